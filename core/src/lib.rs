@@ -1,0 +1,38 @@
+//! posecoach-core: the no_std, allocation-free heart of posecoach.
+//!
+//! Everything here runs unchanged on a Cortex-M4F and on the host, on caller-owned buffers,
+//! without panicking on any input.
+//!
+//! ```text
+//!  keypoints (any format) ──format──▶ skeleton joints ──normalize──▶ p ⊕ v
+//!                                          │
+//!  coach swing ──retarget (onto the student's T-pose skeleton)──▶ virtual swing
+//!                                          │
+//!            kinematics: FK (rotations → positions), IK (positions → rotations)
+//! ```
+//!
+//! Modules, in data-flow order:
+//! - [`config`]: every capacity constant.
+//! - [`joint`]: the canonical joint vocabulary and its parent table.
+//! - [`format`]: built-in keypoint formats mapped onto the vocabulary.
+//! - [`skeleton`]: joints, parents, rest offsets, body segments, end effectors, height.
+//! - [`kinematics`]: forward and inverse kinematics with per-bone rotations.
+//! - [`normalize`]: parent-relative positions and the height-normalized root trajectory.
+//! - [`retarget`]: the analytic retargeter.
+#![cfg_attr(not(any(test, feature = "std")), no_std)]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod config;
+pub mod format;
+pub mod joint;
+pub mod kinematics;
+pub mod normalize;
+pub mod retarget;
+pub mod skeleton;
+
+/// A position or offset in metres (+Y up).
+pub type Vec3 = nalgebra::Vector3<f32>;
+
+/// A rotation.
+pub type Quat = nalgebra::UnitQuaternion<f32>;

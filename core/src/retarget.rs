@@ -1,0 +1,269 @@
+//! The analytic retargeter: bone-direction copy plus a leg-scaled root trajectory.
+//!
+//! It is the fallback when no network weights are loaded and the baseline every learned model
+//! is measured against.
+//!
+//! Joints correspond by index when both skeletons come from the same built-in format with the
+//! same tree, and otherwise by canonical name. A target joint with a counterpart is *anchored*.
+//! For each anchored joint `k` with nearest anchored ancestor `a`, the target's rest chain
+//! `a → … → k` is turned by the smallest rotation that takes its rest chord `T_k − T_a` onto the
+//! source's `S_k − S_a`; for a single bone that is exactly a bone-direction copy. Target joints
+//! without a counterpart are interpolated along their chain this way (a CMU clavicle between
+//! thorax and shoulder), or, past the last anchored joint, carried rigidly by their parent's
+//! rotation (fingers). Source joints without a counterpart are left out (a chord skips them).
+//! The root moves along the source's root trajectory scaled by the ratio of leg lengths. Every
+//! output bone has exactly the target's length.
+//!
+//! ```
+//! use posecoach_core::format::Format;
+//! use posecoach_core::retarget::Analytic;
+//! use posecoach_core::Vec3;
+//!
+//! let coach = Format::Cmu31.default_skeleton().unwrap();
+//! let student = Format::H36m17.default_skeleton().unwrap();
+//! let retarget = Analytic::new(&coach, &student).unwrap();
+//! let mut frame = [Vec3::zeros(); 31];
+//! coach.rest_positions(&mut frame);
+//! let mut out = [Vec3::zeros(); 17];
+//! retarget.frame(&frame, &mut out).unwrap();
+//! ```
+
+use crate::config::MAX_JOINTS;
+use crate::kinematics::{check_len, swing, LengthError};
+use crate::skeleton::Skeleton;
+use crate::{Quat, Vec3};
+
+const NONE: u8 = u8::MAX;
+
+/// Why a retarget could not be set up or run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RetargetError {
+    /// A frame or output buffer has the wrong length.
+    Length(LengthError),
+    /// The source skeleton's legs have zero length, so the trajectory cannot be scaled.
+    DegenerateSource,
+    /// A source joint position is NaN or infinite.
+    #[allow(missing_docs)]
+    NonFinite { joint: usize },
+}
+
+impl From<LengthError> for RetargetError {
+    fn from(e: LengthError) -> Self {
+        RetargetError::Length(e)
+    }
+}
+
+impl core::fmt::Display for RetargetError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            RetargetError::Length(e) => e.fmt(f),
+            RetargetError::DegenerateSource => {
+                f.write_str("the source skeleton's legs have no length")
+            }
+            RetargetError::NonFinite { joint } => write!(f, "source joint {joint} is not finite"),
+        }
+    }
+}
+
+impl core::error::Error for RetargetError {}
+
+/// A precomputed joint correspondence from one skeleton onto another.
+#[derive(Clone, Debug)]
+pub struct Analytic<'a> {
+    source: &'a Skeleton,
+    target: &'a Skeleton,
+    /// Per target joint: its source counterpart, or `NONE`.
+    counterpart: [u8; MAX_JOINTS],
+    /// Per anchored target joint: its nearest anchored proper ancestor.
+    anchor: [u8; MAX_JOINTS],
+    /// Per target joint: the anchored joint whose chord rotation it follows, or `NONE` to
+    /// follow its parent.
+    driver: [u8; MAX_JOINTS],
+    /// Per anchored target joint: the rest chord from its anchor.
+    rest_chord: [Vec3; MAX_JOINTS],
+    scale: f32,
+}
+
+impl<'a> Analytic<'a> {
+    /// Prepares the correspondence from `source` onto `target`.
+    ///
+    /// # Errors
+    /// [`RetargetError::DegenerateSource`] if the source's legs have zero length.
+    pub fn new(source: &'a Skeleton, target: &'a Skeleton) -> Result<Self, RetargetError> {
+        let source_legs = source.leg_length();
+        if source_legs <= f32::EPSILON {
+            return Err(RetargetError::DegenerateSource);
+        }
+        let same_tree = source.format() == target.format()
+            && source.format().joints().len() == source.len()
+            && source.len() == target.len()
+            && (0..source.len()).all(|i| source.parent(i) == target.parent(i));
+        let mut counterpart = [NONE; MAX_JOINTS];
+        for (k, slot) in counterpart.iter_mut().enumerate().take(target.len()) {
+            let found = if same_tree {
+                Some(k)
+            } else {
+                target.joint(k).and_then(|j| source.index_of(j))
+            };
+            *slot = found.map_or(NONE, |i| i as u8);
+        }
+        let mut rest = [Vec3::zeros(); MAX_JOINTS];
+        target.rest_positions(&mut rest);
+        let mut anchor = [NONE; MAX_JOINTS];
+        let mut driver = [NONE; MAX_JOINTS];
+        let mut rest_chord = [Vec3::zeros(); MAX_JOINTS];
+        for k in 1..target.len() {
+            if counterpart[k] == NONE {
+                continue;
+            }
+            driver[k] = k as u8;
+            let mut a = target.parent(k).unwrap_or(0);
+            while counterpart[a] == NONE {
+                if driver[a] == NONE {
+                    driver[a] = k as u8;
+                }
+                a = target.parent(a).unwrap_or(0);
+            }
+            anchor[k] = a as u8;
+            rest_chord[k] = rest[k] - rest[a];
+        }
+        Ok(Analytic {
+            source,
+            target,
+            counterpart,
+            anchor,
+            driver,
+            rest_chord,
+            scale: target.leg_length() / source_legs,
+        })
+    }
+
+    /// Ratio of target to source leg length applied to the root trajectory.
+    pub fn scale(&self) -> f32 {
+        self.scale
+    }
+
+    /// Retargets one source frame into `out` (target joint order).
+    ///
+    /// # Errors
+    /// [`RetargetError::Length`] for a frame shorter than the source skeleton or an output
+    /// shorter than the target; [`RetargetError::NonFinite`] for a NaN or infinite input.
+    pub fn frame(&self, source: &[Vec3], out: &mut [Vec3]) -> Result<(), RetargetError> {
+        check_len(self.source, source.len())?;
+        check_len(self.target, out.len())?;
+        if let Some(joint) = source[..self.source.len()]
+            .iter()
+            .position(|p| !p.iter().all(|v| v.is_finite()))
+        {
+            return Err(RetargetError::NonFinite { joint });
+        }
+        let at = |k: u8| source[self.counterpart[k as usize] as usize];
+        let mut rotation = [Quat::identity(); MAX_JOINTS];
+        out[0] = at(0) * self.scale;
+        for k in 1..self.target.len() {
+            let parent = self.target.parent(k).unwrap_or(0);
+            rotation[k] = match self.driver[k] {
+                NONE => rotation[parent],
+                d if d as usize == k => {
+                    let chord = at(d) - at(self.anchor[k]);
+                    swing(self.rest_chord[k], chord)
+                }
+                d => rotation[d as usize],
+            };
+            out[k] = out[parent] + rotation[k] * self.target.offset(k);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::format::Format;
+    use crate::kinematics::forward;
+    use nalgebra::Quaternion;
+    use proptest::prelude::*;
+
+    const TOLERANCE_M: f32 = 1e-5;
+
+    fn pose(skeleton: &Skeleton, raw: &[[f32; 4]], root: [f32; 3]) -> std::vec::Vec<Vec3> {
+        let local: std::vec::Vec<Quat> = raw
+            .iter()
+            .take(skeleton.len())
+            .map(|a| Quat::new_normalize(Quaternion::new(a[0] + 1.5, a[1], a[2], a[3])))
+            .collect();
+        let mut out = std::vec![Vec3::zeros(); skeleton.len()];
+        forward(skeleton, &local, Vec3::from(root), &mut out).unwrap();
+        out
+    }
+
+    proptest! {
+        #[test]
+        fn onto_its_own_skeleton_is_the_identity(
+            format in prop::sample::select(Format::BUILT_IN.to_vec()),
+            raw in prop::collection::vec(prop::array::uniform4(-1.0f32..1.0), MAX_JOINTS),
+            root in prop::array::uniform3(-3.0f32..3.0),
+        ) {
+            let skeleton = format.default_skeleton().unwrap();
+            let frame = pose(&skeleton, &raw, root);
+            let retarget = Analytic::new(&skeleton, &skeleton).unwrap();
+            let mut out = [Vec3::zeros(); MAX_JOINTS];
+            retarget.frame(&frame, &mut out).unwrap();
+            for k in 0..skeleton.len() {
+                prop_assert!((out[k] - frame[k]).norm() <= TOLERANCE_M, "{format} joint {k}");
+            }
+        }
+
+        #[test]
+        fn output_has_the_targets_bone_lengths(
+            from in prop::sample::select(Format::BUILT_IN.to_vec()),
+            onto in prop::sample::select(Format::BUILT_IN.to_vec()),
+            raw in prop::collection::vec(prop::array::uniform4(-1.0f32..1.0), MAX_JOINTS),
+        ) {
+            let source = from.default_skeleton().unwrap();
+            let target = onto.default_skeleton().unwrap();
+            let frame = pose(&source, &raw, [0.0, 1.0, 0.0]);
+            let retarget = Analytic::new(&source, &target).unwrap();
+            let mut out = [Vec3::zeros(); MAX_JOINTS];
+            retarget.frame(&frame, &mut out).unwrap();
+            for k in 1..target.len() {
+                let bone = (out[k] - out[target.parent(k).unwrap()]).norm();
+                prop_assert!((bone - target.offset(k).norm()).abs() <= TOLERANCE_M);
+            }
+        }
+    }
+
+    #[test]
+    fn root_trajectory_scales_with_leg_length() {
+        let coach = Format::H36m17.default_skeleton().unwrap();
+        let mut offsets = [Vec3::zeros(); 17];
+        offsets[..17].copy_from_slice(coach.offsets());
+        for o in &mut offsets {
+            *o *= 0.8;
+        }
+        let parents: std::vec::Vec<_> = (0..17).map(|i| coach.parent(i)).collect();
+        let student = Skeleton::new(Format::H36m17, &parents, &offsets, coach.joints()).unwrap();
+        let retarget = Analytic::new(&coach, &student).unwrap();
+        assert!((retarget.scale() - 0.8).abs() < 1e-6);
+        let mut frame = [Vec3::zeros(); 17];
+        coach.rest_positions(&mut frame);
+        let mut out = [Vec3::zeros(); 17];
+        retarget.frame(&frame, &mut out).unwrap();
+        assert!((out[0] - frame[0] * 0.8).norm() < 1e-6);
+        assert!((out[10] - frame[10] * 0.8).norm() < 1e-5);
+    }
+
+    #[test]
+    fn non_finite_input_is_an_error() {
+        let s = Format::Coco17.default_skeleton().unwrap();
+        let retarget = Analytic::new(&s, &s).unwrap();
+        let mut frame = [Vec3::zeros(); 15];
+        frame[4].y = f32::NAN;
+        let mut out = [Vec3::zeros(); 15];
+        assert_eq!(
+            retarget.frame(&frame, &mut out),
+            Err(RetargetError::NonFinite { joint: 4 })
+        );
+    }
+}

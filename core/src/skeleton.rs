@@ -1,0 +1,508 @@
+//! Skeletons: joints, parents, rest offsets, body segments, end effectors and height.
+//!
+//! A skeleton is rooted at the pelvis and stored in topological order (a parent's index is
+//! always lower than its children's). Joints carry a canonical [`Joint`] name where one
+//! applies; joints without one (clavicles, fingers, extra spine joints) are kept and follow
+//! their chain.
+//!
+//! ```
+//! use posecoach_core::format::Format;
+//! use posecoach_core::skeleton::{Segment, Skeleton};
+//!
+//! let skeleton = Format::H36m17.default_skeleton().unwrap();
+//! assert_eq!(skeleton.len(), 17);
+//! assert!(skeleton.height() > 1.6 && skeleton.height() < 1.9);
+//! let pelvis = 0;
+//! assert!(skeleton.segment_contains(Segment::LeftLeg, pelvis));
+//! ```
+
+use crate::config::MAX_JOINTS;
+use crate::format::Format;
+use crate::joint::{Joint, JOINT_COUNT};
+use crate::Vec3;
+
+const NO_JOINT: u8 = u8::MAX;
+
+const _: () = assert!(MAX_JOINTS <= 64, "segment masks are u64 bitsets");
+const _: () = assert!(MAX_JOINTS < NO_JOINT as usize);
+
+/// A body segment: the skeleton cut at its branching joints.
+#[allow(missing_docs)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Segment {
+    Spine,
+    Head,
+    LeftArm,
+    RightArm,
+    LeftLeg,
+    RightLeg,
+}
+
+impl Segment {
+    /// All segments in mask order.
+    pub const ALL: [Segment; 6] = [
+        Segment::Spine,
+        Segment::Head,
+        Segment::LeftArm,
+        Segment::RightArm,
+        Segment::LeftLeg,
+        Segment::RightLeg,
+    ];
+
+    /// The snake_case name used in reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Segment::Spine => "spine",
+            Segment::Head => "head",
+            Segment::LeftArm => "left_arm",
+            Segment::RightArm => "right_arm",
+            Segment::LeftLeg => "left_leg",
+            Segment::RightLeg => "right_leg",
+        }
+    }
+}
+
+/// The five end effectors, each resolved to the outermost canonical joint a skeleton has.
+#[allow(missing_docs)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EndEffector {
+    Head,
+    LeftHand,
+    RightHand,
+    LeftFoot,
+    RightFoot,
+}
+
+impl EndEffector {
+    /// All end effectors, limbs in [`Segment`] order after the head.
+    pub const ALL: [EndEffector; 5] = [
+        EndEffector::Head,
+        EndEffector::LeftHand,
+        EndEffector::RightHand,
+        EndEffector::LeftFoot,
+        EndEffector::RightFoot,
+    ];
+
+    /// Canonical joints that may serve, preferred first.
+    pub const fn candidates(self) -> [Joint; 2] {
+        match self {
+            EndEffector::Head => [Joint::HeadTop, Joint::Head],
+            EndEffector::LeftHand => [Joint::LeftHand, Joint::LeftWrist],
+            EndEffector::RightHand => [Joint::RightHand, Joint::RightWrist],
+            EndEffector::LeftFoot => [Joint::LeftToe, Joint::LeftAnkle],
+            EndEffector::RightFoot => [Joint::RightToe, Joint::RightAnkle],
+        }
+    }
+
+    const fn segment(self) -> Segment {
+        match self {
+            EndEffector::Head => Segment::Head,
+            EndEffector::LeftHand => Segment::LeftArm,
+            EndEffector::RightHand => Segment::RightArm,
+            EndEffector::LeftFoot => Segment::LeftLeg,
+            EndEffector::RightFoot => Segment::RightLeg,
+        }
+    }
+}
+
+/// Why a skeleton could not be built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SkeletonError {
+    /// No joints, or more than [`MAX_JOINTS`].
+    #[allow(missing_docs)]
+    JointCount { max: usize, actual: usize },
+    /// The parent, offset and name slices differ in length.
+    LengthMismatch,
+    /// Joint 0 must be the root (no parent) and every other joint needs a parent with a lower index.
+    #[allow(missing_docs)]
+    BadParent { joint: usize },
+    /// The root must be the canonical pelvis.
+    RootNotPelvis,
+    /// A canonical name is used twice.
+    DuplicateJoint(Joint),
+    /// A required canonical joint is absent (the end effector's last candidate is named).
+    MissingJoint(Joint),
+    /// An offset is NaN or infinite.
+    #[allow(missing_docs)]
+    NonFinite { joint: usize },
+}
+
+impl core::fmt::Display for SkeletonError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            SkeletonError::JointCount { max, actual } => {
+                write!(f, "a skeleton needs 1 to {max} joints, got {actual}")
+            }
+            SkeletonError::LengthMismatch => {
+                f.write_str("parents, offsets and joint names differ in length")
+            }
+            SkeletonError::BadParent { joint } => write!(
+                f,
+                "joint {joint}: joint 0 must be the only root and parents must precede children"
+            ),
+            SkeletonError::RootNotPelvis => f.write_str("the root joint must be the pelvis"),
+            SkeletonError::DuplicateJoint(j) => write!(f, "canonical joint `{j}` appears twice"),
+            SkeletonError::MissingJoint(j) => write!(f, "required joint `{j}` is missing"),
+            SkeletonError::NonFinite { joint } => write!(f, "joint {joint}: offset is not finite"),
+        }
+    }
+}
+
+impl core::error::Error for SkeletonError {}
+
+/// A skeleton: at most [`MAX_JOINTS`] joints in topological order, rooted at the pelvis.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Skeleton {
+    format: Format,
+    len: u8,
+    parents: [u8; MAX_JOINTS],
+    joints: [Option<Joint>; MAX_JOINTS],
+    offsets: [Vec3; MAX_JOINTS],
+    by_joint: [u8; JOINT_COUNT],
+    end_effectors: [u8; 5],
+    segments: [u64; 6],
+    height: f32,
+}
+
+impl Skeleton {
+    /// Builds a skeleton from parent indices, rest offsets (metres, from the parent; the
+    /// root's is its rest position) and canonical names.
+    ///
+    /// # Errors
+    /// Any [`SkeletonError`]: a bad count, a malformed tree, a root that is not the pelvis,
+    /// a duplicate name, a missing end effector or a non-finite offset.
+    pub fn new(
+        format: Format,
+        parents: &[Option<usize>],
+        offsets: &[Vec3],
+        joints: &[Option<Joint>],
+    ) -> Result<Skeleton, SkeletonError> {
+        let len = parents.len();
+        if len == 0 || len > MAX_JOINTS {
+            return Err(SkeletonError::JointCount {
+                max: MAX_JOINTS,
+                actual: len,
+            });
+        }
+        if offsets.len() != len || joints.len() != len {
+            return Err(SkeletonError::LengthMismatch);
+        }
+        let mut skeleton = Skeleton {
+            format,
+            len: len as u8,
+            parents: [NO_JOINT; MAX_JOINTS],
+            joints: [None; MAX_JOINTS],
+            offsets: [Vec3::zeros(); MAX_JOINTS],
+            by_joint: [NO_JOINT; JOINT_COUNT],
+            end_effectors: [NO_JOINT; 5],
+            segments: [0; 6],
+            height: 0.0,
+        };
+        for (i, (&parent, (&offset, &joint))) in parents
+            .iter()
+            .zip(offsets.iter().zip(joints.iter()))
+            .enumerate()
+        {
+            match (i, parent) {
+                (0, None) => {}
+                (i, Some(p)) if i > 0 && p < i => skeleton.parents[i] = p as u8,
+                _ => return Err(SkeletonError::BadParent { joint: i }),
+            }
+            if !offset.iter().all(|v| v.is_finite()) {
+                return Err(SkeletonError::NonFinite { joint: i });
+            }
+            skeleton.offsets[i] = offset;
+            skeleton.joints[i] = joint;
+            if let Some(j) = joint {
+                if skeleton.by_joint[j.index()] != NO_JOINT {
+                    return Err(SkeletonError::DuplicateJoint(j));
+                }
+                skeleton.by_joint[j.index()] = i as u8;
+            }
+        }
+        if joints[0] != Some(Joint::Pelvis) {
+            return Err(SkeletonError::RootNotPelvis);
+        }
+        for (k, effector) in EndEffector::ALL.into_iter().enumerate() {
+            let [preferred, fallback] = effector.candidates();
+            skeleton.end_effectors[k] = skeleton
+                .index_of(preferred)
+                .or_else(|| skeleton.index_of(fallback))
+                .ok_or(SkeletonError::MissingJoint(fallback))?
+                as u8;
+        }
+        skeleton.segments = skeleton.cut_segments();
+        skeleton.height = skeleton.measure_height();
+        Ok(skeleton)
+    }
+
+    /// Builds a skeleton from rest (T-pose) joint positions instead of offsets.
+    ///
+    /// # Errors
+    /// As [`Skeleton::new`].
+    pub fn from_rest_positions(
+        format: Format,
+        parents: &[Option<usize>],
+        positions: &[Vec3],
+        joints: &[Option<Joint>],
+    ) -> Result<Skeleton, SkeletonError> {
+        let mut offsets = [Vec3::zeros(); MAX_JOINTS];
+        let offsets = offsets
+            .get_mut(..positions.len())
+            .ok_or(SkeletonError::JointCount {
+                max: MAX_JOINTS,
+                actual: positions.len(),
+            })?;
+        for (i, offset) in offsets.iter_mut().enumerate() {
+            let parent = parents.get(i).copied().flatten();
+            let base = parent
+                .and_then(|p| positions.get(p))
+                .copied()
+                .unwrap_or_else(Vec3::zeros);
+            *offset = positions[i] - base;
+        }
+        Skeleton::new(format, parents, offsets, joints)
+    }
+
+    /// The keypoint format this skeleton was built for.
+    pub fn format(&self) -> Format {
+        self.format
+    }
+
+    /// Number of joints.
+    pub fn len(&self) -> usize {
+        self.len as usize
+    }
+
+    /// Always false: a skeleton has at least its root.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Parent of joint `i` (`None` for the root or an index out of range).
+    pub fn parent(&self, i: usize) -> Option<usize> {
+        match self.parents.get(i) {
+            Some(&p) if p != NO_JOINT && i < self.len() => Some(p as usize),
+            _ => None,
+        }
+    }
+
+    /// Rest offset of joint `i` from its parent (the root's rest position for the root).
+    pub fn offset(&self, i: usize) -> Vec3 {
+        self.offsets().get(i).copied().unwrap_or_else(Vec3::zeros)
+    }
+
+    /// All rest offsets.
+    pub fn offsets(&self) -> &[Vec3] {
+        &self.offsets[..self.len()]
+    }
+
+    /// Canonical name of joint `i`, if it has one.
+    pub fn joint(&self, i: usize) -> Option<Joint> {
+        self.joints().get(i).copied().flatten()
+    }
+
+    /// Canonical names of all joints.
+    pub fn joints(&self) -> &[Option<Joint>] {
+        &self.joints[..self.len()]
+    }
+
+    /// Index of a canonical joint, if this skeleton has it.
+    pub fn index_of(&self, joint: Joint) -> Option<usize> {
+        match self.by_joint[joint.index()] {
+            NO_JOINT => None,
+            i => Some(i as usize),
+        }
+    }
+
+    /// Index of an end effector's joint.
+    pub fn end_effector(&self, effector: EndEffector) -> usize {
+        let k = EndEffector::ALL
+            .iter()
+            .position(|&e| e == effector)
+            .unwrap_or(0);
+        self.end_effectors[k] as usize
+    }
+
+    /// Whether joint `i` belongs to `segment` (a branching joint belongs to every segment that
+    /// starts at it).
+    pub fn segment_contains(&self, segment: Segment, i: usize) -> bool {
+        i < self.len() && self.segment_mask(segment) & (1 << i) != 0
+    }
+
+    /// The joints of `segment` as a bitset (bit `i` = joint `i`).
+    pub fn segment_mask(&self, segment: Segment) -> u64 {
+        self.segments[segment as usize]
+    }
+
+    /// Height: the mean root-to-foot chain length plus the root-to-head chain length (sums of
+    /// bone lengths, as the VPC and PAN papers define it).
+    pub fn height(&self) -> f32 {
+        self.height
+    }
+
+    /// Sum of bone lengths from the root to joint `i`.
+    pub fn chain_length(&self, i: usize) -> f32 {
+        self.ancestry(i).map(|k| self.offset(k).norm()).sum()
+    }
+
+    /// Mean chain length from the root to both feet.
+    pub fn leg_length(&self) -> f32 {
+        0.5 * (self.chain_length(self.end_effector(EndEffector::LeftFoot))
+            + self.chain_length(self.end_effector(EndEffector::RightFoot)))
+    }
+
+    /// Rest positions of all joints (the root at its rest position), written to `out`.
+    /// Writes `min(out.len(), self.len())` joints.
+    pub fn rest_positions(&self, out: &mut [Vec3]) {
+        for i in 0..self.len().min(out.len()) {
+            let base = self.parent(i).map_or(Vec3::zeros(), |p| out[p]);
+            out[i] = base + self.offsets[i];
+        }
+    }
+
+    /// Joint `i` and its non-root ancestors, outwards-in (the root itself is not yielded).
+    pub fn ancestry(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        let start = if i < self.len() && i != 0 {
+            Some(i)
+        } else {
+            None
+        };
+        core::iter::successors(start, move |&k| self.parent(k).filter(|&p| p != 0))
+    }
+
+    fn measure_height(&self) -> f32 {
+        self.leg_length() + self.chain_length(self.end_effector(EndEffector::Head))
+    }
+
+    /// Cuts the tree into the six segments. The main tree is the union of the root-to-end-
+    /// effector paths; each limb runs from the nearest branching ancestor of its end effector
+    /// (a joint with two or more main-tree children) out to the end effector, and the spine
+    /// holds the rest of the main tree. Joints off the main tree (fingers, club) join the
+    /// segment of their nearest main-tree ancestor, or the spine if that is a branching joint.
+    fn cut_segments(&self) -> [u64; 6] {
+        let mut main = 0u64;
+        for &e in &self.end_effectors {
+            main |= 1 | self.ancestry(e as usize).fold(0, |m, k| m | 1 << k);
+        }
+        let mut main_children = [0u8; MAX_JOINTS];
+        for i in 1..self.len() {
+            if main & (1 << i) != 0 {
+                main_children[self.parents[i] as usize] += 1;
+            }
+        }
+        let mut segments = [0u64; 6];
+        let mut limbs = 0u64;
+        for effector in EndEffector::ALL {
+            let mut mask = 0u64;
+            let mut k = self.end_effector(effector);
+            loop {
+                mask |= 1 << k;
+                match self.parent(k) {
+                    Some(p) if main_children[p] < 2 => k = p,
+                    Some(p) => {
+                        mask |= 1 << p;
+                        limbs |= mask & !(1 << p);
+                        break;
+                    }
+                    None => {
+                        limbs |= mask & !1;
+                        break;
+                    }
+                }
+            }
+            segments[effector.segment() as usize] = mask;
+        }
+        segments[Segment::Spine as usize] = main & !limbs;
+        for i in 1..self.len() {
+            if main & (1 << i) == 0 {
+                let p = self.parents[i] as usize;
+                let owner = Segment::ALL
+                    .iter()
+                    .rposition(|&s| segments[s as usize] & (1 << p) != 0);
+                let owner = match owner {
+                    Some(s) if limbs & (1 << p) != 0 || main & (1 << p) == 0 => s,
+                    _ => Segment::Spine as usize,
+                };
+                segments[owner] |= 1 << i;
+            }
+        }
+        segments
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn h36m() -> Skeleton {
+        match Format::H36m17.default_skeleton() {
+            Ok(s) => s,
+            Err(e) => unreachable!("{e}"),
+        }
+    }
+
+    #[test]
+    fn h36m_segments_cut_at_pelvis_and_thorax() {
+        let s = h36m();
+        let names = |seg: Segment| {
+            (0..s.len())
+                .filter(|&i| s.segment_contains(seg, i))
+                .filter_map(|i| s.joint(i))
+                .collect::<std::vec::Vec<_>>()
+        };
+        use Joint::*;
+        assert_eq!(names(Segment::Spine), [Pelvis, Spine, Thorax]);
+        assert_eq!(names(Segment::Head), [Thorax, Neck, HeadTop]);
+        assert_eq!(
+            names(Segment::LeftArm),
+            [Thorax, LeftShoulder, LeftElbow, LeftWrist]
+        );
+        assert_eq!(
+            names(Segment::RightLeg),
+            [Pelvis, RightHip, RightKnee, RightAnkle]
+        );
+    }
+
+    #[test]
+    fn every_joint_is_in_a_segment() {
+        let s = h36m();
+        let all = Segment::ALL
+            .iter()
+            .fold(0, |m, &seg| m | s.segment_mask(seg));
+        assert_eq!(all, (1u64 << s.len()) - 1);
+    }
+
+    #[test]
+    fn rejects_malformed_trees() {
+        let off = [Vec3::zeros(); 2];
+        let joints = [Some(Joint::Pelvis), Some(Joint::Spine)];
+        assert_eq!(
+            Skeleton::new(Format::Custom, &[None, None], &off, &joints),
+            Err(SkeletonError::BadParent { joint: 1 })
+        );
+        assert_eq!(
+            Skeleton::new(Format::Custom, &[None, Some(0)], &off, &joints),
+            Err(SkeletonError::MissingJoint(Joint::Head))
+        );
+        assert_eq!(
+            Skeleton::new(
+                Format::Custom,
+                &[None, Some(0)],
+                &off,
+                &[Some(Joint::Spine); 2]
+            ),
+            Err(SkeletonError::DuplicateJoint(Joint::Spine))
+        );
+        assert_eq!(
+            Skeleton::new(Format::Custom, &[], &[], &[]),
+            Err(SkeletonError::JointCount {
+                max: MAX_JOINTS,
+                actual: 0
+            })
+        );
+    }
+}
