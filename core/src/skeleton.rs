@@ -267,6 +267,75 @@ impl Skeleton {
         Skeleton::new(format, parents, offsets, joints)
     }
 
+    /// A [`Format::Canonical`] skeleton over any subset of canonical joints that includes the
+    /// pelvis, listed in canonical order; each joint's parent is its nearest listed canonical
+    /// ancestor.
+    ///
+    /// # Errors
+    /// [`SkeletonError::BadParent`] if `joints` is not in ascending canonical order (or lacks
+    /// the pelvis first), [`SkeletonError::LengthMismatch`] if the slices differ in length,
+    /// and as [`Skeleton::new`].
+    pub fn canonical(joints: &[Joint], rest_positions: &[Vec3]) -> Result<Skeleton, SkeletonError> {
+        if joints.len() != rest_positions.len() {
+            return Err(SkeletonError::LengthMismatch);
+        }
+        let mut parents = [None; MAX_JOINTS];
+        let mut names = [None; MAX_JOINTS];
+        let (parents, names) = match (
+            parents.get_mut(..joints.len()),
+            names.get_mut(..joints.len()),
+        ) {
+            (Some(p), Some(n)) => (p, n),
+            _ => {
+                return Err(SkeletonError::JointCount {
+                    max: MAX_JOINTS,
+                    actual: joints.len(),
+                })
+            }
+        };
+        for (i, &joint) in joints.iter().enumerate() {
+            if i > 0 && joints[i - 1] >= joint {
+                return Err(SkeletonError::BadParent { joint: i });
+            }
+            names[i] = Some(joint);
+            parents[i] = core::iter::successors(joint.parent(), |j| j.parent())
+                .find_map(|ancestor| joints[..i].iter().position(|&j| j == ancestor));
+            if i > 0 && parents[i].is_none() {
+                return Err(SkeletonError::BadParent { joint: i });
+            }
+        }
+        Skeleton::from_rest_positions(Format::Canonical, parents, rest_positions, names)
+    }
+
+    /// The same skeleton with bone `k` (from its parent to joint `k`) scaled to `lengths[k]`;
+    /// zero-length bones stay zero and the root's entry is ignored.
+    ///
+    /// # Errors
+    /// [`SkeletonError::LengthMismatch`] if `lengths` does not have one entry per joint, and
+    /// [`SkeletonError::NonFinite`] for a NaN, infinite or negative length.
+    pub fn with_bone_lengths(&self, lengths: &[f32]) -> Result<Skeleton, SkeletonError> {
+        if lengths.len() != self.len() {
+            return Err(SkeletonError::LengthMismatch);
+        }
+        let mut offsets = self.offsets;
+        for k in 1..self.len() {
+            if !(lengths[k].is_finite() && lengths[k] >= 0.0) {
+                return Err(SkeletonError::NonFinite { joint: k });
+            }
+            let norm = offsets[k].norm();
+            if norm > 0.0 {
+                offsets[k] *= lengths[k] / norm;
+            }
+        }
+        let parents: [Option<usize>; MAX_JOINTS] = core::array::from_fn(|i| self.parent(i));
+        Skeleton::new(
+            self.format,
+            &parents[..self.len()],
+            &offsets[..self.len()],
+            self.joints(),
+        )
+    }
+
     /// The keypoint format this skeleton was built for.
     pub fn format(&self) -> Format {
         self.format
@@ -474,6 +543,42 @@ mod tests {
             .iter()
             .fold(0, |m, &seg| m | s.segment_mask(seg));
         assert_eq!(all, (1u64 << s.len()) - 1);
+    }
+
+    #[test]
+    fn canonical_subsets_attach_to_the_nearest_present_ancestor() {
+        use Joint::*;
+        let joints = [
+            Pelvis, LeftHip, LeftAnkle, RightHip, RightAnkle, Thorax, HeadTop, LeftWrist,
+            RightWrist,
+        ];
+        let rest: std::vec::Vec<Vec3> = joints.iter().map(|&j| crate::format::t_pose(j)).collect();
+        let s = Skeleton::canonical(&joints, &rest).unwrap();
+        assert_eq!(s.parent(2), Some(1));
+        assert_eq!(s.parent(5), Some(0));
+        assert_eq!(s.parent(7), Some(5));
+        assert_eq!(s.end_effector(EndEffector::LeftHand), 7);
+        let mut swapped = joints;
+        swapped.swap(1, 2);
+        assert_eq!(
+            Skeleton::canonical(&swapped, &rest),
+            Err(SkeletonError::BadParent { joint: 2 })
+        );
+    }
+
+    #[test]
+    fn bone_lengths_can_be_replaced() {
+        let s = h36m();
+        let lengths: std::vec::Vec<f32> = (0..s.len()).map(|k| 0.1 * k as f32).collect();
+        let scaled = s.with_bone_lengths(&lengths).unwrap();
+        for (k, &length) in lengths.iter().enumerate().skip(1) {
+            assert!((scaled.offset(k).norm() - length).abs() < 1e-6);
+            assert!(scaled.offset(k).normalize().dot(&s.offset(k).normalize()) > 0.9999);
+        }
+        assert_eq!(
+            s.with_bone_lengths(&lengths[1..]),
+            Err(SkeletonError::LengthMismatch)
+        );
     }
 
     #[test]
