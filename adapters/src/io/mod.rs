@@ -1,0 +1,97 @@
+//! Host-side file import and export (the `std` feature).
+//!
+//! [`load`] and [`save`] pick the format from the file extension: `.bvh` and `.csv` in and
+//! out, `.c3d` in.
+pub mod bvh;
+pub mod csv;
+pub mod motion;
+
+pub use motion::Motion;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A file could not be read or written; names the file and what went wrong inside it.
+#[derive(Debug)]
+pub struct FileError {
+    /// The file.
+    pub path: PathBuf,
+    /// What went wrong.
+    pub kind: FileErrorKind,
+}
+
+/// What went wrong with a file.
+#[derive(Debug)]
+pub enum FileErrorKind {
+    /// Reading or writing failed.
+    Io(std::io::Error),
+    /// The extension names no supported format.
+    UnknownExtension,
+    /// A keypoint CSV problem.
+    Csv(csv::CsvError),
+    /// A BVH syntax problem.
+    Bvh(bvh::BvhError),
+    /// A BVH hierarchy that is not a usable skeleton.
+    BvhSkeleton(motion::BvhImportError),
+}
+
+impl fmt::Display for FileError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: ", self.path.display())?;
+        match &self.kind {
+            FileErrorKind::Io(e) => e.fmt(f),
+            FileErrorKind::UnknownExtension => {
+                f.write_str("unknown extension: expected .bvh, .c3d or .csv")
+            }
+            FileErrorKind::Csv(e) => e.fmt(f),
+            FileErrorKind::Bvh(e) => e.fmt(f),
+            FileErrorKind::BvhSkeleton(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for FileError {}
+
+fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+/// Reads a motion, choosing the reader by extension.
+///
+/// # Errors
+/// A [`FileError`] naming the file and, inside it, the line, frame or byte at fault.
+pub fn load(path: &Path) -> Result<Motion, FileError> {
+    let fail = |kind| FileError {
+        path: path.to_path_buf(),
+        kind,
+    };
+    let text = || std::fs::read_to_string(path).map_err(|e| fail(FileErrorKind::Io(e)));
+    match extension(path).as_str() {
+        "csv" => csv::read(&text()?).map_err(|e| fail(FileErrorKind::Csv(e))),
+        "bvh" => {
+            let bvh = bvh::Bvh::parse(&text()?).map_err(|e| fail(FileErrorKind::Bvh(e)))?;
+            Motion::from_bvh(bvh, None).map_err(|e| fail(FileErrorKind::BvhSkeleton(e)))
+        }
+        _ => Err(fail(FileErrorKind::UnknownExtension)),
+    }
+}
+
+/// Writes a motion, choosing the writer by extension.
+///
+/// # Errors
+/// A [`FileError`] for an unknown extension or a failed write.
+pub fn save(motion: &Motion, path: &Path) -> Result<(), FileError> {
+    let fail = |kind| FileError {
+        path: path.to_path_buf(),
+        kind,
+    };
+    let text = match extension(path).as_str() {
+        "csv" => csv::write(motion),
+        "bvh" => motion.to_bvh().to_text(),
+        _ => return Err(fail(FileErrorKind::UnknownExtension)),
+    };
+    std::fs::write(path, text).map_err(|e| fail(FileErrorKind::Io(e)))
+}

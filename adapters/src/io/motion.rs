@@ -1,0 +1,289 @@
+//! A recorded motion on the host: a skeleton, joint names and frames of positions, and its
+//! conversion from and to BVH.
+
+use super::bvh::{Bvh, Channel};
+use posecoach_core::format::Format;
+use posecoach_core::joint::Joint;
+use posecoach_core::skeleton::{Skeleton, SkeletonError};
+use posecoach_core::Vec3;
+use std::fmt;
+
+/// A motion in metres, +Y up: `frames × joints` positions on `skeleton`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Motion {
+    /// The skeleton: the file's rest pose, a T-pose, or bone lengths measured from the frames.
+    pub skeleton: Skeleton,
+    /// Joint names as the file spells them, one per skeleton joint.
+    pub names: Vec<String>,
+    /// Frames per second; 0 for a single T-pose row.
+    pub rate_hz: f32,
+    /// Joint positions, frame-major.
+    pub positions: Vec<Vec3>,
+    /// Samples the file lacked (frame-major, like `positions`); each holds the nearest valid
+    /// sample of its joint in time.
+    pub missing: Vec<bool>,
+}
+
+impl Motion {
+    /// Number of frames.
+    pub fn frames(&self) -> usize {
+        self.positions.len() / self.skeleton.len()
+    }
+
+    /// Joint positions of frame `i`.
+    ///
+    /// # Panics
+    /// If `i >= self.frames()`.
+    pub fn frame(&self, i: usize) -> &[Vec3] {
+        let n = self.skeleton.len();
+        &self.positions[i * n..(i + 1) * n]
+    }
+
+    /// Duration in seconds (0 for a single frame).
+    pub fn duration_s(&self) -> f32 {
+        if self.rate_hz > 0.0 {
+            self.frames().saturating_sub(1) as f32 / self.rate_hz
+        } else {
+            0.0
+        }
+    }
+
+    /// How many samples were missing in the file, per joint.
+    pub fn missing_per_joint(&self) -> Vec<usize> {
+        let n = self.skeleton.len();
+        let mut counts = vec![0; n];
+        for (i, _) in self.missing.iter().enumerate().filter(|(_, &m)| m) {
+            counts[i % n] += 1;
+        }
+        counts
+    }
+}
+
+/// Length units a BVH file may use, in metres: m, cm, mm, inch, and the CMU conversions' unit
+/// (1/0.45 inch).
+pub const BVH_UNITS: [(&str, f32); 5] = [
+    ("m", 1.0),
+    ("cm", 0.01),
+    ("mm", 0.001),
+    ("in", 0.0254),
+    ("cmu", 0.0254 / 0.45),
+];
+
+/// The [`BVH_UNITS`] entry that makes a skeleton `height` (in file units) closest to 1.75 m on a
+/// log scale: BVH files do not state their units.
+pub fn guess_bvh_units(height: f32) -> (&'static str, f32) {
+    let off = |scale: f32| (height * scale / 1.75).ln().abs();
+    BVH_UNITS
+        .into_iter()
+        .min_by(|a, b| off(a.1).total_cmp(&off(b.1)))
+        .unwrap_or(BVH_UNITS[0])
+}
+
+/// Why a BVH hierarchy cannot become a motion.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BvhImportError {
+    /// Neither a built-in format nor canonical joint names, with a root that reaches the pelvis
+    /// through single-child joints only.
+    UnknownSkeleton,
+    /// The hierarchy does not make a valid skeleton.
+    Skeleton(SkeletonError),
+}
+
+impl fmt::Display for BvhImportError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            BvhImportError::UnknownSkeleton => f.write_str(
+                "joint names match no built-in format (cmu31, bandai22, h36m17, coco17, blazepose33, smpl24, golf) \
+                 and the root is not a joint named `pelvis`: rename the joints to canonical names",
+            ),
+            BvhImportError::Skeleton(e) => write!(f, "the hierarchy is not a usable skeleton: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for BvhImportError {}
+
+impl Motion {
+    /// A motion from a BVH file: joints above the pelvis that have a single child (Bandai's
+    /// `joint_Root`) are dropped, the format is recognized by joint names (else joints named
+    /// like the canonical vocabulary make a custom skeleton), a leading all-zero rest frame is
+    /// dropped, and lengths are converted with `units` metres per file unit, or with the units
+    /// [`guess_bvh_units`] picks when `None`.
+    ///
+    /// # Errors
+    /// [`BvhImportError`] when no joint can be identified as the pelvis or the tree is not a
+    /// valid skeleton.
+    pub fn from_bvh(mut bvh: Bvh, units: Option<f32>) -> Result<Motion, BvhImportError> {
+        if bvh.first_frame_is_rest() {
+            bvh.drop_first_frame();
+        }
+        let n = bvh.joints.len();
+        let mut start = 0;
+        let (format, names) = loop {
+            let names: Vec<&str> = bvh.joints[start..]
+                .iter()
+                .map(|j| j.name.as_str())
+                .collect();
+            if let Some(format) = Format::detect(&names) {
+                let joints = format.joints().iter().map(|j| j.joint).collect::<Vec<_>>();
+                break (format, joints);
+            }
+            if names.first() == Some(&Joint::Pelvis.name()) {
+                break (
+                    Format::Custom,
+                    names.iter().map(|&n| Joint::from_name(n)).collect(),
+                );
+            }
+            let children = bvh
+                .joints
+                .iter()
+                .filter(|j| j.parent == Some(start))
+                .count();
+            if children != 1 || start + 1 >= n {
+                return Err(BvhImportError::UnknownSkeleton);
+            }
+            start += 1;
+        };
+        let parents: Vec<Option<usize>> = bvh.joints[start..]
+            .iter()
+            .map(|j| j.parent.and_then(|p| p.checked_sub(start)))
+            .collect();
+        let mut rest = vec![[0.0; 3]; n];
+        bvh.rest_positions(&mut rest);
+        let offset = |k: usize| {
+            let v = if k == start {
+                rest[k]
+            } else {
+                bvh.joints[k].offset
+            };
+            Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
+        };
+        let offsets: Vec<Vec3> = (start..n).map(offset).collect();
+        let build = |scale: f32| {
+            let scaled: Vec<Vec3> = offsets.iter().map(|o| o * scale).collect();
+            Skeleton::new(format, &parents, &scaled, &names).map_err(BvhImportError::Skeleton)
+        };
+        let scale = match units {
+            Some(scale) => scale,
+            None => guess_bvh_units(build(1.0)?.height()).1,
+        };
+        let skeleton = build(scale)?;
+        let mut frame = vec![[0.0; 3]; n];
+        let mut positions = Vec::with_capacity(bvh.frames * (n - start));
+        for f in 0..bvh.frames {
+            bvh.positions(f, &mut frame);
+            positions.extend(
+                frame[start..]
+                    .iter()
+                    .map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) * scale),
+            );
+        }
+        Ok(Motion {
+            skeleton,
+            names: bvh.joints[start..].iter().map(|j| j.name.clone()).collect(),
+            rate_hz: if bvh.frame_time > 0.0 {
+                (1.0 / bvh.frame_time) as f32
+            } else {
+                0.0
+            },
+            missing: vec![false; positions.len()],
+            positions,
+        })
+    }
+
+    /// The motion as BVH in metres: every joint with position and Z-X-Y rotation channels, so
+    /// positions re-import exactly (see [`Bvh::from_positions`]). A T-pose gets one frame at
+    /// 30 fps.
+    pub fn to_bvh(&self) -> Bvh {
+        let s = &self.skeleton;
+        let f64s = |v: &Vec3| [f64::from(v.x), f64::from(v.y), f64::from(v.z)];
+        let parents: Vec<Option<usize>> = (0..s.len()).map(|k| s.parent(k)).collect();
+        let offsets: Vec<[f64; 3]> = s.offsets().iter().map(f64s).collect();
+        let positions: Vec<[f64; 3]> = self.positions.iter().map(f64s).collect();
+        let rate = if self.rate_hz > 0.0 {
+            f64::from(self.rate_hz)
+        } else {
+            30.0
+        };
+        Bvh::from_positions(
+            &self.names,
+            &parents,
+            &offsets,
+            &vec![None; s.len()],
+            &positions,
+            1.0 / rate,
+            [Channel::Zrotation, Channel::Xrotation, Channel::Yrotation],
+        )
+    }
+}
+
+/// Mean length of every bone over the frames where both its ends were present (0 where never).
+pub fn mean_bone_lengths(skeleton: &Skeleton, positions: &[Vec3], missing: &[bool]) -> Vec<f32> {
+    let n = skeleton.len();
+    let mut sums = vec![(0.0f64, 0usize); n];
+    for (frame, gaps) in positions.chunks_exact(n).zip(missing.chunks_exact(n)) {
+        for k in 1..n {
+            let p = skeleton.parent(k).unwrap_or(0);
+            if !gaps[k] && !gaps[p] {
+                sums[k].0 += f64::from((frame[k] - frame[p]).norm());
+                sums[k].1 += 1;
+            }
+        }
+    }
+    sums.iter()
+        .map(|&(s, c)| if c > 0 { (s / c as f64) as f32 } else { 0.0 })
+        .collect()
+}
+
+/// `template` with its bones rescaled to the mean lengths measured in `positions`.
+///
+/// # Errors
+/// As [`Skeleton::with_bone_lengths`].
+pub fn measured_skeleton(
+    template: &Skeleton,
+    positions: &[Vec3],
+    missing: &[bool],
+) -> Result<Skeleton, SkeletonError> {
+    template.with_bone_lengths(&mean_bone_lengths(template, positions, missing))
+}
+
+/// Replaces every missing sample by the nearest valid sample of the same joint in time
+/// (earlier one on ties). Joints never present keep their value.
+pub fn hold_missing(joints: usize, positions: &mut [Vec3], missing: &[bool]) {
+    if joints == 0 {
+        return;
+    }
+    let frames = positions.len() / joints;
+    for j in 0..joints {
+        let valid: Vec<usize> = (0..frames).filter(|&f| !missing[f * joints + j]).collect();
+        if valid.is_empty() {
+            continue;
+        }
+        let mut next = 0;
+        for f in 0..frames {
+            while next + 1 < valid.len() && valid[next + 1] <= f {
+                next += 1;
+            }
+            let a = valid[next];
+            let source = match valid.get(next + 1) {
+                Some(&b) if b.abs_diff(f) < a.abs_diff(f) => b,
+                _ => a,
+            };
+            positions[f * joints + j] = positions[source * joints + j];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hold_missing_takes_the_nearest_valid_sample() {
+        let mut p: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f32, 0.0, 0.0)).collect();
+        let missing = [true, false, true, true, true, false];
+        hold_missing(1, &mut p, &missing);
+        let xs: Vec<f32> = p.iter().map(|v| v.x).collect();
+        assert_eq!(xs, [1.0, 1.0, 1.0, 1.0, 5.0, 5.0]);
+    }
+}
