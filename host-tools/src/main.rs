@@ -1,0 +1,62 @@
+//! `posecoach`: the host command-line tool.
+//!
+//! Every command returns its output as text (a readable summary, or one JSON object with
+//! `--json`) and `main` prints it.
+
+mod inspect;
+mod retarget;
+mod tpose;
+
+use clap::{Parser, Subcommand};
+use std::io::Write;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "posecoach",
+    version,
+    about = "Virtual golf coach: retarget a coach's swing onto a student and score it"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Retarget a coach's motion onto a student's skeleton, given by a T-pose.
+    Retarget(retarget::Args),
+    /// Describe a motion file: format, joints, frames, rate, height, segments, missing data.
+    Inspect(inspect::Args),
+    /// Write a keypoint format's standard T-pose scaled to a height, for use as a student.
+    Tpose(tpose::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Retarget(args) => retarget::run(&args),
+        Command::Inspect(args) => inspect::run(&args),
+        Command::Tpose(args) => tpose::run(&args),
+    };
+    match result {
+        Ok(output) => {
+            // A reader that stops early (`| head`) is not an error.
+            let mut stdout = std::io::stdout().lock();
+            match stdout
+                .write_all(output.as_bytes())
+                .and_then(|()| stdout.flush())
+            {
+                Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+                    eprintln!("error: writing the output: {e}");
+                    ExitCode::FAILURE
+                }
+                _ => ExitCode::SUCCESS,
+            }
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
