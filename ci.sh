@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# The one test command: everything CI checks, runnable on a fresh Debian machine that has only
+# the Rust toolchain (rustup). Usage: ./ci.sh
+set -euo pipefail
+cd "$(dirname "$0")"
+
+step() { printf '\n==> %s\n' "$*"; }
+
+step "toolchain (rust-toolchain.toml: pinned version, rustfmt, clippy, thumbv7em-none-eabihf)"
+rustup toolchain install
+rustup show active-toolchain
+
+step "format"
+cargo fmt --all -- --check
+
+step "clippy"
+cargo clippy --workspace --all-targets -- -D warnings
+
+step "tests"
+cargo test --workspace
+
+step "thumbv7em-none-eabihf: core and adapters without std, with and without defmt"
+cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabihf
+cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabihf --features posecoach-core/defmt,posecoach-adapters/defmt
+
+step "no alloc: link both crates into a Cortex-M4F static library with no global allocator"
+(cd firmware-examples/no-alloc-check && cargo build --release && cargo build --release --features defmt)
+
+step "docs"
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
+
+step "all checks passed"
