@@ -1,9 +1,7 @@
 //! `posecoach retarget`: the coach's motion on the student's skeleton.
 
-use anyhow::{Context, Result};
-use posecoach_adapters::io::{self, Motion};
-use posecoach_core::retarget::Analytic;
-use posecoach_core::Vec3;
+use anyhow::Result;
+use posecoach_adapters::io;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -29,7 +27,9 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<String> {
     let coach = io::load(&args.coach)?;
     let student = io::load(&args.student_tpose)?;
-    let virtual_swing = retarget(&coach, &student)?;
+    let virtual_swing = coach
+        .retarget_analytic(&student)
+        .map_err(|(frame, e)| anyhow::anyhow!("coach frame {frame}: {e}"))?;
     io::save(&virtual_swing, &args.out)?;
     let summary = json!({
         "method": "analytic",
@@ -54,25 +54,5 @@ pub fn run(args: &Args) -> Result<String> {
             student.skeleton.height(),
             summary["root_scale"].as_f64().unwrap_or(1.0),
         ) + &format!("wrote {}\n", args.out.display())
-    })
-}
-
-/// The coach's motion retargeted frame by frame onto the student's skeleton.
-pub fn retarget(coach: &Motion, student: &Motion) -> Result<Motion> {
-    let analytic = Analytic::new(&coach.skeleton, &student.skeleton)
-        .context("cannot retarget between these skeletons")?;
-    let n = student.skeleton.len();
-    let mut positions = vec![Vec3::zeros(); coach.frames() * n];
-    for (f, out) in positions.chunks_exact_mut(n).enumerate() {
-        analytic
-            .frame(coach.frame(f), out)
-            .with_context(|| format!("coach frame {f}"))?;
-    }
-    Ok(Motion {
-        skeleton: student.skeleton.clone(),
-        names: student.names.clone(),
-        rate_hz: coach.rate_hz,
-        missing: vec![false; positions.len()],
-        positions,
     })
 }

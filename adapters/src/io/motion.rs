@@ -4,6 +4,7 @@
 use super::bvh::{Bvh, Channel};
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
+use posecoach_core::retarget::{Analytic, RetargetError};
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
 use posecoach_core::Vec3;
 use std::fmt;
@@ -46,6 +47,27 @@ impl Motion {
         } else {
             0.0
         }
+    }
+
+    /// This motion retargeted with the analytic retargeter onto `student`'s skeleton, keeping
+    /// the student's joint names and this motion's rate.
+    ///
+    /// # Errors
+    /// As [`Analytic::new`] and [`Analytic::frame`], the latter with the frame index.
+    pub fn retarget_analytic(&self, student: &Motion) -> Result<Motion, (usize, RetargetError)> {
+        let analytic = Analytic::new(&self.skeleton, &student.skeleton).map_err(|e| (0, e))?;
+        let n = student.skeleton.len();
+        let mut positions = vec![Vec3::zeros(); self.frames() * n];
+        for (f, out) in positions.chunks_exact_mut(n).enumerate() {
+            analytic.frame(self.frame(f), out).map_err(|e| (f, e))?;
+        }
+        Ok(Motion {
+            skeleton: student.skeleton.clone(),
+            names: student.names.clone(),
+            rate_hz: self.rate_hz,
+            missing: vec![false; positions.len()],
+            positions,
+        })
     }
 
     /// How many samples were missing in the file, per joint.
