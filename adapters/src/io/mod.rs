@@ -3,7 +3,9 @@
 //! [`load`] and [`save`] pick the format from the file extension: `.bvh` and `.csv` in and
 //! out, `.c3d` in.
 pub mod bvh;
+pub mod c3d;
 pub mod csv;
+pub mod golf;
 pub mod motion;
 
 pub use motion::Motion;
@@ -33,6 +35,12 @@ pub enum FileErrorKind {
     Bvh(bvh::BvhError),
     /// A BVH hierarchy that is not a usable skeleton.
     BvhSkeleton(motion::BvhImportError),
+    /// A C3D structure problem.
+    C3d(c3d::C3dError),
+    /// A C3D file without the golf marker set.
+    Golf(golf::GolfError),
+    /// Joint centres that do not make a skeleton (a bone never measured).
+    Skeleton(posecoach_core::skeleton::SkeletonError),
 }
 
 impl fmt::Display for FileError {
@@ -46,6 +54,12 @@ impl fmt::Display for FileError {
             FileErrorKind::Csv(e) => e.fmt(f),
             FileErrorKind::Bvh(e) => e.fmt(f),
             FileErrorKind::BvhSkeleton(e) => e.fmt(f),
+            FileErrorKind::C3d(e) => e.fmt(f),
+            FileErrorKind::Golf(e) => write!(
+                f,
+                "{e}: C3D files are read as the GearsSports golf marker set (see the README)"
+            ),
+            FileErrorKind::Skeleton(e) => write!(f, "the joint centres are not a skeleton: {e}"),
         }
     }
 }
@@ -74,6 +88,12 @@ pub fn load(path: &Path) -> Result<Motion, FileError> {
         "bvh" => {
             let bvh = bvh::Bvh::parse(&text()?).map_err(|e| fail(FileErrorKind::Bvh(e)))?;
             Motion::from_bvh(bvh, None).map_err(|e| fail(FileErrorKind::BvhSkeleton(e)))
+        }
+        "c3d" => {
+            let bytes = std::fs::read(path).map_err(|e| fail(FileErrorKind::Io(e)))?;
+            let c3d = c3d::C3d::parse(&bytes).map_err(|e| fail(FileErrorKind::C3d(e)))?;
+            let centres = golf::joint_centres(&c3d).map_err(|e| fail(FileErrorKind::Golf(e)))?;
+            Motion::from_golf(&centres).map_err(|e| fail(FileErrorKind::Skeleton(e)))
         }
         _ => Err(fail(FileErrorKind::UnknownExtension)),
     }

@@ -2,6 +2,7 @@
 //! conversion from and to BVH.
 
 use super::bvh::{Bvh, Channel};
+use super::golf::{JointCentres, GOLF_JOINTS};
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::retarget::{Analytic, RetargetError};
@@ -213,6 +214,28 @@ impl Motion {
         })
     }
 
+    /// A motion from golf joint centres on the [`Format::GolfMarkers`] skeleton, with bone
+    /// lengths measured as the mean over the frames. Samples still missing after the marker
+    /// filling are held from the nearest valid sample and flagged in `missing`.
+    ///
+    /// # Errors
+    /// [`SkeletonError`] if a bone could not be measured in any frame.
+    pub fn from_golf(centres: &JointCentres) -> Result<Motion, SkeletonError> {
+        let n = GOLF_JOINTS.len();
+        let mut positions: Vec<Vec3> = centres.positions.iter().map(|&p| Vec3::from(p)).collect();
+        let missing: Vec<bool> = centres.valid.iter().map(|&v| !v).collect();
+        let template = Format::GolfMarkers.default_skeleton()?;
+        let skeleton = measured_skeleton(&template, &positions, &missing)?;
+        hold_missing(n, &mut positions, &missing);
+        Ok(Motion {
+            skeleton,
+            names: GOLF_JOINTS.iter().map(|&j| j.to_string()).collect(),
+            rate_hz: centres.rate_hz,
+            positions,
+            missing,
+        })
+    }
+
     /// The motion as BVH in metres: every joint with position and Z-X-Y rotation channels, so
     /// positions re-import exactly (see [`Bvh::from_positions`]). A T-pose gets one frame at
     /// 30 fps.
@@ -299,6 +322,16 @@ pub fn hold_missing(joints: usize, positions: &mut [Vec3], missing: &[bool]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn golf_joint_order_matches_the_core_format() {
+        let core: Vec<&str> = Format::GolfMarkers
+            .joints()
+            .iter()
+            .map(|j| j.name)
+            .collect();
+        assert_eq!(core, GOLF_JOINTS);
+    }
 
     #[test]
     fn hold_missing_takes_the_nearest_valid_sample() {
