@@ -2,6 +2,8 @@
 //! `cargo test -p posecoach-tests --test fixtures -- --ignored`. Their provenance is this code.
 
 use posecoach_adapters::io::bvh::Bvh;
+use posecoach_adapters::io::c3d::C3d;
+use posecoach_adapters::io::{csv, golf, Motion};
 use posecoach_tests::{fixture, shared_data};
 
 /// The first `frames` frames of a BVH clip, every `step`-th frame, with the same hierarchy.
@@ -42,4 +44,11 @@ fn regenerate() {
         let bvh = Bvh::parse(&std::fs::read_to_string(data.join(source)).unwrap()).unwrap();
         std::fs::write(fixture(out), excerpt(&bvh, step, frames).to_text()).unwrap();
     }
+    let c3d = C3d::parse(&std::fs::read(data.join("golf/gears_tour_driver.c3d")).unwrap()).unwrap();
+    let centres = golf::resample(&golf::joint_centres(&c3d).unwrap(), GOLF_RATE_HZ);
+    let swing = Motion::from_golf(&centres).unwrap();
+    std::fs::write(fixture("golf_driver_60hz.csv"), csv::write(&swing)).unwrap();
 }
+
+/// The rate the scoring tests use for the golf swings.
+const GOLF_RATE_HZ: f32 = 60.0;

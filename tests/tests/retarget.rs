@@ -1,7 +1,7 @@
 //! Cross-format analytic retargeting, written as BVH and CSV and read back.
 
 use posecoach_adapters::io::{self, Motion};
-use posecoach_tests::fixture;
+use posecoach_tests::{fixture, shared_data};
 use std::path::Path;
 
 const TOLERANCE_M: f32 = 1e-5;
@@ -81,4 +81,25 @@ fn cmu_onto_an_h36m_t_pose_round_trips() {
     );
     assert_eq!(out.skeleton.len(), 17);
     round_trip(&out, "cmu-on-h36m");
+}
+
+#[test]
+fn golf_swing_onto_an_h36m_t_pose_round_trips() {
+    let out = retarget(
+        &fixture("golf_driver_60hz.csv"),
+        &fixture("h36m17_tpose.csv"),
+    );
+    assert!((out.rate_hz - 60.0).abs() < 0.01);
+    round_trip(&out, "golf-csv-on-h36m");
+}
+
+#[test]
+fn real_c3d_golf_swing_onto_an_h36m_t_pose_round_trips() {
+    let Some(data) = shared_data("real_c3d_golf_swing_onto_an_h36m_t_pose_round_trips") else {
+        return;
+    };
+    for name in ["gears_tour_driver.c3d", "gears_tour_iron.c3d"] {
+        let out = retarget(&data.join("golf").join(name), &fixture("h36m17_tpose.csv"));
+        round_trip(&out, name);
+    }
 }
