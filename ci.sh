@@ -26,6 +26,11 @@ cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabi
 step "no alloc: link both crates into a Cortex-M4F static library with no global allocator"
 (cd firmware-examples/no-alloc-check && cargo build --release && cargo build --release --features defmt)
 
+step "fuzz: every byte parser for 30 s, seeded with the committed fixtures (nightly, cargo-fuzz)"
+rustup toolchain install nightly --profile minimal
+command -v cargo-fuzz >/dev/null 2>&1 || cargo install cargo-fuzz --locked
+fuzz/run.sh 30
+
 step "docs"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 

@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Runs every fuzz target for a while, seeded with the committed fixtures.
+# Usage: fuzz/run.sh [SECONDS_PER_TARGET]   (default 30). Needs nightly and cargo-fuzz.
+set -euo pipefail
+cd "$(dirname "$0")"
+seconds="${1:-30}"
+mkdir -p logs
+for target in bvh c3d csv; do
+    corpus="corpus/$target"
+    mkdir -p "$corpus"
+    find ../tests/fixtures -name "*.$target" -exec cp {} "$corpus/" \;
+    log="logs/$target.txt"
+    if ! cargo +nightly fuzz run "$target" "$corpus" -- -max_total_time="$seconds" -rss_limit_mb=2048 >"$log" 2>&1; then
+        tail -40 "$log" >&2
+        echo "fuzz $target failed: see fuzz/$log and fuzz/artifacts/$target" >&2
+        exit 1
+    fi
+    echo "fuzz $target: $(grep -E '^Done [0-9]+ runs' "$log" || echo 'ran') in ${seconds}s"
+done
