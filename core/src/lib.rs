@@ -14,19 +14,22 @@
 //! Modules, in data-flow order:
 //! - [`config`]: every capacity constant.
 //! - [`joint`]: the canonical joint vocabulary and its parent table.
-//! - [`format`]: built-in keypoint formats mapped onto the vocabulary.
+//! - [`format`](mod@format): built-in keypoint formats mapped onto the vocabulary.
 //! - [`skeleton`]: joints, parents, rest offsets, body segments, end effectors, height.
 //! - [`kinematics`]: forward and inverse kinematics with per-bone rotations.
 //! - [`normalize`]: parent-relative positions and the height-normalized root trajectory.
 //! - [`retarget`]: the analytic retargeter.
+//! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod config;
+pub mod dtw;
 pub mod format;
 pub mod joint;
 pub mod kinematics;
+mod math;
 pub mod normalize;
 pub mod retarget;
 pub mod skeleton;

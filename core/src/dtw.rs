@@ -1,0 +1,705 @@
+//! Banded dynamic time warping between two pose sequences.
+//!
+//! A sequence is `3 · joints` channels of `frames` floats each, channel-major: the x of joint
+//! 0 in every frame, then the x of joint 1, ..., then all y, then all z. A band row's costs are
+//! then computed one joint at a time across the row's contiguous frames, a loop the compiler
+//! vectorizes, before a branch-free pass of the recurrence over the row.
+//! The cost of cell `(i, j)` is the weighted mean over joints of the Euclidean distance
+//! between joint positions in frame `i` of `a` and frame `j` of `b` (callers put the root at
+//! the origin). The accumulated distance is classic DTW: `D(i, j) = cost(i, j) +
+//! min(D(i-1, j-1), D(i-1, j), D(i, j-1))`, ties going diagonal, then `a` advancing, then `b`.
+//!
+//! The [`Band`] is a Sakoe-Chiba window of `radius` columns around a guide line through
+//! anchor cells: with no anchors the guide is the diagonal from `(0, 0)` to `(n-1, m-1)`;
+//! with matched swing events as anchors each phase is banded around its own diagonal. Only
+//! banded cells are computed: two rows of accumulated cost and 2 bits per banded cell for the
+//! path, all in caller-provided scratch (see [`scratch_len`]). When the band covers the whole
+//! matrix the result equals full DTW exactly.
+//!
+//! ```
+//! use posecoach_core::dtw::{align, scratch_len, Band, Sequence};
+//!
+//! // One joint moving along x (channels x, y, z); `b` lingers on its second frame.
+//! let a = [0.0, 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+//! let b = [0.0, 1.0, 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+//! let (a, b) = (Sequence::new(&a, 1).unwrap(), Sequence::new(&b, 1).unwrap());
+//! let band = Band::global(1);
+//! let len = scratch_len(a.frames(), b.frames(), &band).unwrap();
+//! let (mut cost, mut steps) = (vec![0.0; len.cost], vec![0u8; len.path_bytes]);
+//! let mut path = [(0u16, 0u16); 7];
+//! let result = align(&a, &b, &[], &band, &mut cost, &mut steps, &mut path).unwrap();
+//! assert_eq!(result.distance, 0.0);
+//! assert_eq!(&path[..result.path_len], &[(0, 0), (1, 1), (1, 2), (2, 3)]);
+//! ```
+
+use crate::config::MAX_JOINTS;
+use crate::math::sqrt;
+
+/// Largest number of anchors a band may have.
+pub const MAX_ANCHORS: usize = 16;
+
+/// Why an alignment could not be computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DtwError {
+    /// A sequence is empty, longer than `u16::MAX` frames, or not a whole number of frames.
+    SequenceShape,
+    /// The two sequences have different joint counts.
+    JointMismatch {
+        /// Joints in `a`.
+        a: usize,
+        /// Joints in `b`.
+        b: usize,
+    },
+    /// `weights` is neither empty nor one per joint, or has a negative, non-finite or all-zero
+    /// weight.
+    Weights,
+    /// Anchors must lie inside the matrix and increase strictly in both coordinates; at most
+    /// [`MAX_ANCHORS`].
+    Anchors,
+    /// A scratch buffer or the path output is too short.
+    Scratch {
+        /// The buffer that is short: 0 cost, 1 path bits, 2 path output.
+        which: u8,
+        /// Length needed.
+        needed: usize,
+    },
+}
+
+impl core::fmt::Display for DtwError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            DtwError::SequenceShape => {
+                f.write_str("a sequence is empty, too long or not a whole number of frames")
+            }
+            DtwError::JointMismatch { a, b } => {
+                write!(f, "sequences have {a} and {b} joints; they must match")
+            }
+            DtwError::Weights => f.write_str(
+                "weights must be empty or one finite, non-negative weight per joint, not all zero",
+            ),
+            DtwError::Anchors => {
+                f.write_str("anchors must increase strictly and lie inside both sequences")
+            }
+            DtwError::Scratch { which, needed } => {
+                let name =
+                    ["cost scratch", "path scratch", "path output"][(*which as usize).min(2)];
+                write!(f, "{name} too short: {needed} needed")
+            }
+        }
+    }
+}
+
+impl core::error::Error for DtwError {}
+
+/// A pose sequence: `3 · joints` channels (x of every joint, then y, then z) of `frames`
+/// floats each.
+#[derive(Clone, Copy, Debug)]
+pub struct Sequence<'a> {
+    data: &'a [f32],
+    joints: usize,
+}
+
+impl<'a> Sequence<'a> {
+    /// Wraps channel-major `data` of `joints` joints.
+    ///
+    /// # Errors
+    /// [`DtwError::SequenceShape`] for no joints or more than [`MAX_JOINTS`], no frames, a
+    /// partial frame or more than `u16::MAX` frames.
+    pub fn new(data: &'a [f32], joints: usize) -> Result<Self, DtwError> {
+        let dims = 3 * joints;
+        if joints == 0
+            || joints > MAX_JOINTS
+            || data.is_empty()
+            || !data.len().is_multiple_of(dims)
+            || data.len() / dims > u16::MAX as usize
+        {
+            return Err(DtwError::SequenceShape);
+        }
+        Ok(Sequence { data, joints })
+    }
+
+    /// Number of frames.
+    pub fn frames(&self) -> usize {
+        self.data.len() / (3 * self.joints)
+    }
+
+    /// Number of joints.
+    pub fn joints(&self) -> usize {
+        self.joints
+    }
+
+    /// Channel `c` (`axis · joints + joint`) over frames `range`.
+    fn channel(&self, c: usize, range: core::ops::Range<usize>) -> &'a [f32] {
+        let frames = self.frames();
+        &self.data[c * frames..][range]
+    }
+
+    /// Value of channel `c` in frame `i`.
+    fn at(&self, c: usize, i: usize) -> f32 {
+        self.data[c * self.frames() + i]
+    }
+}
+
+/// A Sakoe-Chiba band around a guide line through anchor cells.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Band {
+    radius: u16,
+    anchors: [(u16, u16); MAX_ANCHORS],
+    anchor_count: u8,
+}
+
+impl Band {
+    /// A band of `radius` columns around the diagonal from `(0, 0)` to `(n-1, m-1)`.
+    pub const fn global(radius: u16) -> Band {
+        Band {
+            radius,
+            anchors: [(0, 0); MAX_ANCHORS],
+            anchor_count: 0,
+        }
+    }
+
+    /// A band of `radius` columns around the piecewise-linear guide through `anchors`
+    /// (matched frames `(i in a, j in b)`, e.g. swing events), each segment its own diagonal.
+    ///
+    /// # Errors
+    /// [`DtwError::Anchors`] for more than [`MAX_ANCHORS`] anchors or anchors that do not
+    /// increase strictly in both coordinates. [`align`] also requires them strictly inside the
+    /// matrix: `0 < i < n-1` and `0 < j < m-1`.
+    pub fn anchored(radius: u16, anchors: &[(u16, u16)]) -> Result<Band, DtwError> {
+        let mut band = Band::global(radius);
+        if anchors.len() > MAX_ANCHORS
+            || anchors
+                .windows(2)
+                .any(|w| w[1].0 <= w[0].0 || w[1].1 <= w[0].1)
+        {
+            return Err(DtwError::Anchors);
+        }
+        band.anchors[..anchors.len()].copy_from_slice(anchors);
+        band.anchor_count = anchors.len() as u8;
+        Ok(band)
+    }
+
+    /// The anchors given to [`Band::anchored`].
+    pub fn anchors(&self) -> &[(u16, u16)] {
+        &self.anchors[..self.anchor_count as usize]
+    }
+
+    /// The guide through `(0, 0)`, the anchors and `(n-1, m-1)`; `None` unless every anchor
+    /// lies strictly inside the matrix (`0 < i < n-1`, `0 < j < m-1`).
+    fn guide(&self, n: usize, m: usize) -> Option<Guide> {
+        let mut points = [(0.0f32, 0.0f32); MAX_ANCHORS + 2];
+        for (point, &(i, j)) in points[1..].iter_mut().zip(self.anchors()) {
+            let (i, j) = (i as usize, j as usize);
+            if i == 0 || j == 0 || i + 1 >= n || j + 1 >= m {
+                return None;
+            }
+            *point = (i as f32, j as f32);
+        }
+        let count = self.anchors().len() + 2;
+        points[count - 1] = ((n - 1) as f32, (m - 1) as f32);
+        Some(Guide {
+            points,
+            count,
+            n,
+            m,
+            radius: self.radius as usize,
+        })
+    }
+}
+
+struct Guide {
+    points: [(f32, f32); MAX_ANCHORS + 2],
+    count: usize,
+    n: usize,
+    m: usize,
+    radius: usize,
+}
+
+impl Guide {
+    /// Column of the guide line at row `i` (clamped to the last row).
+    fn center(&self, i: usize) -> f32 {
+        let x = i.min(self.n - 1) as f32;
+        let points = &self.points[..self.count];
+        for w in points.windows(2) {
+            let ((i0, j0), (i1, j1)) = (w[0], w[1]);
+            if x <= i1 {
+                return if i1 > i0 {
+                    j0 + (x - i0) * (j1 - j0) / (i1 - i0)
+                } else {
+                    j1
+                };
+            }
+        }
+        (self.m - 1) as f32
+    }
+
+    /// Banded columns `lo..=hi` of row `i`: `radius` columns either side of the guide, and up
+    /// to the guide's next column, so both bounds never decrease and each row starts at most
+    /// one column past the previous row's end: a path always exists. The first row starts at
+    /// column 0 and the last row ends at column `m-1`.
+    fn row(&self, i: usize) -> (usize, usize) {
+        let last = self.m - 1;
+        let c = self.center(i);
+        let lo = if i == 0 {
+            0
+        } else {
+            (libm::floorf(c) as usize).saturating_sub(self.radius)
+        };
+        let hi = if i + 1 >= self.n {
+            last
+        } else {
+            let next = self.center(i + 1) - 1.0;
+            (libm::ceilf(c.max(next)) as usize + self.radius).min(last)
+        };
+        (lo.min(last), hi)
+    }
+}
+
+/// Scratch sizes for [`align`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ScratchLen {
+    /// Floats of cost scratch: two padded rows of accumulated cost and one row of cell costs,
+    /// each as wide as the band's widest step from one row to the next.
+    pub cost: usize,
+    /// Bytes of path scratch (2 bits per banded cell).
+    pub path_bytes: usize,
+    /// Banded cells.
+    pub cells: usize,
+}
+
+/// Scratch needed to align `n` frames with `m` frames in `band`.
+///
+/// # Errors
+/// [`DtwError::SequenceShape`] for an empty sequence, [`DtwError::Anchors`] for anchors
+/// outside the matrix.
+pub fn scratch_len(n: usize, m: usize, band: &Band) -> Result<ScratchLen, DtwError> {
+    if n == 0 || m == 0 {
+        return Err(DtwError::SequenceShape);
+    }
+    let guide = band.guide(n, m).ok_or(DtwError::Anchors)?;
+    // Accumulated-cost rows must reach from one column before the previous row's start to
+    // one column after this row's end.
+    let (mut cells, mut span, mut prev_lo) = (0, 0, 0);
+    for i in 0..n {
+        let (lo, hi) = guide.row(i);
+        cells += hi - lo + 1;
+        span = span.max(hi + 1 - prev_lo.min(lo));
+        prev_lo = lo;
+    }
+    Ok(ScratchLen {
+        cost: 3 * (span + 2),
+        path_bytes: cells.div_ceil(4),
+        cells,
+    })
+}
+
+/// The result of [`align`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Alignment {
+    /// Sum of cell costs along the path (the unit of the coordinates).
+    pub distance: f32,
+    /// `distance` divided by the path length.
+    pub normalized: f32,
+    /// Number of path cells written to the path output.
+    pub path_len: usize,
+}
+
+const DIAGONAL: u8 = 0;
+const ADVANCE_A: u8 = 1;
+const ADVANCE_B: u8 = 2;
+
+/// Aligns `a` to `b` within `band` and writes the warping path, `(frame of a, frame of b)`
+/// from `(0, 0)` to the last frames, into `path` (which needs `a.frames() + b.frames() - 1`
+/// entries at most).
+///
+/// `weights` is empty (every joint counts the same) or one weight per joint.
+///
+/// # Errors
+/// [`DtwError`] for mismatched sequences, bad weights or anchors, or short buffers.
+pub fn align(
+    a: &Sequence<'_>,
+    b: &Sequence<'_>,
+    weights: &[f32],
+    band: &Band,
+    cost: &mut [f32],
+    steps: &mut [u8],
+    path: &mut [(u16, u16)],
+) -> Result<Alignment, DtwError> {
+    let joints = a.joints();
+    if b.joints() != joints {
+        return Err(DtwError::JointMismatch {
+            a: joints,
+            b: b.joints(),
+        });
+    }
+    let weight_sum: f32 = weights.iter().sum();
+    if !(weights.is_empty()
+        || (weights.len() == joints
+            && weights.iter().all(|w| w.is_finite() && *w >= 0.0)
+            && weight_sum > 0.0))
+    {
+        return Err(DtwError::Weights);
+    }
+    let (n, m) = (a.frames(), b.frames());
+    let guide = band.guide(n, m).ok_or(DtwError::Anchors)?;
+    let len = scratch_len(n, m, band)?;
+    let short = |which: u8, needed: usize| DtwError::Scratch { which, needed };
+    if cost.len() < len.cost {
+        return Err(short(0, len.cost));
+    }
+    if steps.len() < len.path_bytes {
+        return Err(short(1, len.path_bytes));
+    }
+    if path.len() < n + m - 1 {
+        return Err(short(2, n + m - 1));
+    }
+    let cell = match weights {
+        [] => CellCost {
+            weights: &ONES[..joints],
+            scale: 1.0 / joints as f32,
+        },
+        w => CellCost {
+            weights: w,
+            scale: 1.0 / weight_sum,
+        },
+    };
+
+    // Accumulated-cost rows are stored from one column left of the row's first column, with
+    // infinity there and after the row's end, so neighbours need no range checks.
+    let width = len.cost / 3;
+    let (rows, here) = cost[..3 * width].split_at_mut(2 * width);
+    let (mut prev, mut curr) = rows.split_at_mut(width);
+    prev.fill(f32::INFINITY);
+    let mut prev_lo = 0usize;
+    let mut bits = StepWriter {
+        steps,
+        offset: 0,
+        acc: 0,
+        count: 0,
+    };
+    for i in 0..n {
+        let (lo, hi) = guide.row(i);
+        let cells = &mut here[..hi - lo + 1];
+        cell.row(a, i, b, lo..hi + 1, cells);
+        // prev[k] holds column prev_lo + k - 1.
+        let shift = lo + 1 - prev_lo;
+        curr[0] = f32::INFINITY;
+        let mut left = f32::INFINITY;
+        for (k, &c) in cells.iter().enumerate() {
+            let (diagonal, up) = (prev[shift + k - 1], prev[shift + k]);
+            let (mut best, mut step) = (diagonal, DIAGONAL);
+            if up < best {
+                (best, step) = (up, ADVANCE_A);
+            }
+            if left < best {
+                (best, step) = (left, ADVANCE_B);
+            }
+            if i == 0 && k == 0 {
+                best = 0.0;
+            }
+            left = c + best;
+            curr[k + 1] = left;
+            bits.push(step);
+        }
+        curr[cells.len() + 1..].fill(f32::INFINITY);
+        core::mem::swap(&mut prev, &mut curr);
+        prev_lo = lo;
+    }
+    bits.flush();
+    let distance = prev[m - prev_lo];
+
+    // Walk back from (n-1, m-1), recomputing each row's range and its offset in `steps`.
+    let (mut i, mut j) = (n - 1, m - 1);
+    let (mut lo, _) = guide.row(i);
+    let mut row_start = len.cells - (m - lo);
+    let mut written = 0;
+    loop {
+        path[written] = (i as u16, j as u16);
+        written += 1;
+        if i == 0 && j == 0 {
+            break;
+        }
+        let at = row_start + (j - lo);
+        let step = (steps[at / 4] >> (2 * (at % 4))) & 0b11;
+        if step != ADVANCE_B {
+            i -= 1;
+            let (new_lo, new_hi) = guide.row(i);
+            row_start -= new_hi - new_lo + 1;
+            lo = new_lo;
+        }
+        if step != ADVANCE_A {
+            j -= 1;
+        }
+    }
+    path[..written].reverse();
+    Ok(Alignment {
+        distance,
+        normalized: distance / written as f32,
+        path_len: written,
+    })
+}
+
+/// Weights used when the caller gives none.
+const ONES: [f32; MAX_JOINTS] = [1.0; MAX_JOINTS];
+
+/// The per-cell cost: weighted mean joint distance.
+struct CellCost<'w> {
+    /// One weight per joint.
+    weights: &'w [f32],
+    /// One over the sum of the weights.
+    scale: f32,
+}
+
+impl CellCost<'_> {
+    /// Costs of frame `i` of `a` against frames `columns` of `b`, into `out`: joint by joint,
+    /// each a loop across the columns (vectorized), summed in joint order.
+    fn row(
+        &self,
+        a: &Sequence<'_>,
+        i: usize,
+        b: &Sequence<'_>,
+        columns: core::ops::Range<usize>,
+        out: &mut [f32],
+    ) {
+        out.fill(0.0);
+        let joints = a.joints();
+        for (k, &w) in self.weights.iter().enumerate() {
+            let (x, y, z) = (a.at(k, i), a.at(joints + k, i), a.at(2 * joints + k, i));
+            let bx = b.channel(k, columns.clone());
+            let by = b.channel(joints + k, columns.clone());
+            let bz = b.channel(2 * joints + k, columns.clone());
+            for (((o, &u), &v), &t) in out.iter_mut().zip(bx).zip(by).zip(bz) {
+                let (dx, dy, dz) = (x - u, y - v, z - t);
+                *o += w * sqrt(dx * dx + dy * dy + dz * dz);
+            }
+        }
+        for o in out.iter_mut() {
+            *o *= self.scale;
+        }
+    }
+}
+
+/// Packs path steps, 2 bits each, 32 to a word before they are stored.
+struct StepWriter<'s> {
+    steps: &'s mut [u8],
+    offset: usize,
+    acc: u64,
+    count: u32,
+}
+
+impl StepWriter<'_> {
+    fn push(&mut self, step: u8) {
+        self.acc |= u64::from(step) << (2 * self.count);
+        self.count += 1;
+        if self.count == 32 {
+            self.flush();
+        }
+    }
+
+    /// Stores the pending steps (bytes are whole: a partial last byte is padded with zeros).
+    fn flush(&mut self) {
+        let bytes = (self.count as usize).div_ceil(4);
+        let end = (self.offset + bytes).min(self.steps.len());
+        for (byte, value) in self.steps[self.offset..end]
+            .iter_mut()
+            .zip(self.acc.to_le_bytes())
+        {
+            *byte = value;
+        }
+        self.offset = end;
+        (self.acc, self.count) = (0, 0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    /// Full-matrix DTW with the same cost (summed in joint order), recurrence and tie-breaking.
+    fn naive(a: &Sequence<'_>, b: &Sequence<'_>, weights: &[f32]) -> (f32, Vec<(u16, u16)>) {
+        let (n, m, joints) = (a.frames(), b.frames(), a.joints());
+        let scale = 1.0
+            / if weights.is_empty() {
+                joints as f32
+            } else {
+                weights.iter().sum::<f32>()
+            };
+        let cost = |i: usize, j: usize| {
+            let mut total = 0.0f32;
+            for k in 0..joints {
+                let d = |axis: usize| a.at(axis * joints + k, i) - b.at(axis * joints + k, j);
+                let (dx, dy, dz) = (d(0), d(1), d(2));
+                total +=
+                    weights.get(k).copied().unwrap_or(1.0) * (dx * dx + dy * dy + dz * dz).sqrt();
+            }
+            total * scale
+        };
+        let mut d = vec![vec![f32::INFINITY; m]; n];
+        let mut step = vec![vec![DIAGONAL; m]; n];
+        for i in 0..n {
+            for j in 0..m {
+                let here = cost(i, j);
+                if i == 0 && j == 0 {
+                    d[i][j] = here;
+                    continue;
+                }
+                let diagonal = if i > 0 && j > 0 {
+                    d[i - 1][j - 1]
+                } else {
+                    f32::INFINITY
+                };
+                let up = if i > 0 { d[i - 1][j] } else { f32::INFINITY };
+                let left = if j > 0 { d[i][j - 1] } else { f32::INFINITY };
+                let (best, s) = if diagonal <= up && diagonal <= left {
+                    (diagonal, DIAGONAL)
+                } else if up <= left {
+                    (up, ADVANCE_A)
+                } else {
+                    (left, ADVANCE_B)
+                };
+                d[i][j] = here + best;
+                step[i][j] = s;
+            }
+        }
+        let (mut i, mut j) = (n - 1, m - 1);
+        let mut path = vec![(i as u16, j as u16)];
+        while (i, j) != (0, 0) {
+            match step[i][j] {
+                DIAGONAL => (i, j) = (i - 1, j - 1),
+                ADVANCE_A => i -= 1,
+                _ => j -= 1,
+            }
+            path.push((i as u16, j as u16));
+        }
+        path.reverse();
+        (d[n - 1][m - 1], path)
+    }
+
+    fn run(
+        a: &Sequence<'_>,
+        b: &Sequence<'_>,
+        weights: &[f32],
+        band: &Band,
+    ) -> (Alignment, Vec<(u16, u16)>) {
+        let len = scratch_len(a.frames(), b.frames(), band).unwrap();
+        let mut cost = vec![0.0; len.cost];
+        let mut steps = vec![0u8; len.path_bytes];
+        let mut path = vec![(0, 0); a.frames() + b.frames() - 1];
+        let r = align(a, b, weights, band, &mut cost, &mut steps, &mut path).unwrap();
+        path.truncate(r.path_len);
+        (r, path)
+    }
+
+    fn sequences() -> impl Strategy<Value = (usize, Vec<f32>, Vec<f32>, Vec<f32>)> {
+        (1usize..12, 1usize..40, 1usize..40).prop_flat_map(|(joints, n, m)| {
+            (
+                Just(joints),
+                prop::collection::vec(-1.0f32..1.0, 3 * joints * n),
+                prop::collection::vec(-1.0f32..1.0, 3 * joints * m),
+                prop::collection::vec(0.0f32..2.0, joints),
+            )
+        })
+    }
+
+    proptest! {
+        #[test]
+        fn a_band_covering_the_matrix_is_classic_dtw((joints, a, b, w) in sequences(), weighted in any::<bool>()) {
+            let (a, b) = (Sequence::new(&a, joints).unwrap(), Sequence::new(&b, joints).unwrap());
+            let weights: &[f32] = if weighted && w.iter().sum::<f32>() > 0.0 { &w } else { &[] };
+            let (expected, expected_path) = naive(&a, &b, weights);
+            let (got, path) = run(&a, &b, weights, &Band::global(u16::MAX));
+            prop_assert_eq!(got.distance, expected);
+            prop_assert_eq!(path, expected_path);
+        }
+
+        #[test]
+        fn banded_paths_are_valid_and_no_shorter_than_classic(
+            (joints, a, b, _) in sequences(), radius in 0u16..6, cuts in prop::collection::vec((0.0f32..1.0, 0.0f32..1.0), 0..4),
+        ) {
+            let (a, b) = (Sequence::new(&a, joints).unwrap(), Sequence::new(&b, joints).unwrap());
+            let (n, m) = (a.frames(), b.frames());
+            // Anchors strictly inside the matrix, increasing in both coordinates.
+            let mut anchors: Vec<(u16, u16)> = Vec::new();
+            let (mut fi, mut fj): (Vec<f32>, Vec<f32>) = cuts.into_iter().unzip();
+            fi.sort_by(f32::total_cmp);
+            fj.sort_by(f32::total_cmp);
+            for (x, y) in fi.into_iter().zip(fj) {
+                let (i, j) = (1 + (x * (n as f32 - 2.0)) as u16, 1 + (y * (m as f32 - 2.0)) as u16);
+                if (i as usize) < n - 1 && (j as usize) < m - 1 && anchors.last().is_none_or(|&(pi, pj)| i > pi && j > pj) {
+                    anchors.push((i, j));
+                }
+            }
+            let band = Band::anchored(radius, &anchors).unwrap();
+            let guide = band.guide(n, m).unwrap();
+            let mut previous = (0, 0);
+            for i in 0..n {
+                let (lo, hi) = guide.row(i);
+                prop_assert!(lo <= hi && hi < m);
+                if i > 0 {
+                    prop_assert!(lo >= previous.0 && hi >= previous.1 && lo <= previous.1 + 1);
+                }
+                previous = (lo, hi);
+            }
+            for &(i, j) in &anchors {
+                let (lo, hi) = guide.row(i as usize);
+                prop_assert!(lo <= j as usize && j as usize <= hi, "anchor outside the band");
+            }
+            let (banded, path) = run(&a, &b, &[], &band);
+            prop_assert_eq!(path[0], (0, 0));
+            prop_assert_eq!(*path.last().unwrap(), ((n - 1) as u16, (m - 1) as u16));
+            for w in path.windows(2) {
+                let step = (w[1].0 - w[0].0, w[1].1 - w[0].1);
+                prop_assert!(matches!(step, (1, 1) | (1, 0) | (0, 1)));
+            }
+            for &(i, j) in &path {
+                let (lo, hi) = guide.row(i as usize);
+                prop_assert!(lo <= j as usize && j as usize <= hi);
+            }
+            let (classic, _) = naive(&a, &b, &[]);
+            prop_assert!(banded.distance >= classic);
+        }
+    }
+
+    #[test]
+    fn bad_inputs_are_errors() {
+        let a = [0.0f32; 6];
+        assert_eq!(
+            Sequence::new(&a[..5], 1).err(),
+            Some(DtwError::SequenceShape)
+        );
+        assert_eq!(Sequence::new(&a, 0).err(), Some(DtwError::SequenceShape));
+        let (s1, s2) = (Sequence::new(&a, 1).unwrap(), Sequence::new(&a, 2).unwrap());
+        let band = Band::global(2);
+        let mut path = [(0, 0); 8];
+        assert_eq!(
+            align(&s1, &s2, &[], &band, &mut [0.0; 8], &mut [0; 8], &mut path),
+            Err(DtwError::JointMismatch { a: 1, b: 2 })
+        );
+        assert_eq!(
+            align(
+                &s1,
+                &s1,
+                &[1.0, 1.0],
+                &band,
+                &mut [0.0; 8],
+                &mut [0; 8],
+                &mut path
+            ),
+            Err(DtwError::Weights)
+        );
+        let needed = scratch_len(2, 2, &band).unwrap().cost;
+        assert_eq!(
+            align(&s1, &s1, &[], &band, &mut [0.0; 1], &mut [0; 8], &mut path),
+            Err(DtwError::Scratch { which: 0, needed })
+        );
+        assert_eq!(
+            Band::anchored(1, &[(3, 3), (2, 4)]).err(),
+            Some(DtwError::Anchors)
+        );
+        let edge = Band::anchored(1, &[(0, 1)]).unwrap();
+        assert_eq!(scratch_len(2, 2, &edge).err(), Some(DtwError::Anchors));
+    }
+}
