@@ -3,6 +3,7 @@
 //! Every command returns its output as text (a readable summary, or one JSON object with
 //! `--json`) and `main` prints it.
 
+mod bench;
 mod inspect;
 mod retarget;
 mod tpose;
@@ -30,6 +31,8 @@ enum Command {
     Inspect(inspect::Args),
     /// Write a keypoint format's standard T-pose scaled to a height, for use as a student.
     Tpose(tpose::Args),
+    /// Measure the speed of the core's hot paths.
+    Bench(bench::Args),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +41,7 @@ fn main() -> ExitCode {
         Command::Retarget(args) => retarget::run(&args),
         Command::Inspect(args) => inspect::run(&args),
         Command::Tpose(args) => tpose::run(&args),
+        Command::Bench(args) => bench::run(&args),
     };
     match result {
         Ok(output) => {
