@@ -2,7 +2,7 @@
 //! `cargo test -p posecoach-tests --test fixtures -- --ignored`. Their provenance is this code.
 
 use posecoach_adapters::io::bvh::Bvh;
-use posecoach_adapters::io::c3d::C3d;
+use posecoach_adapters::io::c3d::{C3d, Storage};
 use posecoach_adapters::io::{csv, golf, Motion};
 use posecoach_tests::{fixture, shared_data};
 
@@ -22,6 +22,25 @@ fn excerpt(bvh: &Bvh, step: usize, frames: usize) -> Bvh {
         frame_time: bvh.frame_time * step as f64,
         frames: motion.len() / channels,
         motion,
+    }
+}
+
+/// Every `step`-th frame of a C3D trial, with its labels and missing samples as they are.
+fn decimate(c3d: &C3d, step: usize) -> C3d {
+    fn every<T: Copy>(samples: &[T], labels: usize, step: usize) -> Vec<T> {
+        let frames = samples.chunks_exact(labels).step_by(step);
+        frames.flatten().copied().collect()
+    }
+    let n = c3d.labels.len();
+    let points = every(&c3d.points, n, step);
+    C3d {
+        labels: c3d.labels.clone(),
+        rate_hz: c3d.rate_hz / step as f32,
+        frames: points.len() / n,
+        first_frame: c3d.first_frame,
+        units_to_metres: c3d.units_to_metres,
+        points,
+        valid: every(&c3d.valid, n, step),
     }
 }
 
@@ -48,7 +67,19 @@ fn regenerate() {
     let centres = golf::resample(&golf::joint_centres(&c3d).unwrap(), GOLF_RATE_HZ);
     let swing = Motion::from_golf(&centres).unwrap();
     std::fs::write(fixture("golf_driver_60hz.csv"), csv::write(&swing)).unwrap();
+
+    let markers = decimate(&c3d, (c3d.rate_hz / GOLF_RATE_HZ) as usize);
+    assert_eq!(markers.rate_hz, GOLF_RATE_HZ);
+    let bytes = markers.to_bytes(MARKER_STORAGE);
+    let back = C3d::parse(&bytes).unwrap();
+    assert_eq!(
+        back.valid, markers.valid,
+        "a marker is out of the integer range"
+    );
+    std::fs::write(fixture("golf_driver_markers_60hz.c3d"), bytes).unwrap();
 }
 
 /// The rate the scoring tests use for the golf swings.
 const GOLF_RATE_HZ: f32 = 60.0;
+/// 0.5 mm steps (±16.38 m): half the size of float storage.
+const MARKER_STORAGE: Storage = Storage::Integer { scale: 0.0005 };

@@ -2,6 +2,7 @@
 //! height.
 
 use posecoach_adapters::io;
+use posecoach_adapters::io::c3d::C3d;
 use posecoach_tests::{files, fixture, shared_data};
 use std::path::Path;
 
@@ -49,6 +50,16 @@ fn committed_fixtures_import() {
     for name in ["cmu_131_01_excerpt.bvh", "bandai_walk_excerpt.bvh"] {
         check(&fixture(name));
     }
+    let markers = fixture("golf_driver_markers_60hz.c3d");
+    assert_eq!(check(&markers), 109);
+    let raw = C3d::parse(&std::fs::read(&markers).unwrap()).unwrap();
+    assert!(
+        raw.valid.contains(&false),
+        "the fixture keeps the capture's gaps"
+    );
+    let golf = io::load(&markers).unwrap();
+    assert_eq!(golf.skeleton.format().name(), "golf");
+    assert_eq!((golf.skeleton.len(), golf.rate_hz), (22, 60.0));
     let tpose = io::load(&fixture("h36m17_tpose.csv")).unwrap();
     assert_eq!((tpose.frames(), tpose.skeleton.len()), (1, 17));
     assert!((tpose.skeleton.height() - 1.62).abs() < 1e-4);

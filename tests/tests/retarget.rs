@@ -94,6 +94,17 @@ fn golf_swing_onto_an_h36m_t_pose_round_trips() {
 }
 
 #[test]
+fn c3d_golf_markers_onto_an_h36m_t_pose_round_trip() {
+    let out = retarget(
+        &fixture("golf_driver_markers_60hz.c3d"),
+        &fixture("h36m17_tpose.csv"),
+    );
+    assert_eq!((out.frames(), out.skeleton.len()), (109, 17));
+    assert!((out.rate_hz - 60.0).abs() < 0.01);
+    round_trip(&out, "golf-c3d-on-h36m");
+}
+
+#[test]
 fn real_c3d_golf_swing_onto_an_h36m_t_pose_round_trips() {
     let Some(data) = shared_data("real_c3d_golf_swing_onto_an_h36m_t_pose_round_trips") else {
         return;

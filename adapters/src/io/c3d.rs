@@ -1,4 +1,4 @@
-//! Reader for the point data of C3D motion-capture files.
+//! Reader and writer for the point data of C3D motion-capture files.
 //!
 //! Supported subset of the format (see the C3D.ORG user guide):
 //! - 512-byte blocks; block 1 is the header (byte 0 = first parameter block, byte 1 = `0x50`).
@@ -17,11 +17,15 @@
 //!
 //! Conventions: positions are converted to metres using `POINT:UNITS`; the axes are left as
 //! stored. A sample is missing when its residual word is negative or a coordinate is not finite;
-//! missing samples read as `[0.0; 3]` with `valid == false`. Events, analog values, force
+//! missing samples read as zero with `valid == false`. Events, analog values, force
 //! plates, camera masks and residual magnitudes are not read.
 //!
 //! Parsing never panics and never reads outside the input: every declared size is checked
 //! against the byte length first, and allocations are bounded by it.
+//!
+//! [`C3d::to_bytes`] writes Intel files with metres as units and no analog channels, in either
+//! [`Storage`].
+use posecoach_core::Vec3;
 use std::fmt;
 
 /// Size of a C3D block in bytes.
@@ -29,14 +33,20 @@ const BLOCK: usize = 512;
 /// Key stored in header byte 1.
 const KEY: u8 = 0x50;
 
-/// Default longest gap, in frames, that [`C3d::fill_gaps`] bridges.
+/// Longest gap, in seconds, that the golf import bridges with [`C3d::fill_gaps`].
 ///
-/// 10 frames is 28 ms at 360 Hz, the longest gap the GearsSports exports declare as interpolable
+/// 10 frames at 360 Hz (28 ms), the longest gap the GearsSports exports declare as interpolable
 /// (header word 6). Deleting 10-frame windows of valid data in the two golf trials and refilling
 /// them gives errors of 1–4 mm on the pelvis and slow phases, but up to 2–3 cm on the wrists and
 /// elbows and 6.5 cm on the shaft cluster in the downswing (5-frame gaps: 1 cm and 3 cm), so
-/// longer gaps are left missing rather than bridged by guesswork.
-pub const MAX_GAP_FRAMES: usize = 10;
+/// longer gaps are left missing rather than bridged by guesswork. It is a duration, not a
+/// frame count, so that a file resampled to 60 Hz is not bridged over 167 ms.
+pub const MAX_GAP_S: f32 = 10.0 / 360.0;
+
+/// [`MAX_GAP_S`] in frames at `rate_hz` (at least one frame).
+pub fn max_gap_frames(rate_hz: f32) -> usize {
+    ((rate_hz * MAX_GAP_S).round() as usize).max(1)
+}
 
 /// Point data of a C3D file.
 #[derive(Debug, Clone, PartialEq)]
@@ -52,9 +62,24 @@ pub struct C3d {
     /// Factor converting the stored units to metres (from `POINT:UNITS`).
     pub units_to_metres: f32,
     /// Positions in metres, `frames × labels`, row-major by frame, C3D axes.
-    pub points: Vec<[f32; 3]>,
+    pub points: Vec<Vec3>,
     /// Validity of each sample, `frames × labels`.
     pub valid: Vec<bool>,
+}
+
+/// How [`C3d::to_bytes`] stores coordinates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Storage {
+    /// 32-bit floats (`POINT:SCALE` −1): positions are kept exactly.
+    Float,
+    /// 16-bit integers counting steps of `scale` metres (`POINT:SCALE`), half the size of float
+    /// storage. Positions are rounded to the nearest step; a sample beyond ±32767 steps on any
+    /// axis is written as missing. A scale of 0.0005 holds ±16.38 m in 0.5 mm steps (error at
+    /// most 0.25 mm).
+    Integer {
+        /// Metres per step; positive and finite.
+        scale: f32,
+    },
 }
 
 /// Why a C3D file could not be read.
@@ -155,6 +180,15 @@ enum Format {
 }
 
 impl Format {
+    /// Processor type in the parameter section header.
+    fn processor(self) -> u8 {
+        match self {
+            Self::Intel => 84,
+            Self::Dec => 85,
+            Self::Mips => 86,
+        }
+    }
+
     fn u16(self, b: [u8; 2]) -> u16 {
         match self {
             Self::Mips => u16::from_be_bytes(b),
@@ -169,6 +203,21 @@ impl Format {
             Self::Dec => vax_to_f32(b),
         }
     }
+
+    fn u16_bytes(self, v: u16) -> [u8; 2] {
+        match self {
+            Self::Mips => v.to_be_bytes(),
+            Self::Intel | Self::Dec => v.to_le_bytes(),
+        }
+    }
+
+    fn f32_bytes(self, v: f32) -> [u8; 4] {
+        match self {
+            Self::Intel => v.to_le_bytes(),
+            Self::Mips => v.to_be_bytes(),
+            Self::Dec => f32_to_vax(v),
+        }
+    }
 }
 
 /// Decodes a VAX F-float as stored in DEC C3D files: two little-endian 16-bit words, the first
@@ -181,6 +230,15 @@ fn vax_to_f32(b: [u8; 4]) -> f32 {
     }
     // Read as IEEE the same bits mean 1.f × 2^(e-127); VAX means 0.1f × 2^(e-128), a quarter.
     f32::from_bits(bits) / 4.0
+}
+
+/// Encodes a VAX F-float: the inverse of [`vax_to_f32`] for zero and magnitudes from 2^-128 up
+/// to 2^126.
+fn f32_to_vax(v: f32) -> [u8; 4] {
+    // VAX has no negative zero: sign + zero exponent is the reserved operand.
+    let v = if v == 0.0 { 0.0 } else { v };
+    let b = (v * 4.0).to_bits().to_le_bytes();
+    [b[2], b[3], b[0], b[1]]
 }
 
 /// The input bytes with the file's number format; every read is bounds-checked.
@@ -369,11 +427,9 @@ impl C3d {
         let Some(&[_, _, blocks, processor]) = data.get(start..start + 4) else {
             return Err(truncated(start, 4, len, "parameter section header"));
         };
-        let format = match processor {
-            84 => Format::Intel,
-            85 => Format::Dec,
-            86 => Format::Mips,
-            _ => return Err(err(start + 3, C3dErrorKind::BadProcessor(processor))),
+        let formats = [Format::Intel, Format::Dec, Format::Mips];
+        let Some(format) = formats.into_iter().find(|f| f.processor() == processor) else {
+            return Err(err(start + 3, C3dErrorKind::BadProcessor(processor)));
         };
         let end = start + usize::from(blocks) * BLOCK;
         if blocks == 0 {
@@ -471,10 +527,10 @@ impl C3d {
         let mut valid = Vec::with_capacity(frames * count);
         for i in 0..frames * count {
             let at = data_start + i / count * frame_bytes + i % count * 4 * width;
-            let xyz = [value(at)?, value(at + width)?, value(at + 2 * width)?];
-            let xyz = xyz.map(|v| v * factor * units_to_metres);
+            let xyz = Vec3::new(value(at)?, value(at + width)?, value(at + 2 * width)?);
+            let xyz = xyz * factor * units_to_metres;
             let ok = value(at + 3 * width)? >= 0.0 && xyz.iter().all(|v| v.is_finite());
-            points.push(if ok { xyz } else { [0.0; 3] });
+            points.push(if ok { xyz } else { Vec3::zeros() });
             valid.push(ok);
         }
         let rate_hz = rate as f32;
@@ -489,13 +545,75 @@ impl C3d {
         })
     }
 
+    /// The points as a C3D file: Intel byte order, `POINT:UNITS` m, no analog channels, and the
+    /// frame range in the header and in `TRIAL:ACTUAL_START_FIELD`/`ACTUAL_END_FIELD` (read for
+    /// trials longer than 65535 frames).
+    ///
+    /// [`C3d::parse`] gives back the labels, rate, frame count, first frame, validity and
+    /// positions: exactly with [`Storage::Float`], to within half a step with
+    /// [`Storage::Integer`]. Invalid samples, non-finite ones and those out of the integer range
+    /// are written as missing (negative residual) with zero coordinates. `units_to_metres` is
+    /// not used: points are in metres. Labels are cut to 255 bytes and read back trimmed; the
+    /// first frame reads back as 1 when a trial of at most 65535 frames ends past frame 65535
+    /// (the header holds 16-bit frame numbers). More than 65535 labels, or labels that overflow
+    /// the 255-block parameter section (about 5000 of 24 characters), make a file that
+    /// [`C3d::parse`] rejects.
+    pub fn to_bytes(&self, storage: Storage) -> Vec<u8> {
+        let n = self.labels.len();
+        let width = self.labels.iter().map(String::len).max();
+        let width = width.unwrap_or(0).clamp(1, usize::from(u8::MAX));
+        // A record links to the next by a signed 16-bit offset: at most 32760 bytes of data.
+        let rows = (32_760 / width).min(usize::from(u8::MAX));
+        let mut records = vec![point_text("UNITS".into(), 1, &["m"])];
+        for (k, chunk) in self.labels.chunks(rows).enumerate() {
+            let name = match k {
+                0 => "LABELS".to_owned(),
+                _ => format!("LABELS{}", k + 1),
+            };
+            records.push(point_text(name, width, chunk));
+        }
+        let frames = u32::try_from(self.frames).unwrap_or(u32::MAX);
+        let last = self.first_frame.saturating_add(frames).saturating_sub(1);
+        records.extend([
+            trial_field(Format::Intel, "ACTUAL_START_FIELD", self.first_frame),
+            trial_field(Format::Intel, "ACTUAL_END_FIELD", last),
+        ]);
+
+        let (scale, max) = match storage {
+            Storage::Float => (-1.0, f32::MAX),
+            Storage::Integer { scale } => (scale, f32::from(i16::MAX)),
+        };
+        // Metres as floats, or whole steps of `scale`.
+        let stored = |p: Vec3| match scale < 0.0 {
+            true => p,
+            false => (p / scale).map(f32::round),
+        };
+        let sample = |i: usize| match self.point(i / n, i % n).map(stored) {
+            Some(p) if p.iter().all(|v| v.abs() <= max) => [p.x, p.y, p.z, 0.0],
+            _ => [0.0, 0.0, 0.0, -1.0],
+        };
+        let layout = Layout {
+            format: Format::Intel,
+            scale,
+            rate: self.rate_hz,
+            first_frame: self.first_frame as usize,
+            frames: self.frames,
+            points: n,
+            analog: [0, 1],
+        };
+        layout.write(
+            &records,
+            (0..self.frames.saturating_mul(n)).flat_map(sample),
+        )
+    }
+
     /// Index of the marker labelled exactly `label` (after trimming).
     pub fn label_index(&self, label: &str) -> Option<usize> {
         self.labels.iter().position(|l| l == label.trim())
     }
 
     /// Position of marker `label` in `frame`, or `None` when missing or out of range.
-    pub fn point(&self, frame: usize, label: usize) -> Option<[f32; 3]> {
+    pub fn point(&self, frame: usize, label: usize) -> Option<Vec3> {
         let i = self.index(frame, label)?;
         match (self.valid.get(i), self.points.get(i)) {
             (Some(true), Some(&p)) => Some(p),
@@ -508,7 +626,7 @@ impl C3d {
         (frame < self.frames && label < n).then_some(frame * n + label)
     }
 
-    fn set(&mut self, frame: usize, label: usize, p: [f32; 3]) {
+    fn set(&mut self, frame: usize, label: usize, p: Vec3) {
         let Some(i) = self.index(frame, label) else {
             return;
         };
@@ -524,7 +642,7 @@ impl C3d {
     pub fn fill_gaps(&mut self, max_gap: usize) -> usize {
         let mut filled = 0;
         for m in 0..self.labels.len() {
-            let orig: Vec<Option<[f32; 3]>> = (0..self.frames).map(|f| self.point(f, m)).collect();
+            let orig: Vec<Option<Vec3>> = (0..self.frames).map(|f| self.point(f, m)).collect();
             let at = |f: Option<usize>| f.and_then(|f| orig.get(f).copied().flatten());
             let mut f = 0;
             while f < self.frames {
@@ -548,12 +666,9 @@ impl C3d {
                 let (ta, tb) = match (at(start.checked_sub(2)), at(Some(f + 1))) {
                     (Some(a0), Some(b1)) => {
                         let s = h / (h + 1.0);
-                        (
-                            vec3::scale(vec3::sub(b, a0), s),
-                            vec3::scale(vec3::sub(b1, a), s),
-                        )
+                        ((b - a0) * s, (b1 - a) * s)
                     }
-                    _ => (vec3::sub(b, a), vec3::sub(b, a)),
+                    _ => (b - a, b - a),
                 };
                 for k in start..f {
                     let t = (k + 1 - start) as f32 / h;
@@ -565,7 +680,7 @@ impl C3d {
                         t3 - t2,
                     ];
                     let terms = [a, ta, b, tb].into_iter().zip(basis);
-                    self.set(k, m, terms.fold([0.0; 3], |p, (v, w)| vec3::mad(p, v, w)));
+                    self.set(k, m, terms.fold(Vec3::zeros(), |p, (v, w)| p + v * w));
                     filled += 1;
                 }
             }
@@ -583,18 +698,17 @@ impl C3d {
             let [a, b, d] = frame_of.map(|m| c.point(f, m));
             Frame::new(a?, b?, d?)
         };
-        let (mut sum, mut n) = ([0.0f64; 3], 0u32);
+        let (mut sum, mut n) = (Vec3::zeros().cast::<f64>(), 0u32);
         for f in 0..self.frames {
             if let (Some(fr), Some(p)) = (frame_at(self, f), self.point(f, target)) {
-                let l = fr.local(p);
-                sum = [0, 1, 2].map(|i| sum[i] + f64::from(l[i]));
+                sum += fr.local(p).cast::<f64>();
                 n += 1;
             }
         }
         if n == 0 {
             return 0;
         }
-        let local = sum.map(|s| (s / f64::from(n)) as f32);
+        let local = (sum / f64::from(n)).cast::<f32>();
         let mut filled = 0;
         for f in 0..self.frames {
             if let (None, Some(fr)) = (self.point(f, target), frame_at(self, f)) {
@@ -606,74 +720,182 @@ impl C3d {
     }
 }
 
+/// A parameter for [`Layout::write`]: group (1 POINT, 2 ANALOG, 3 TRIAL), name, type (-1 char,
+/// 2 int16, 4 float), dimensions, and data encoded in the file's format.
+type Record = (u8, String, i8, Vec<u8>, Vec<u8>);
+
+/// A char parameter of group POINT: `rows` padded with spaces, or cut, to `width` bytes.
+fn point_text(name: String, width: usize, rows: &[impl AsRef<str>]) -> Record {
+    let padded = rows.iter().flat_map(|row| {
+        let bytes = row.as_ref().bytes();
+        bytes.chain(std::iter::repeat(b' ')).take(width)
+    });
+    let data = padded.collect();
+    (1, name, -1, vec![width as u8, rows.len() as u8], data)
+}
+
+/// `TRIAL:name` holding `v` as two 16-bit words, low word first.
+fn trial_field(format: Format, name: &str, v: u32) -> Record {
+    let words = [v as u16, (v >> 16) as u16];
+    let data = words
+        .into_iter()
+        .flat_map(|w| format.u16_bytes(w))
+        .collect();
+    (3, name.to_owned(), 2, vec![2], data)
+}
+
+/// What the header and the standard parameters of a file to write say.
+struct Layout {
+    format: Format,
+    /// `POINT:SCALE`: negative for float storage.
+    scale: f32,
+    /// Frames per second.
+    rate: f32,
+    first_frame: usize,
+    frames: usize,
+    /// Number of points.
+    points: usize,
+    /// Analog channels, and samples per channel and frame.
+    analog: [u16; 2],
+}
+
+impl Layout {
+    /// The file: header; parameter section with the groups POINT, ANALOG and TRIAL, the
+    /// parameters `POINT:USED`, `SCALE`, `RATE`, `FRAMES`, `DATA_START`, `ANALOG:USED` and
+    /// `RATE`, then `records`; data section. `data` holds, frame by frame, x, y, z and residual
+    /// of every point then the analog samples, in stored units (int16 storage truncates them).
+    /// Counts beyond 65535 are written as 65535; a file with more than 65535 points or 255
+    /// parameter blocks, as one that does not parse.
+    fn write(&self, records: &[Record], data: impl IntoIterator<Item = f32>) -> Vec<u8> {
+        let format = self.format;
+        let word = |v: usize| {
+            format
+                .u16_bytes(u16::try_from(v).unwrap_or(u16::MAX))
+                .to_vec()
+        };
+        let float = |v: f32| format.f32_bytes(v).to_vec();
+        let [channels, per_channel] = self.analog;
+        let section = |data_block: usize| {
+            let standard = [
+                (1, "USED", 2, word(self.points)),
+                (1, "SCALE", 4, float(self.scale)),
+                (1, "RATE", 4, float(self.rate)),
+                (1, "FRAMES", 2, word(self.frames)),
+                (1, "DATA_START", 2, word(data_block)),
+                (2, "USED", 2, word(channels.into())),
+                (2, "RATE", 4, float(self.rate * f32::from(per_channel))),
+            ];
+            let standard = standard
+                .map(|(group, name, kind, data)| (group, name.to_owned(), kind, Vec::new(), data));
+            let mut p = vec![1, KEY, 0, format.processor()];
+            for (id, name) in [(1u8, "POINT"), (2, "ANALOG"), (3, "TRIAL")] {
+                // A negative id makes a group; the link skips itself and an empty description.
+                p.extend(
+                    [name.len() as u8, id.wrapping_neg()]
+                        .into_iter()
+                        .chain(name.bytes()),
+                );
+                p.extend(word(3).into_iter().chain([0]));
+            }
+            let all: Vec<&Record> = standard.iter().chain(records).collect();
+            for (k, (group, name, kind, dims, data)) in all.iter().enumerate() {
+                // The link covers itself, type, dimensions, data and an empty description.
+                let next = match k + 1 < all.len() {
+                    true => 5 + dims.len() + data.len(),
+                    false => 0,
+                };
+                p.extend([name.len() as u8, *group].into_iter().chain(name.bytes()));
+                p.extend(
+                    word(next)
+                        .into_iter()
+                        .chain([*kind as u8, dims.len() as u8]),
+                );
+                p.extend(dims.iter().chain(data).chain(&[0]));
+            }
+            p
+        };
+        let blocks = section(0).len().div_ceil(BLOCK);
+        let data_block = 2 + blocks;
+        let mut params = section(data_block);
+        // What the 8-bit block count and 16-bit point count cannot hold gets a block count of 0,
+        // which the reader rejects.
+        let fits = blocks <= usize::from(u8::MAX) && self.points <= usize::from(u16::MAX);
+        params[2] = if fits { blocks as u8 } else { 0 };
+        params.resize(blocks * BLOCK, 0);
+
+        // 16-bit frame numbers: a range ending past 65535 is written as 1..=frames.
+        let last = self
+            .first_frame
+            .saturating_add(self.frames)
+            .saturating_sub(1);
+        let (first, last) = match u16::try_from(last) {
+            Ok(_) => (self.first_frame, last),
+            Err(_) => (1, self.frames),
+        };
+        // Header words 1-12: parameter block and key, points, analog samples per frame, first
+        // and last frame, longest interpolated gap (not recorded), scale, data block, analog
+        // samples per channel and frame, rate.
+        let mut out = [
+            vec![2, KEY],
+            word(self.points),
+            word(usize::from(channels) * usize::from(per_channel)),
+            word(first),
+            word(last),
+            word(0),
+            float(self.scale),
+            word(data_block),
+            word(per_channel.into()),
+            float(self.rate),
+        ]
+        .concat();
+        out.resize(BLOCK, 0);
+        out.extend(params);
+        for v in data {
+            match self.scale < 0.0 {
+                true => out.extend(format.f32_bytes(v)),
+                false => out.extend(format.u16_bytes(v as i16 as u16)),
+            }
+        }
+        out
+    }
+}
+
 /// Right-handed orthonormal frame from three points: origin `a`, x toward `b`,
 /// z = x × (c − a) normalised, y = z × x.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Frame {
     /// Origin, the first point.
-    pub origin: [f32; 3],
+    pub origin: Vec3,
     /// Unit x, y and z axes.
-    pub axes: [[f32; 3]; 3],
+    pub axes: [Vec3; 3],
 }
 
 impl Frame {
     /// `None` when the three points are (nearly) collinear or coincident.
-    pub fn new(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Option<Frame> {
-        let x = vec3::normalize(vec3::sub(b, a))?;
-        let z = vec3::normalize(vec3::cross(x, vec3::sub(c, a)))?;
+    pub fn new(a: Vec3, b: Vec3, c: Vec3) -> Option<Frame> {
+        // `v / |v|`, or `None` when `|v|` is below 1e-9 or not finite.
+        let unit = |v: Vec3| {
+            let n = v.norm();
+            (n > 1e-9 && n.is_finite()).then(|| v * (1.0 / n))
+        };
+        let x = unit(b - a)?;
+        let z = unit(x.cross(&(c - a)))?;
         Some(Frame {
             origin: a,
-            axes: [x, vec3::cross(z, x), z],
+            axes: [x, z.cross(&x), z],
         })
     }
 
     /// Coordinates of global point `p` in this frame.
-    pub fn local(&self, p: [f32; 3]) -> [f32; 3] {
-        let d = vec3::sub(p, self.origin);
-        self.axes.map(|axis| vec3::dot(d, axis))
+    pub fn local(&self, p: Vec3) -> Vec3 {
+        let d = p - self.origin;
+        self.axes.map(|axis| d.dot(&axis)).into()
     }
 
     /// Global point with local coordinates `l`.
-    pub fn global(&self, l: [f32; 3]) -> [f32; 3] {
-        self.axes
-            .iter()
-            .zip(l)
-            .fold(self.origin, |p, (&axis, s)| vec3::mad(p, axis, s))
-    }
-}
-
-/// Small 3-vector helpers shared with the joint-centre code.
-pub(crate) mod vec3 {
-    pub fn add(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-        [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-    }
-    pub fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-    }
-    pub fn scale(a: [f32; 3], s: f32) -> [f32; 3] {
-        a.map(|v| v * s)
-    }
-    /// `a + s·b`.
-    pub fn mad(a: [f32; 3], b: [f32; 3], s: f32) -> [f32; 3] {
-        add(a, scale(b, s))
-    }
-    pub fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-        a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-    }
-    pub fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    }
-    pub fn norm(a: [f32; 3]) -> f32 {
-        dot(a, a).sqrt()
-    }
-    /// `a / |a|`, or `None` when `|a|` is below 1e-9 or not finite.
-    pub fn normalize(a: [f32; 3]) -> Option<[f32; 3]> {
-        let n = norm(a);
-        (n > 1e-9 && n.is_finite()).then(|| scale(a, 1.0 / n))
+    pub fn global(&self, l: Vec3) -> Vec3 {
+        let terms = self.axes.iter().zip(l.iter());
+        terms.fold(self.origin, |p, (&axis, &s)| p + axis * s)
     }
 }
 
@@ -681,19 +903,18 @@ pub(crate) mod vec3 {
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 pub(crate) mod tests {
     use super::*;
+    use proptest::prelude::*;
     use std::path::PathBuf;
 
     const RATE: f32 = 50.0;
     const INT_SCALE: f32 = 0.25;
     const FLOAT_SCALE: f32 = -0.01;
     /// One analog channel sampled at twice the point rate.
-    const ANALOG_PER_FRAME: i16 = 2;
+    const ANALOG_PER_FRAME: u16 = 2;
     /// Written where an analog sample is: visible if the reader mistakes it for point data.
     const ANALOG_VALUE: f32 = -7777.0;
     const LABELS: [&str; 3] = ["LASI", "RASI", "Club:Head"];
     const FRAMES: usize = 4;
-    /// Header, one parameter block, then data.
-    const DATA_BLOCK: i16 = 3;
     /// (frame, marker) of the one missing sample.
     const MISSING: (usize, usize) = (2, 1);
 
@@ -709,109 +930,45 @@ pub(crate) mod tests {
     }
 
     /// Stored coordinates: multiples of 0.25, exact in both storage formats.
-    fn sample(f: usize, m: usize) -> [f32; 3] {
+    fn sample(f: usize, m: usize) -> Vec3 {
         let (f, m) = (f as f32, m as f32);
-        [1.5 * f + m, 100.0 - 2.0 * f, -0.25 * (m + f)]
+        Vec3::new(1.5 * f + m, 100.0 - 2.0 * f, -0.25 * (m + f))
     }
-
-    fn enc16(format: Format, v: i16) -> [u8; 2] {
-        match format {
-            Format::Mips => v.to_be_bytes(),
-            _ => v.to_le_bytes(),
-        }
-    }
-
-    fn enc32(format: Format, v: f32) -> [u8; 4] {
-        match format {
-            Format::Intel => v.to_le_bytes(),
-            Format::Mips => v.to_be_bytes(),
-            Format::Dec => {
-                // VAX has no negative zero: sign + zero exponent is the reserved operand.
-                let v = if v == 0.0 { 0.0 } else { v };
-                let b = (v * 4.0).to_bits().to_le_bytes();
-                [b[2], b[3], b[0], b[1]]
-            }
-        }
-    }
-
-    /// Parameter record: group id, name, type, dimensions, encoded data.
-    type Rec = (u8, &'static str, i8, Vec<u8>, Vec<u8>);
 
     /// A small C3D file: 3 markers (labels split over LABELS and LABELS2), 4 frames, one
     /// missing sample, one analog channel; `extra` parameters are appended.
-    fn write(format: Format, float: bool, units: &str, extra: &[Rec]) -> Vec<u8> {
-        let scale = if float { FLOAT_SCALE } else { INT_SCALE };
-        let w = |v: i16| enc16(format, v).to_vec();
-        let fl = |v: f32| enc32(format, v).to_vec();
-        let text = |s: &str| s.as_bytes().to_vec();
-        let mut recs: Vec<Rec> = vec![
-            (1, "USED", 2, vec![], w(3)),
-            (1, "SCALE", 4, vec![], fl(scale)),
-            (1, "RATE", 4, vec![], fl(RATE)),
-            (1, "FRAMES", 2, vec![], w(FRAMES as i16)),
-            (1, "DATA_START", 2, vec![], w(DATA_BLOCK)),
-            (1, "UNITS", -1, vec![units.len() as u8], text(units)),
-            (1, "LABELS", -1, vec![5, 2], text("LASI RASI ")),
-            (1, "LABELS2", -1, vec![9, 1], text(LABELS[2])),
-            (2, "USED", 2, vec![], w(1)),
-            (2, "RATE", 4, vec![], fl(RATE * f32::from(ANALOG_PER_FRAME))),
+    fn write(format: Format, float: bool, units: &str, extra: &[Record]) -> Vec<u8> {
+        let mut records = vec![
+            point_text("UNITS".into(), units.len(), &[units]),
+            point_text("LABELS".into(), 5, &LABELS[..2]),
+            point_text("LABELS2".into(), 9, &LABELS[2..]),
         ];
-        recs.extend_from_slice(extra);
-        let code = [(Format::Intel, 84), (Format::Dec, 85), (Format::Mips, 86)];
-        let code = code.iter().find(|c| c.0 == format).map_or(0, |c| c.1);
-        let mut p = vec![1, KEY, 1, code];
-        for (id, name) in [(1i8, "POINT"), (2, "ANALOG"), (3, "TRIAL")] {
-            p.extend(
-                [name.len() as u8, (-id) as u8]
-                    .into_iter()
-                    .chain(text(name)),
-            );
-            p.extend(w(3).into_iter().chain([0]));
-        }
-        for (k, (group, name, kind, dims, data)) in recs.iter().enumerate() {
-            let next = if k + 1 == recs.len() {
-                0
+        records.extend_from_slice(extra);
+        let layout = Layout {
+            format,
+            scale: if float { FLOAT_SCALE } else { INT_SCALE },
+            rate: RATE,
+            first_frame: 1,
+            frames: FRAMES,
+            points: LABELS.len(),
+            analog: [1, ANALOG_PER_FRAME],
+        };
+        let point = |f, m| {
+            let xyz = if float {
+                sample(f, m)
             } else {
-                5 + dims.len() + data.len()
+                sample(f, m) / INT_SCALE
             };
-            p.extend([name.len() as u8, *group].into_iter().chain(text(name)));
-            p.extend(
-                w(next as i16)
-                    .into_iter()
-                    .chain([*kind as u8, dims.len() as u8]),
-            );
-            p.extend(dims.iter().chain(data).chain(&[0]));
-        }
-        assert!(p.len() <= BLOCK);
-        p.resize(BLOCK, 0);
-
-        // Header words 1-12 in order: parameter block and key, points, analog values per
-        // frame, first and last frame, interpolation gap, scale, data block, analog samples
-        // per channel and frame, rate.
-        let (frames, analog) = (w(FRAMES as i16), w(ANALOG_PER_FRAME));
-        let h = [
-            vec![2, KEY],
-            w(3),
-            analog.clone(),
-            w(1),
-            frames,
-            w(10),
-            fl(scale),
-        ];
-        let mut h = [h.concat(), w(DATA_BLOCK), analog, fl(RATE)].concat();
-        h.resize(BLOCK, 0);
-
-        let num = |v: f32| if float { fl(v) } else { w(v as i16) };
-        let mut d = Vec::new();
-        for f in 0..FRAMES {
-            for m in 0..LABELS.len() {
-                let residual = if (f, m) == MISSING { -1.0 } else { 0.0 };
-                let xyz = sample(f, m).map(|v| if float { v } else { v / INT_SCALE });
-                d.extend(xyz.into_iter().chain([residual]).flat_map(num));
-            }
-            d.extend((0..ANALOG_PER_FRAME).flat_map(|_| num(ANALOG_VALUE)));
-        }
-        [h, p, d].concat()
+            let residual = if (f, m) == MISSING { -1.0 } else { 0.0 };
+            [xyz.x, xyz.y, xyz.z, residual]
+        };
+        let analog = [ANALOG_VALUE; ANALOG_PER_FRAME as usize];
+        let frame = |f| {
+            (0..LABELS.len())
+                .flat_map(move |m| point(f, m))
+                .chain(analog)
+        };
+        layout.write(&records, (0..FRAMES).flat_map(frame))
     }
 
     #[test]
@@ -838,7 +995,7 @@ pub(crate) mod tests {
                     );
                 }
             }
-            assert_eq!(c.points[MISSING.0 * 3 + MISSING.1], [0.0; 3]);
+            assert_eq!(c.points[MISSING.0 * 3 + MISSING.1], Vec3::zeros());
             assert_eq!(c.label_index(" Club:Head "), Some(2));
             assert_eq!(c.point(FRAMES, 0), None);
         }
@@ -885,17 +1042,83 @@ pub(crate) mod tests {
 
     #[test]
     fn long_trials_use_the_trial_fields() {
-        let w = |v: u16| v.to_le_bytes();
-        let field = |v: u32| [w(v as u16), w((v >> 16) as u16)].concat();
         let extra = [
-            (3, "ACTUAL_START_FIELD", 2, vec![2], field(1)),
-            (3, "ACTUAL_END_FIELD", 2, vec![2], field(70_000)),
+            trial_field(Format::Intel, "ACTUAL_START_FIELD", 1),
+            trial_field(Format::Intel, "ACTUAL_END_FIELD", 70_000),
         ];
         let e = C3d::parse(&write(Format::Intel, false, "mm", &extra)).unwrap_err();
         assert!(
             e.to_string().contains("data section of 70000 frames"),
             "{e}"
         );
+    }
+
+    /// 0.5 mm steps: ±16.38 m.
+    const STEP: f32 = 0.0005;
+
+    /// Values the writer keeps: trimmed labels, points within ±16 m, zero where missing.
+    fn any_c3d() -> impl Strategy<Value = C3d> {
+        (0..6usize, 0..12usize).prop_flat_map(|(n, frames)| {
+            let labels = prop::collection::vec("[A-Za-z0-9_:*]{0,12}", n);
+            let xyz = prop::array::uniform3(-16.0f32..16.0);
+            let samples = prop::collection::vec((xyz, prop::bool::weighted(0.8)), n * frames);
+            let fields = (labels, samples, 1.0f32..2000.0, 0..1000u32);
+            fields.prop_map(move |(labels, samples, rate_hz, first_frame)| C3d {
+                labels,
+                rate_hz,
+                frames,
+                first_frame,
+                units_to_metres: 1.0,
+                points: samples
+                    .iter()
+                    .map(|&(p, ok)| if ok { p.into() } else { Vec3::zeros() })
+                    .collect(),
+                valid: samples.iter().map(|&(_, ok)| ok).collect(),
+            })
+        })
+    }
+
+    proptest! {
+        #[test]
+        fn to_bytes_round_trips(c in any_c3d()) {
+            prop_assert_eq!(&C3d::parse(&c.to_bytes(Storage::Float)).unwrap(), &c);
+            let back = C3d::parse(&c.to_bytes(Storage::Integer { scale: STEP })).unwrap();
+            let key = |c: &C3d| {
+                (c.labels.clone(), c.rate_hz, c.frames, c.first_frame, c.valid.clone())
+            };
+            prop_assert_eq!(key(&back), key(&c));
+            // Half a step, plus f32 rounding at 16 m.
+            let worst = back.points.iter().zip(&c.points).map(|(a, b)| (a - b).amax());
+            prop_assert!(worst.fold(0.0, f32::max) <= 0.5 * STEP + 64.0 * f32::EPSILON);
+        }
+    }
+
+    #[test]
+    fn to_bytes_handles_long_label_lists_long_trials_and_unstorable_samples() {
+        // 300 labels of 200 bytes: split over LABELS and LABELS2 by the 16-bit record links.
+        let mut wide = synthetic(2, 300, |f, m| Vec3::new(f as f32, m as f32, -0.5));
+        wide.labels = (0..300).map(|m| format!("{m:_>200}")).collect();
+        // 70000 frames: the frame range only fits the TRIAL fields.
+        let mut long = synthetic(70_000, 1, |f, _| Vec3::new(0.0, 1e-4 * f as f32, 0.0));
+        long.first_frame = 3;
+        for c in [wide, long] {
+            assert_eq!(C3d::parse(&c.to_bytes(Storage::Float)).unwrap(), c);
+        }
+        let mut too_many = synthetic(1, 6000, |_, _| Vec3::zeros());
+        too_many.labels = (0..6000).map(|m| format!("{m:_>24}")).collect();
+        let e = C3d::parse(&too_many.to_bytes(Storage::Float)).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "byte 514: parameter section header: expected at least one parameter block"
+        );
+        let mut late = synthetic(3, 3, |_, m| Vec3::new(15.5 + 0.5 * m as f32, 0.0, 0.0));
+        late.first_frame = 65_534;
+        late.points[0].y = f32::NAN;
+        let back = C3d::parse(&late.to_bytes(Storage::Integer { scale: STEP })).unwrap();
+        assert_eq!((back.frames, back.first_frame), (3, 1));
+        // A NaN, then 16 m and 16.5 m against a range of 16.38 m.
+        assert_eq!(back.valid[..3], [false, true, false]);
+        assert_eq!(back.points[2], Vec3::zeros());
     }
 
     #[test]
@@ -928,7 +1151,7 @@ pub(crate) mod tests {
         }
     }
 
-    fn synthetic(frames: usize, labels: usize, at: impl Fn(usize, usize) -> [f32; 3]) -> C3d {
+    fn synthetic(frames: usize, labels: usize, at: impl Fn(usize, usize) -> Vec3) -> C3d {
         let points = (0..frames * labels)
             .map(|i| at(i / labels, i % labels))
             .collect();
@@ -946,7 +1169,7 @@ pub(crate) mod tests {
     #[test]
     fn fill_gaps_bridges_short_gaps_only() {
         const MAX_GAP: usize = 4;
-        let line = |f: usize| [0.1 * f as f32, 1.0 - 0.2 * f as f32, 0.05 * f as f32];
+        let line = |f: usize| Vec3::new(0.1 * f as f32, 1.0 - 0.2 * f as f32, 0.05 * f as f32);
         let mut c = synthetic(30, 1, |f, _| line(f));
         let gaps = [0..2, 5..8, 12..18, 20..24, 28..30];
         for f in gaps.iter().cloned().flatten() {
@@ -975,11 +1198,11 @@ pub(crate) mod tests {
         let pose = |f: usize, m: usize| {
             let (s, c) = (0.07 * f as f32).sin_cos();
             let [x, y, z] = body[m];
-            [
+            Vec3::new(
                 c * x - s * z + 0.01 * f as f32,
                 y + 1.0,
                 s * x + c * z - 0.02 * f as f32,
-            ]
+            )
         };
         let mut c = synthetic(40, 4, pose);
         for f in 10..40 {
@@ -990,7 +1213,7 @@ pub(crate) mod tests {
         for f in 10..40 {
             let (p, want) = (c.point(f, 3).unwrap(), pose(f, 3));
             assert!(
-                vec3::norm(vec3::sub(p, want)) < TOLERANCE,
+                (p - want).norm() < TOLERANCE,
                 "frame {f}: {p:?} vs {want:?}"
             );
         }

@@ -9,9 +9,10 @@
 //!
 //! Labels are matched exactly, or as the part after a `Subject:` prefix (e.g.
 //! `Golfer:WaistLeft`), so exports that prefix the subject name also work.
+use posecoach_core::Vec3;
 use std::fmt;
 
-use super::c3d::{vec3, C3d, Frame, MAX_GAP_FRAMES};
+use super::c3d::{max_gap_frames, C3d, Frame};
 
 /// Canonical joint names produced, in output order, and how each is estimated:
 /// - pelvis: mean of the four waist markers; hips: Bell/Davis-style regression from the waist
@@ -79,7 +80,7 @@ pub struct JointCentres {
     pub frames: usize,
     /// `frames × GOLF_JOINTS` positions in metres (+Y up, axes as in the file); zero where
     /// invalid.
-    pub positions: Vec<[f32; 3]>,
+    pub positions: Vec<Vec3>,
     /// `frames × GOLF_JOINTS`: whether every marker the joint needs was present or filled.
     pub valid: Vec<bool>,
     /// Marker samples filled by gap and rigid-cluster filling.
@@ -121,7 +122,8 @@ fn marker(name: &str) -> usize {
 
 /// Joint centres ([`GOLF_JOINTS`]) from the markers.
 ///
-/// The [`GOLF_MARKERS`] are gap-filled first ([`C3d::fill_gaps`] with [`MAX_GAP_FRAMES`]);
+/// The [`GOLF_MARKERS`] are gap-filled first ([`C3d::fill_gaps`] over at most
+/// [`MAX_GAP_S`](super::c3d::MAX_GAP_S));
 /// the shoulder-top markers are then rigid-filled ([`C3d::fill_rigid`]) from ShoulderBack,
 /// BackLeft/BackRight and UArmHigh of the same side (RShoulderTop is missing in 80–86 % of the
 /// frames, LShoulderTop in frames 0–109 of the iron trial). A joint is invalid in a frame when
@@ -153,7 +155,7 @@ pub fn joint_centres(c3d: &C3d) -> Result<JointCentres, GolfError> {
             markers.valid.push(p.is_some());
         }
     }
-    let mut filled = markers.fill_gaps(MAX_GAP_FRAMES);
+    let mut filled = markers.fill_gaps(max_gap_frames(markers.rate_hz));
     for (target, cluster) in SHOULDER_CLUSTERS {
         filled += markers.fill_rigid(marker(target), cluster.map(marker));
     }
@@ -175,16 +177,16 @@ pub fn joint_centres(c3d: &C3d) -> Result<JointCentres, GolfError> {
 }
 
 /// The [`GOLF_JOINTS`] of one frame from its markers (`None` where a marker is missing).
-fn frame_joints(at: impl Fn(&str) -> Option<[f32; 3]>) -> [Option<[f32; 3]>; GOLF_JOINTS.len()] {
+fn frame_joints(at: impl Fn(&str) -> Option<Vec3>) -> [Option<Vec3>; GOLF_JOINTS.len()] {
     let mean = |names: &[&str]| {
         let sum = names
             .iter()
-            .try_fold([0.0; 3], |s, n| Some(vec3::add(s, at(n)?)));
-        Some(vec3::scale(sum?, 1.0 / names.len() as f32))
+            .try_fold(Vec3::zeros(), |s, n| Some(s + at(n)?));
+        Some(sum? * (1.0 / names.len() as f32))
     };
-    let lerp = |a: Option<[f32; 3]>, b: Option<[f32; 3]>, t: f32| {
+    let lerp = |a: Option<Vec3>, b: Option<Vec3>, t: f32| {
         let (a, b) = (a?, b?);
-        Some(vec3::mad(a, vec3::sub(b, a), t))
+        Some(a + (b - a) * t)
     };
     let hips = match WAIST.map(&at) {
         [Some(l), Some(r), Some(lb), Some(rb)] => hip_centres([l, r, lb, rb]),
@@ -233,10 +235,10 @@ fn frame_joints(at: impl Fn(&str) -> Option<[f32; 3]>) -> [Option<[f32; 3]>; GOL
 /// −0.19 w forward, −0.30 w up). Of the variants tried (origin at the front midpoint or the
 /// mean of the four, `w` from the front pair or the midpoints) this one kept the hip–KneeOut
 /// distance most constant.
-fn hip_centres([left, right, lback, rback]: [[f32; 3]; 4]) -> Option<[[f32; 3]; 2]> {
-    let mid = |a, b| vec3::scale(vec3::add(a, b), 0.5);
+fn hip_centres([left, right, lback, rback]: [Vec3; 4]) -> Option<[Vec3; 2]> {
+    let mid = |a: Vec3, b: Vec3| (a + b) * 0.5;
     let (left_mid, right_mid, front) = (mid(left, lback), mid(right, rback), mid(left, right));
-    let w = vec3::norm(vec3::sub(left_mid, right_mid));
+    let w = (left_mid - right_mid).norm();
     // x: toward the left, y: forward, z: x × forward = down.
     let [lateral, forward, down] = Frame::new(right_mid, left_mid, front)?.axes;
     let hip = |side: f32| {
@@ -247,7 +249,7 @@ fn hip_centres([left, right, lback, rback]: [[f32; 3]; 4]) -> Option<[[f32; 3]; 
         ];
         offsets
             .iter()
-            .fold(front, |p, &(axis, k)| vec3::mad(p, axis, k * w))
+            .fold(front, |p, &(axis, k)| p + axis * (k * w))
     };
     Some([hip(1.0), hip(-1.0)])
 }
@@ -286,9 +288,7 @@ pub fn resample(jc: &JointCentres, rate_hz: f32) -> JointCentres {
             } else {
                 sample(i, j)
             };
-            let p = sample(i, j)
-                .zip(next)
-                .map(|(a, b)| vec3::mad(a, vec3::sub(b, a), t));
+            let p = sample(i, j).zip(next).map(|(a, b)| a + (b - a) * t);
             out.positions.push(p.unwrap_or_default());
             out.valid.push(p.is_some());
         }
@@ -305,20 +305,20 @@ mod tests {
     const TOLERANCE: f32 = 1e-6;
     const FRAMES: usize = 3;
     /// Stand-in position of any marker not placed explicitly.
-    fn spot(m: usize) -> [f32; 3] {
-        [
+    fn spot(m: usize) -> Vec3 {
+        Vec3::new(
             0.01 * m as f32,
             0.5 + 0.02 * m as f32,
             0.1 - 0.03 * m as f32,
-        ]
+        )
     }
     /// Waist markers of a golfer facing −X, left toward +Z: front pair 30 cm apart, back pair
     /// 20 cm apart and 14 cm behind, so the midpoint width is 25 cm.
-    const WAIST_AT: [[f32; 3]; 4] = [
-        [0.0, 1.0, 0.15],
-        [0.0, 1.0, -0.15],
-        [0.14, 1.0, 0.1],
-        [0.14, 1.0, -0.1],
+    const WAIST_AT: [Vec3; 4] = [
+        Vec3::new(0.0, 1.0, 0.15),
+        Vec3::new(0.0, 1.0, -0.15),
+        Vec3::new(0.14, 1.0, 0.1),
+        Vec3::new(0.14, 1.0, -0.1),
     ];
 
     /// Static markers (labels with a subject prefix), all valid.
@@ -336,13 +336,14 @@ mod tests {
         }
     }
 
-    fn joint(jc: &JointCentres, f: usize, name: &str) -> Option<[f32; 3]> {
+    fn joint(jc: &JointCentres, f: usize, name: &str) -> Option<Vec3> {
         let i = f * GOLF_JOINTS.len() + GOLF_JOINTS.iter().position(|&j| j == name).unwrap();
         jc.valid[i].then_some(jc.positions[i])
     }
 
-    fn assert_near(a: [f32; 3], b: [f32; 3]) {
-        assert!(vec3::norm(vec3::sub(a, b)) < TOLERANCE, "{a:?} vs {b:?}");
+    fn assert_near(a: Vec3, b: impl Into<Vec3>) {
+        let b = b.into();
+        assert!((a - b).norm() < TOLERANCE, "{a:?} vs {b:?}");
     }
 
     #[test]
@@ -355,10 +356,8 @@ mod tests {
         assert_eq!((jc.frames, jc.filled, jc.rate_hz), (FRAMES, 1, 360.0));
         let m = |name: &str| spot(marker(name));
         let mean = |names: &[&str]| {
-            let sum = names
-                .iter()
-                .fold([0.0; 3], |s, &name| vec3::add(s, m(name)));
-            vec3::scale(sum, 1.0 / names.len() as f32)
+            let sum: Vec3 = names.iter().map(|&name| m(name)).sum();
+            sum / names.len() as f32
         };
         assert_near(joint(&jc, 0, "pelvis").unwrap(), [0.07, 1.0, 0.0]);
         // w = 0.25: 0.09 lateral, 0.0475 posterior (+X), 0.075 down.
@@ -372,13 +371,13 @@ mod tests {
         let right_shoulder = mean(&["RShoulderTop", "RShoulderBack"]);
         assert_near(joint(&jc, 0, "right_shoulder").unwrap(), right_shoulder);
         let left_shoulder = mean(&["LShoulderTop", "LShoulderBack"]);
-        let thorax = vec3::scale(vec3::add(left_shoulder, right_shoulder), 0.5);
+        let thorax = (left_shoulder + right_shoulder) / 2.0;
         assert_near(joint(&jc, 1, "thorax").unwrap(), thorax);
-        let spine = vec3::scale(vec3::add(thorax, [0.07, 1.0, 0.0]), 0.5);
+        let spine = (thorax + Vec3::new(0.07, 1.0, 0.0)) / 2.0;
         assert_near(joint(&jc, 1, "spine").unwrap(), spine);
         let head = mean(&["HeadTop", "HeadFront", "HeadSide"]);
         assert_near(joint(&jc, 1, "head").unwrap(), head);
-        let neck = vec3::mad(thorax, vec3::sub(head, thorax), NECK_FRACTION);
+        let neck = thorax + (head - thorax) * NECK_FRACTION;
         assert_near(joint(&jc, 1, "neck").unwrap(), neck);
         let club = ["Marker_2:2:1", "Marker_2:2:2", "Marker_2:2:3"];
         assert_near(joint(&jc, 1, "club_head").unwrap(), mean(&club));
@@ -404,7 +403,7 @@ mod tests {
         const IN_RATE: f32 = 6.0;
         const OUT_RATE: f32 = 4.0;
         let n = GOLF_JOINTS.len();
-        let path = |t: f32, j: usize| [t, 2.0 * t - j as f32, 0.5];
+        let path = |t: f32, j: usize| Vec3::new(t, 2.0 * t - j as f32, 0.5);
         let mut jc = JointCentres {
             rate_hz: IN_RATE,
             frames: 7,
@@ -440,8 +439,8 @@ mod tests {
     /// Peak speed (m/s) of a joint by central differences over valid neighbours.
     fn peak_speed(jc: &JointCentres, name: &str) -> f32 {
         let speeds = (1..jc.frames.saturating_sub(1)).filter_map(|f| {
-            let d = vec3::sub(joint(jc, f + 1, name)?, joint(jc, f - 1, name)?);
-            Some(vec3::norm(d) * jc.rate_hz / 2.0)
+            let d = joint(jc, f + 1, name)? - joint(jc, f - 1, name)?;
+            Some(d.norm() * jc.rate_hz / 2.0)
         });
         speeds.fold(0.0, f32::max)
     }
@@ -488,21 +487,19 @@ mod tests {
             }
             for (a, b) in BONES {
                 let lengths: Vec<f32> = (0..jc.frames)
-                    .filter_map(|f| {
-                        Some(vec3::norm(vec3::sub(joint(&jc, f, a)?, joint(&jc, f, b)?)))
-                    })
+                    .filter_map(|f| Some((joint(&jc, f, a)? - joint(&jc, f, b)?).norm()))
                     .collect();
                 let (m, sd) = mean_sd(&lengths);
                 eprintln!("  {a}–{b}: {m:.3} ± {sd:.4} m");
                 assert!(sd < MAX_BONE_SD, "{file} {a}–{b}");
             }
-            let toe_y = (joint(&jc, 0, "left_toe").unwrap()[1]
-                + joint(&jc, 0, "right_toe").unwrap()[1])
+            let toe_y = (joint(&jc, 0, "left_toe").unwrap().y
+                + joint(&jc, 0, "right_toe").unwrap().y)
                 / 2.0;
-            let height = joint(&jc, 0, "head_top").unwrap()[1] - toe_y;
+            let height = joint(&jc, 0, "head_top").unwrap().y - toe_y;
             let tallest = (0..jc.frames)
                 .filter_map(|f| joint(&jc, f, "head_top"))
-                .map(|p| p[1] - toe_y);
+                .map(|p| p.y - toe_y);
             eprintln!(
                 "  head top above the toes: {height:.3} m at address, {:.3} m at most",
                 tallest.fold(0.0, f32::max)

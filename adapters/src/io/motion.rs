@@ -222,7 +222,7 @@ impl Motion {
     /// [`SkeletonError`] if a bone could not be measured in any frame.
     pub fn from_golf(centres: &JointCentres) -> Result<Motion, SkeletonError> {
         let n = GOLF_JOINTS.len();
-        let mut positions: Vec<Vec3> = centres.positions.iter().map(|&p| Vec3::from(p)).collect();
+        let mut positions = centres.positions.clone();
         let missing: Vec<bool> = centres.valid.iter().map(|&v| !v).collect();
         let template = Format::GolfMarkers.default_skeleton()?;
         let skeleton = measured_skeleton(&template, &positions, &missing)?;
