@@ -79,7 +79,7 @@ fn to_channels(frame_major: &[f32], dims: usize) -> Vec<f32> {
 }
 
 fn dtw(args: &DtwArgs) -> Result<String> {
-    if args.dims == 0 || args.dims % 3 != 0 {
+    if args.dims == 0 || !args.dims.is_multiple_of(3) {
         bail!(
             "--dims {} must be a positive multiple of 3 (x, y, z per joint)",
             args.dims
