@@ -11,7 +11,8 @@
 //! without a counterpart are interpolated along their chain this way (a CMU clavicle between
 //! thorax and shoulder), or, past the last anchored joint, carried rigidly by their parent's
 //! rotation (fingers). Source joints without a counterpart are left out (a chord skips them).
-//! The root moves along the source's root trajectory scaled by the ratio of leg lengths. Every
+//! The root moves along the source's root trajectory scaled by the ratio of leg lengths (to the
+//! toes where both skeletons have them, else to the ankles). Every
 //! output bone has exactly the target's length.
 //!
 //! ```
@@ -29,6 +30,7 @@
 //! ```
 
 use crate::config::MAX_JOINTS;
+use crate::joint::Joint;
 use crate::kinematics::{check_len, swing, LengthError};
 use crate::skeleton::Skeleton;
 use crate::{Quat, Vec3};
@@ -91,7 +93,7 @@ impl<'a> Analytic<'a> {
     /// # Errors
     /// [`RetargetError::DegenerateSource`] if the source's legs have zero length.
     pub fn new(source: &'a Skeleton, target: &'a Skeleton) -> Result<Self, RetargetError> {
-        let source_legs = source.leg_length();
+        let (source_legs, target_legs) = leg_lengths(source, target);
         if source_legs <= f32::EPSILON {
             return Err(RetargetError::DegenerateSource);
         }
@@ -135,7 +137,7 @@ impl<'a> Analytic<'a> {
             anchor,
             driver,
             rest_chord,
-            scale: target.leg_length() / source_legs,
+            scale: target_legs / source_legs,
         })
     }
 
@@ -175,6 +177,22 @@ impl<'a> Analytic<'a> {
         }
         Ok(())
     }
+}
+
+/// Mean root-to-foot chain lengths of both skeletons, measured to the deepest foot joints both
+/// have (toes, else ankles) so that a format without toes is not compared with one that has
+/// them; each skeleton's own end-effector chains if they share neither.
+fn leg_lengths(source: &Skeleton, target: &Skeleton) -> (f32, f32) {
+    let to = |s: &Skeleton, [left, right]: [Joint; 2]| {
+        Some(0.5 * (s.chain_length(s.index_of(left)?) + s.chain_length(s.index_of(right)?)))
+    };
+    [
+        [Joint::LeftToe, Joint::RightToe],
+        [Joint::LeftAnkle, Joint::RightAnkle],
+    ]
+    .into_iter()
+    .find_map(|feet| Some((to(source, feet)?, to(target, feet)?)))
+    .unwrap_or((source.leg_length(), target.leg_length()))
 }
 
 #[cfg(test)]
@@ -252,6 +270,20 @@ mod tests {
         retarget.frame(&frame, &mut out).unwrap();
         assert!((out[0] - frame[0] * 0.8).norm() < 1e-6);
         assert!((out[10] - frame[10] * 0.8).norm() < 1e-5);
+    }
+
+    #[test]
+    fn leg_ratio_compares_the_same_chain() {
+        // Golf joint centres reach the toes, H36M only the ankles: compare pelvis-to-ankle.
+        let golf = Format::GolfMarkers.default_skeleton().unwrap();
+        let h36m = Format::H36m17.default_skeleton().unwrap();
+        let retarget = Analytic::new(&golf, &h36m).unwrap();
+        let ankle = |s: &Skeleton| s.chain_length(s.index_of(Joint::LeftAnkle).unwrap());
+        assert!((retarget.scale() - ankle(&h36m) / ankle(&golf)).abs() < 1e-6);
+        assert!(
+            (retarget.scale() - 1.0).abs() < 1e-6,
+            "both are the same standard body"
+        );
     }
 
     #[test]
