@@ -208,6 +208,30 @@ fn unit(v: Vec3) -> Option<Vec3> {
     Unit::try_new(v, MIN_BONE).map(Unit::into_inner)
 }
 
+/// Random poses for property tests.
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::*;
+    use nalgebra::Quaternion;
+    use std::vec::Vec;
+
+    /// Rotations from raw uniform draws in ±1, biased toward the identity so chains stay
+    /// readable (a rotation of at most about 80° per bone).
+    pub(crate) fn rotations(raw: &[[f32; 4]]) -> Vec<Quat> {
+        raw.iter()
+            .map(|a| Quat::new_normalize(Quaternion::new(a[0] + 1.5, a[1], a[2], a[3])))
+            .collect()
+    }
+
+    /// Joint positions of `skeleton` posed by [`rotations`] of `raw` with the root at `root`.
+    pub(crate) fn pose(skeleton: &Skeleton, raw: &[[f32; 4]], root: [f32; 3]) -> Vec<Vec3> {
+        let mut out = std::vec![Vec3::zeros(); skeleton.len()];
+        let local = rotations(&raw[..skeleton.len()]);
+        forward(skeleton, &local, Vec3::from(root), &mut out).unwrap();
+        out
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -215,10 +239,6 @@ mod tests {
     use proptest::prelude::*;
 
     const TOLERANCE_M: f32 = 1e-5;
-
-    fn quat(a: [f32; 4]) -> Quat {
-        Quat::new_normalize(Quaternion::new(a[0] + 1.5, a[1], a[2], a[3]))
-    }
 
     proptest! {
         #[test]
@@ -239,7 +259,7 @@ mod tests {
         ) {
             let skeleton = format.default_skeleton().unwrap();
             let n = skeleton.len();
-            let local: std::vec::Vec<Quat> = raw.iter().take(n).map(|&a| quat(a)).collect();
+            let local = testing::rotations(&raw[..n]);
             let mut positions = [Vec3::zeros(); MAX_JOINTS];
             forward(&skeleton, &local, Vec3::from(root), &mut positions).unwrap();
             let mut fitted = [Quat::identity(); MAX_JOINTS];

@@ -199,22 +199,10 @@ fn leg_lengths(source: &Skeleton, target: &Skeleton) -> (f32, f32) {
 mod tests {
     use super::*;
     use crate::format::Format;
-    use crate::kinematics::forward;
-    use nalgebra::Quaternion;
+    use crate::kinematics::testing::pose;
     use proptest::prelude::*;
 
     const TOLERANCE_M: f32 = 1e-5;
-
-    fn pose(skeleton: &Skeleton, raw: &[[f32; 4]], root: [f32; 3]) -> std::vec::Vec<Vec3> {
-        let local: std::vec::Vec<Quat> = raw
-            .iter()
-            .take(skeleton.len())
-            .map(|a| Quat::new_normalize(Quaternion::new(a[0] + 1.5, a[1], a[2], a[3])))
-            .collect();
-        let mut out = std::vec![Vec3::zeros(); skeleton.len()];
-        forward(skeleton, &local, Vec3::from(root), &mut out).unwrap();
-        out
-    }
 
     proptest! {
         #[test]
