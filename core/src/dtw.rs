@@ -371,6 +371,8 @@ pub fn align(
     let (rows, here) = cost[..3 * width].split_at_mut(2 * width);
     let (mut prev, mut curr) = rows.split_at_mut(width);
     prev.fill(f32::INFINITY);
+    // A virtual diagonal predecessor of cell (0, 0) with distance 0 starts the path.
+    prev[0] = 0.0;
     let mut prev_lo = 0usize;
     let mut bits = StepWriter {
         steps,
@@ -380,14 +382,20 @@ pub fn align(
     };
     for i in 0..n {
         let (lo, hi) = guide.row(i);
-        let cells = &mut here[..hi - lo + 1];
+        let w = hi - lo + 1;
+        let cells = &mut here[..w];
         cell.row(a, i, b, lo..hi + 1, cells);
-        // prev[k] holds column prev_lo + k - 1.
-        let shift = lo + 1 - prev_lo;
+        // prev[k] holds column prev_lo + k - 1, so the cells above this row's columns
+        // lo - 1 ..= hi start at prev[lo - prev_lo].
+        let above = &prev[lo - prev_lo..lo - prev_lo + w + 1];
         curr[0] = f32::INFINITY;
         let mut left = f32::INFINITY;
-        for (k, &c) in cells.iter().enumerate() {
-            let (diagonal, up) = (prev[shift + k - 1], prev[shift + k]);
+        for ((d, pair), &c) in curr[1..=w]
+            .iter_mut()
+            .zip(above.windows(2))
+            .zip(cells.iter())
+        {
+            let (diagonal, up) = (pair[0], pair[1]);
             let (mut best, mut step) = (diagonal, DIAGONAL);
             if up < best {
                 (best, step) = (up, ADVANCE_A);
@@ -395,14 +403,11 @@ pub fn align(
             if left < best {
                 (best, step) = (left, ADVANCE_B);
             }
-            if i == 0 && k == 0 {
-                best = 0.0;
-            }
             left = c + best;
-            curr[k + 1] = left;
+            *d = left;
             bits.push(step);
         }
-        curr[cells.len() + 1..].fill(f32::INFINITY);
+        curr[w + 1..].fill(f32::INFINITY);
         core::mem::swap(&mut prev, &mut curr);
         prev_lo = lo;
     }
