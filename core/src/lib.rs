@@ -19,6 +19,7 @@
 //! - [`kinematics`]: forward and inverse kinematics with per-bone rotations.
 //! - [`normalize`]: parent-relative positions and the height-normalized root trajectory.
 //! - [`retarget`]: the analytic retargeter.
+//! - [`events`]: the eight swing events.
 //! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
@@ -26,6 +27,7 @@
 
 pub mod config;
 pub mod dtw;
+pub mod events;
 pub mod format;
 pub mod joint;
 pub mod kinematics;

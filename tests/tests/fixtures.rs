@@ -63,10 +63,19 @@ fn regenerate() {
         let bvh = Bvh::parse(&std::fs::read_to_string(data.join(source)).unwrap()).unwrap();
         std::fs::write(fixture(out), excerpt(&bvh, step, frames).to_text()).unwrap();
     }
+    for club in ["iron", "driver"] {
+        let c3d =
+            C3d::parse(&std::fs::read(data.join(format!("golf/gears_tour_{club}.c3d"))).unwrap())
+                .unwrap();
+        let centres = golf::resample(&golf::joint_centres(&c3d).unwrap(), GOLF_RATE_HZ);
+        let swing = Motion::from_golf(&centres).unwrap();
+        std::fs::write(
+            fixture(&format!("golf_{club}_60hz.csv")),
+            csv::write(&swing),
+        )
+        .unwrap();
+    }
     let c3d = C3d::parse(&std::fs::read(data.join("golf/gears_tour_driver.c3d")).unwrap()).unwrap();
-    let centres = golf::resample(&golf::joint_centres(&c3d).unwrap(), GOLF_RATE_HZ);
-    let swing = Motion::from_golf(&centres).unwrap();
-    std::fs::write(fixture("golf_driver_60hz.csv"), csv::write(&swing)).unwrap();
 
     let markers = decimate(&c3d, (c3d.rate_hz / GOLF_RATE_HZ) as usize);
     assert_eq!(markers.rate_hz, GOLF_RATE_HZ);
