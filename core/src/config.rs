@@ -5,8 +5,5 @@
 /// Most joints one skeleton may have (BlazePose-33 landmarks and CMU-31 fit).
 pub const MAX_JOINTS: usize = 40;
 
-/// Most body segments a skeleton is cut into (spine, head, two arms, two legs).
-pub const MAX_SEGMENTS: usize = 6;
-
-/// Deepest parent chain a skeleton may have (root to the deepest joint, in bones).
-pub const MAX_DEPTH: usize = 16;
+/// Longest swing, in frames, that can be scored (4.2 s at 60 Hz, 8.5 s at 30 Hz).
+pub const MAX_SWING_FRAMES: usize = 256;

@@ -103,6 +103,7 @@ pub enum Side {
 /// The events of one swing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SwingEvents {
     /// The lead side: left for a right-handed golfer.
     pub lead: Side,

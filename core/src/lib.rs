@@ -21,6 +21,7 @@
 //! - [`retarget`]: the analytic retargeter.
 //! - [`events`]: the eight swing events.
 //! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
+//! - [`score`]: the score, tempo, spatial deviations and advice of one swing.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -34,6 +35,7 @@ pub mod kinematics;
 mod math;
 pub mod normalize;
 pub mod retarget;
+pub mod score;
 pub mod skeleton;
 
 /// A position or offset in metres (+Y up).

@@ -1,0 +1,667 @@
+//! Scoring a student's swing against the coach's virtual swing on the student's skeleton.
+//!
+//! [`score`] finds both swings' events, aligns them with the event-anchored banded DTW, and
+//! builds a fixed-capacity [`Report`]: the score, the frame correspondence, the tempo of each
+//! phase, the joints that deviate most at each key event (in the golfer's stance frame), and
+//! advice items ordered by importance.
+//!
+//! - **Score**: `100 · exp(−e / (SCORE_SCALE · h))`, with `e` the DTW distance divided by the
+//!   path length (the mean joint distance along the alignment, root at the origin) and `h` the
+//!   student's height: identical swings score 100 and the score falls strictly as `e` grows. A
+//!   mean error of 10 % of the height (18 cm on a 1.8 m skeleton) scores 37.
+//! - **Tempo**: each phase's duration, student over coach; beyond ±[`TEMPO_TOLERANCE`] the
+//!   verdict is `slow` or `fast`.
+//! - **Spatial**: at each event the student's pose is compared with the nearest point of the
+//!   coach's trajectory around the frames the alignment matches with it, so a swing that is
+//!   only faster or slower is not reported as out of position.
+//! - **Stance frame**: origin between the feet at address, `toward_target` from the trail foot
+//!   to the lead foot (horizontal), `toward_ball` the horizontal direction the chest faces
+//!   (toward the hands), `up` = +Y; each swing in its own frame, so a pelvis that moves toward
+//!   the ball is reported as the pelvis moving.
+
+use crate::config::MAX_SWING_FRAMES;
+use crate::dtw::{self, Band, DtwError, Sequence};
+use crate::events::{self, Event, EventError, Side, SwingEvents};
+use crate::joint::Joint;
+use crate::skeleton::Skeleton;
+use crate::Vec3;
+use heapless::Vec as HVec;
+
+/// Relative phase-duration difference beyond which the tempo verdict is slow or fast.
+pub const TEMPO_TOLERANCE: f32 = 0.15;
+/// Joint deviations at or below this (metres) are not reported.
+pub const SPATIAL_THRESHOLD_M: f32 = 0.05;
+/// Deviations reported per event, largest first.
+pub const DEVIATIONS_PER_EVENT: usize = 3;
+/// Height fraction of mean error at which the score is `100 / e`.
+pub const SCORE_SCALE: f32 = 0.1;
+/// Most advice items a report holds.
+pub const MAX_ADVICE: usize = 8;
+/// Longest warping path a report holds.
+pub const MAX_PATH: usize = 2 * MAX_SWING_FRAMES - 1;
+/// Most deviations a report holds (every event).
+pub const MAX_DEVIATIONS: usize = 8 * DEVIATIONS_PER_EVENT;
+
+/// A swing phase between two events.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum Phase {
+    /// Address to top.
+    Backswing,
+    /// Top to impact.
+    Downswing,
+    /// Impact to finish.
+    FollowThrough,
+}
+
+impl Phase {
+    /// All phases in swing order.
+    pub const ALL: [Phase; 3] = [Phase::Backswing, Phase::Downswing, Phase::FollowThrough];
+
+    /// The snake_case name used in reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Phase::Backswing => "backswing",
+            Phase::Downswing => "downswing",
+            Phase::FollowThrough => "follow_through",
+        }
+    }
+
+    const fn bounds(self) -> (Event, Event) {
+        match self {
+            Phase::Backswing => (Event::Address, Event::Top),
+            Phase::Downswing => (Event::Top, Event::Impact),
+            Phase::FollowThrough => (Event::Impact, Event::Finish),
+        }
+    }
+}
+
+/// How a phase's duration compares with the coach's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[allow(missing_docs)]
+pub enum Verdict {
+    Ok,
+    Slow,
+    Fast,
+}
+
+impl Verdict {
+    /// The name used in reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Verdict::Ok => "ok",
+            Verdict::Slow => "slow",
+            Verdict::Fast => "fast",
+        }
+    }
+}
+
+/// One phase's tempo.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct PhaseTempo {
+    /// The phase.
+    pub phase: Phase,
+    /// Student's duration, seconds.
+    pub student_s: f32,
+    /// Coach's duration, seconds.
+    pub coach_s: f32,
+    /// `student_s / coach_s`.
+    pub ratio: f32,
+    /// Slow or fast beyond [`TEMPO_TOLERANCE`].
+    pub verdict: Verdict,
+}
+
+/// Axes of the golfer's stance frame, and the six directions along them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[allow(missing_docs)]
+pub enum Direction {
+    TowardTarget,
+    AwayFromTarget,
+    TowardBall,
+    AwayFromBall,
+    Up,
+    Down,
+}
+
+impl Direction {
+    /// The snake_case name used in reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Direction::TowardTarget => "toward_target",
+            Direction::AwayFromTarget => "away_from_target",
+            Direction::TowardBall => "toward_ball",
+            Direction::AwayFromBall => "away_from_ball",
+            Direction::Up => "up",
+            Direction::Down => "down",
+        }
+    }
+
+    /// The words used in advice: "at the top your left wrist is 12 cm {lower}".
+    pub const fn comparative(self) -> &'static str {
+        match self {
+            Direction::TowardTarget => "closer to the target",
+            Direction::AwayFromTarget => "farther from the target",
+            Direction::TowardBall => "closer to the ball",
+            Direction::AwayFromBall => "farther from the ball",
+            Direction::Up => "higher",
+            Direction::Down => "lower",
+        }
+    }
+}
+
+/// A joint off the coach's position at an event.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Deviation {
+    /// The event.
+    pub event: Event,
+    /// The joint.
+    pub joint: Joint,
+    /// Length of the offset, metres.
+    pub distance_m: f32,
+    /// Student minus coach in the stance frame: toward target, toward ball, up (metres).
+    pub offset_m: [f32; 3],
+    /// The offset's largest component.
+    pub direction: Direction,
+}
+
+/// One piece of advice; [`core::fmt::Display`] renders it as a sentence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Advice {
+    /// A phase too slow or fast.
+    Tempo(PhaseTempo),
+    /// A joint off at an event.
+    Spatial(Deviation),
+}
+
+impl Advice {
+    /// How far past its threshold this is: the sort key, most important first.
+    pub fn severity(&self) -> f32 {
+        match self {
+            Advice::Tempo(t) => {
+                libm::fabsf(libm::logf(t.ratio)) / libm::logf(1.0 + TEMPO_TOLERANCE)
+            }
+            Advice::Spatial(d) => d.distance_m / SPATIAL_THRESHOLD_M,
+        }
+    }
+}
+
+impl core::fmt::Display for Advice {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Advice::Tempo(t) => {
+                let percent = libm::roundf(libm::fabsf(t.ratio - 1.0) * 100.0) as u32;
+                let (adjective, hint) = match t.verdict {
+                    Verdict::Fast => ("faster", "take it smoother"),
+                    _ => ("slower", "keep it moving"),
+                };
+                let phase = match t.phase {
+                    Phase::Backswing => "backswing",
+                    Phase::Downswing => "downswing",
+                    Phase::FollowThrough => "follow-through",
+                };
+                write!(f, "Your {phase} is {percent}% {adjective} than the coach's ({:.2} s against {:.2} s): {hint}.", t.student_s, t.coach_s)
+            }
+            Advice::Spatial(d) => {
+                let event = match d.event {
+                    Event::Address => "At address",
+                    Event::ToeUp => "At toe-up",
+                    Event::MidBackswing => "Halfway back",
+                    Event::Top => "At the top",
+                    Event::MidDownswing => "Halfway down",
+                    Event::Impact => "At impact",
+                    Event::MidFollowThrough => "Halfway through",
+                    Event::Finish => "At the finish",
+                };
+                let cm = libm::roundf(d.distance_m * 100.0) as u32;
+                let joint = d.joint.name();
+                write!(f, "{event} your ")?;
+                for (i, word) in joint.split('_').enumerate() {
+                    write!(f, "{}{word}", if i > 0 { " " } else { "" })?;
+                }
+                write!(
+                    f,
+                    " is {cm} cm {} than the coach's.",
+                    d.direction.comparative()
+                )
+            }
+        }
+    }
+}
+
+/// The result of scoring one swing.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Report {
+    /// 0 to 100.
+    pub score: f32,
+    /// DTW distance (sum of mean joint distances along the path, metres).
+    pub distance: f32,
+    /// `distance` over the path length.
+    pub normalized: f32,
+    /// Frame correspondence `(student, coach)`.
+    pub path: HVec<(u16, u16), MAX_PATH>,
+    /// The student's events.
+    pub student_events: SwingEvents,
+    /// The coach's events.
+    pub coach_events: SwingEvents,
+    /// Backswing, downswing and follow-through.
+    pub tempo: [PhaseTempo; 3],
+    /// Backswing over downswing duration, student.
+    pub student_tempo_ratio: f32,
+    /// Backswing over downswing duration, coach.
+    pub coach_tempo_ratio: f32,
+    /// At each event, up to [`DEVIATIONS_PER_EVENT`] joints beyond [`SPATIAL_THRESHOLD_M`],
+    /// largest first.
+    pub spatial: HVec<Deviation, MAX_DEVIATIONS>,
+    /// The most important advice first.
+    pub advice: HVec<Advice, MAX_ADVICE>,
+}
+
+/// Why a swing could not be scored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ScoreError {
+    /// Events could not be found in the student's (`student` true) or coach's swing.
+    Events {
+        /// Whose swing.
+        student: bool,
+        /// Why.
+        error: EventError,
+    },
+    /// A swing is longer than [`MAX_SWING_FRAMES`].
+    TooLong {
+        /// Its frames.
+        frames: usize,
+    },
+    /// The alignment failed (scratch too small, bad weights).
+    Dtw(DtwError),
+    /// Scratch shorter than [`scratch_len`] asks.
+    Scratch {
+        /// Floats needed (bytes are [`ScratchLen::bytes`]).
+        needed: usize,
+    },
+}
+
+impl core::fmt::Display for ScoreError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ScoreError::Events { student, error } => {
+                write!(
+                    f,
+                    "{} swing: {error}",
+                    if *student { "student" } else { "coach" }
+                )
+            }
+            ScoreError::TooLong { frames } => {
+                write!(
+                    f,
+                    "a swing of {frames} frames is longer than {MAX_SWING_FRAMES}"
+                )
+            }
+            ScoreError::Dtw(e) => write!(f, "alignment: {e}"),
+            ScoreError::Scratch { needed } => write!(f, "scoring scratch needs {needed} floats"),
+        }
+    }
+}
+
+impl core::error::Error for ScoreError {}
+
+impl From<DtwError> for ScoreError {
+    fn from(e: DtwError) -> Self {
+        ScoreError::Dtw(e)
+    }
+}
+
+/// Scratch [`score`] needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ScratchLen {
+    /// Floats: both swings' features and the DTW rows.
+    pub floats: usize,
+    /// Bytes: the DTW path bits.
+    pub bytes: usize,
+}
+
+/// Scratch [`score`] needs for swings of `student` and `coach` frames on a skeleton of `joints`
+/// joints, whatever band the events give.
+pub fn scratch_len(joints: usize, student: usize, coach: usize) -> ScratchLen {
+    ScratchLen {
+        floats: 3 * joints * (student + coach) + 3 * (coach + 2),
+        bytes: (student * coach).div_ceil(4),
+    }
+}
+
+/// Stance frame of one swing at its address.
+struct Stance {
+    origin: Vec3,
+    target: Vec3,
+    ball: Vec3,
+}
+
+impl Stance {
+    fn new(skeleton: &Skeleton, frame: &[Vec3], lead: Side) -> Stance {
+        let at = |j: Joint, fallback: Joint| {
+            skeleton
+                .index_of(j)
+                .or(skeleton.index_of(fallback))
+                .map_or(Vec3::zeros(), |k| frame[k])
+        };
+        let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
+        let (left, right) = (
+            at(Joint::LeftAnkle, Joint::LeftToe),
+            at(Joint::RightAnkle, Joint::RightToe),
+        );
+        let (lead_foot, trail_foot) = match lead {
+            Side::Left => (left, right),
+            Side::Right => (right, left),
+        };
+        let target = flat(lead_foot - trail_foot)
+            .try_normalize(1e-6)
+            .unwrap_or(Vec3::x());
+        let mut ball = Vec3::y().cross(&target);
+        let chest = at(Joint::Thorax, Joint::Neck);
+        let hands =
+            (at(Joint::LeftWrist, Joint::LeftHand) + at(Joint::RightWrist, Joint::RightHand)) * 0.5;
+        if ball.dot(&(hands - chest)) < 0.0 {
+            ball = -ball;
+        }
+        let origin = (left + right) * 0.5;
+        Stance {
+            origin: Vec3::new(origin.x, 0.0, origin.z),
+            target,
+            ball,
+        }
+    }
+
+    /// `p` in stance coordinates: toward target, toward ball, up.
+    fn local(&self, p: Vec3) -> Vec3 {
+        let d = p - self.origin;
+        Vec3::new(d.dot(&self.target), d.dot(&self.ball), d.y)
+    }
+}
+
+/// Frame `f` of a swing of `joints` joints.
+fn frame(swing: &[Vec3], joints: usize, f: usize) -> &[Vec3] {
+    &swing[f * joints..(f + 1) * joints]
+}
+
+/// The coach's pose closest to the student's frame `i` (`pose`): the point of the coach's
+/// trajectory, between consecutive frames around those the path matches with `i`, whose
+/// root-relative pose is nearest in least squares. Comparing there keeps timing (a frame's
+/// quantization is 12 cm of hand travel at impact at 60 Hz) out of the spatial advice.
+/// Returns joint `k`'s world position on the coach's side.
+fn closest_coach_pose<'c>(
+    joints: usize,
+    pose: &[Vec3],
+    coach: &'c [Vec3],
+    path: &[(u16, u16)],
+    i: usize,
+) -> impl Fn(usize) -> Vec3 + 'c {
+    let m = coach.len() / joints;
+    let matched = path
+        .iter()
+        .filter(|&&(a, _)| a as usize == i)
+        .map(|&(_, b)| b as usize);
+    let (lo, hi) = matched.fold((usize::MAX, 0), |(lo, hi), j| (lo.min(j), hi.max(j)));
+    let (lo, hi) = (lo.min(hi).saturating_sub(1), (hi + 1).min(m - 1));
+    let relative = |f: &[Vec3], k: usize| f[k] - f[0];
+    let mut best = (f32::INFINITY, lo, 0.0f32);
+    for j in lo..hi.max(lo + 1).min(m) {
+        let (c0, c1) = (
+            frame(coach, joints, j),
+            frame(coach, joints, (j + 1).min(m - 1)),
+        );
+        let (mut along, mut norm) = (0.0f32, 0.0f32);
+        for k in 0..joints {
+            let step = relative(c1, k) - relative(c0, k);
+            along += (relative(pose, k) - relative(c0, k)).dot(&step);
+            norm += step.norm_squared();
+        }
+        let t = if norm > 0.0 {
+            (along / norm).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let residual: f32 = (0..joints)
+            .map(|k| {
+                (relative(pose, k) - relative(c0, k) - (relative(c1, k) - relative(c0, k)) * t)
+                    .norm_squared()
+            })
+            .sum();
+        if residual < best.0 {
+            best = (residual, j, t);
+        }
+    }
+    let (_, j, t) = best;
+    let (c0, c1) = (
+        frame(coach, joints, j),
+        frame(coach, joints, (j + 1).min(m - 1)),
+    );
+    move |k| c0[k] + (c1[k] - c0[k]) * t
+}
+
+/// Writes `swing` root-relative and channel-major into `out` (3 · joints · frames floats).
+fn features(joints: usize, swing: &[Vec3], out: &mut [f32]) {
+    let frames = swing.len() / joints;
+    for (f, frame) in swing.chunks_exact(joints).enumerate() {
+        let root = frame[0];
+        for (k, p) in frame.iter().enumerate() {
+            let d = p - root;
+            for axis in 0..3 {
+                out[(axis * joints + k) * frames + f] = d[axis];
+            }
+        }
+    }
+}
+
+/// Scores `student` (frames × skeleton joints at `student_hz`) against the coach's virtual
+/// swing `coach` (on the same skeleton, at `coach_hz`), with a DTW band of `radius` frames
+/// around the event-anchored guide (`anchored`) or the diagonal.
+///
+/// # Errors
+/// [`ScoreError`] when events cannot be found, a swing is too long or the scratch (see
+/// [`scratch_len`]) too short.
+#[allow(clippy::too_many_arguments)]
+pub fn score(
+    skeleton: &Skeleton,
+    student: &[Vec3],
+    student_hz: f32,
+    coach: &[Vec3],
+    coach_hz: f32,
+    radius: u16,
+    anchored: bool,
+    floats: &mut [f32],
+    bytes: &mut [u8],
+) -> Result<Report, ScoreError> {
+    let joints = skeleton.len();
+    let student_events =
+        events::detect(skeleton, student, student_hz).map_err(|error| ScoreError::Events {
+            student: true,
+            error,
+        })?;
+    let coach_events =
+        events::detect(skeleton, coach, coach_hz).map_err(|error| ScoreError::Events {
+            student: false,
+            error,
+        })?;
+    let (n, m) = (student.len() / joints, coach.len() / joints);
+    for frames in [n, m] {
+        if frames > MAX_SWING_FRAMES {
+            return Err(ScoreError::TooLong { frames });
+        }
+    }
+    let needed = scratch_len(joints, n, m);
+    if floats.len() < needed.floats || bytes.len() < needed.bytes {
+        return Err(ScoreError::Scratch {
+            needed: needed.floats,
+        });
+    }
+
+    // Alignment.
+    let (a, rest) = floats.split_at_mut(3 * joints * n);
+    let (b, rest) = rest.split_at_mut(3 * joints * m);
+    features(joints, student, a);
+    features(joints, coach, b);
+    let mut anchors: HVec<(u16, u16), 8> = HVec::new();
+    if anchored {
+        for event in Event::ALL {
+            let (i, j) = (student_events.frame(event), coach_events.frame(event));
+            let after_last = anchors
+                .last()
+                .is_none_or(|&(pi, pj)| i > pi as usize && j > pj as usize);
+            if i > 0 && j > 0 && i + 1 < n && j + 1 < m && after_last {
+                // Eight events fit the eight slots.
+                let _ = anchors.push((i as u16, j as u16));
+            }
+        }
+    }
+    let band = Band::anchored(radius, &anchors)?;
+    let len = dtw::scratch_len(n, m, &band)?;
+    let cost = &mut rest[..len.cost];
+    let steps = &mut bytes[..len.path_bytes];
+    let mut path_buf = [(0u16, 0u16); MAX_PATH];
+    let alignment = dtw::align(
+        &Sequence::new(a, joints)?,
+        &Sequence::new(b, joints)?,
+        &[],
+        &band,
+        cost,
+        steps,
+        &mut path_buf[..(n + m - 1).min(MAX_PATH)],
+    )?;
+    let mut path = HVec::new();
+    for &p in &path_buf[..alignment.path_len] {
+        let _ = path.push(p);
+    }
+    let score = 100.0 * libm::expf(-alignment.normalized / (SCORE_SCALE * skeleton.height()));
+
+    // Tempo.
+    let duration = |e: &SwingEvents, hz: f32, phase: Phase| {
+        let (from, to) = phase.bounds();
+        (e.frame(to) - e.frame(from)) as f32 / hz
+    };
+    let tempo = Phase::ALL.map(|phase| {
+        let (student_s, coach_s) = (
+            duration(&student_events, student_hz, phase),
+            duration(&coach_events, coach_hz, phase),
+        );
+        let ratio = student_s / coach_s;
+        let verdict = if ratio > 1.0 + TEMPO_TOLERANCE {
+            Verdict::Slow
+        } else if ratio < 1.0 / (1.0 + TEMPO_TOLERANCE) {
+            Verdict::Fast
+        } else {
+            Verdict::Ok
+        };
+        PhaseTempo {
+            phase,
+            student_s,
+            coach_s,
+            ratio,
+            verdict,
+        }
+    });
+    let tempo_ratio = |e: &SwingEvents, hz: f32| {
+        duration(e, hz, Phase::Backswing) / duration(e, hz, Phase::Downswing)
+    };
+
+    // Spatial deviations at each event, in each swing's stance frame.
+    let stance_s = Stance::new(
+        skeleton,
+        frame(student, joints, student_events.frame(Event::Address)),
+        student_events.lead,
+    );
+    let stance_c = Stance::new(
+        skeleton,
+        frame(coach, joints, coach_events.frame(Event::Address)),
+        coach_events.lead,
+    );
+    let mut spatial: HVec<Deviation, MAX_DEVIATIONS> = HVec::new();
+    for event in Event::ALL {
+        let i = student_events.frame(event);
+        let fs = frame(student, joints, i);
+        let fc = closest_coach_pose(joints, fs, coach, &path, i);
+        let mut worst: HVec<Deviation, DEVIATIONS_PER_EVENT> = HVec::new();
+        for (k, &p) in fs.iter().enumerate() {
+            let Some(joint) = skeleton.joint(k).filter(|j| !j.is_club()) else {
+                continue;
+            };
+            let offset = stance_s.local(p) - stance_c.local(fc(k));
+            let distance_m = offset.norm();
+            if distance_m <= SPATIAL_THRESHOLD_M {
+                continue;
+            }
+            let axis = offset.iamax();
+            let direction = match (axis, offset[axis] > 0.0) {
+                (0, true) => Direction::TowardTarget,
+                (0, false) => Direction::AwayFromTarget,
+                (1, true) => Direction::TowardBall,
+                (1, false) => Direction::AwayFromBall,
+                (_, true) => Direction::Up,
+                (_, false) => Direction::Down,
+            };
+            let deviation = Deviation {
+                event,
+                joint,
+                distance_m,
+                offset_m: [offset.x, offset.y, offset.z],
+                direction,
+            };
+            insert_sorted(&mut worst, deviation, |d| d.distance_m);
+        }
+        for d in worst {
+            let _ = spatial.push(d);
+        }
+    }
+
+    // Advice: tempo and spatial items by severity.
+    let mut advice: HVec<Advice, MAX_ADVICE> = HVec::new();
+    for t in tempo.iter().filter(|t| t.verdict != Verdict::Ok) {
+        insert_sorted(&mut advice, Advice::Tempo(*t), Advice::severity);
+    }
+    for d in &spatial {
+        insert_sorted(&mut advice, Advice::Spatial(*d), Advice::severity);
+    }
+
+    Ok(Report {
+        score,
+        distance: alignment.distance,
+        normalized: alignment.normalized,
+        path,
+        student_events,
+        coach_events,
+        tempo,
+        student_tempo_ratio: tempo_ratio(&student_events, student_hz),
+        coach_tempo_ratio: tempo_ratio(&coach_events, coach_hz),
+        spatial,
+        advice,
+    })
+}
+
+/// Inserts `item` into `list`, kept sorted by `key` descending; when full, the smallest goes.
+fn insert_sorted<T: Copy, const N: usize>(list: &mut HVec<T, N>, item: T, key: impl Fn(&T) -> f32) {
+    let at = list
+        .iter()
+        .position(|x| key(x) < key(&item))
+        .unwrap_or(list.len());
+    if at >= N {
+        return;
+    }
+    if list.is_full() {
+        list.pop();
+    }
+    let _ = list.insert(at, item);
+}

@@ -1,0 +1,301 @@
+//! Scoring on the real driver swing: identical swings, and variants with one planted flaw each.
+//!
+//! Each variant is derived from `fixtures/golf_driver_60hz.csv` (joint centres of the real
+//! tour swing at 60 Hz) by a transformation in this file: a phase time-warped 20-40 %, or one
+//! joint moved 8-15 cm around one event along an axis of the golfer's stance frame.
+
+use posecoach_adapters::io::{self, Motion};
+use posecoach_core::events::Event;
+use posecoach_core::joint::Joint;
+use posecoach_core::score::{score, scratch_len, Advice, Direction, Phase, Report, Verdict};
+use posecoach_core::Vec3;
+use posecoach_tests::fixture;
+
+/// Band radius in frames at 60 Hz.
+const RADIUS: u16 = 10;
+
+fn driver() -> Motion {
+    io::load(&fixture("golf_driver_60hz.csv")).unwrap()
+}
+
+fn run(student: &Motion, coach: &Motion) -> Report {
+    let j = coach.skeleton.len();
+    let len = scratch_len(j, student.frames(), coach.frames());
+    let (mut floats, mut bytes) = (vec![0.0; len.floats], vec![0u8; len.bytes]);
+    score(
+        &coach.skeleton,
+        &student.positions,
+        student.rate_hz,
+        &coach.positions,
+        coach.rate_hz,
+        RADIUS,
+        true,
+        &mut floats,
+        &mut bytes,
+    )
+    .unwrap()
+}
+
+/// `swing` with the phase from event `from` to event `to` (coach frames) stretched by `factor`.
+fn warp_phase(swing: &Motion, from: usize, to: usize, factor: f32) -> Motion {
+    let warp = |t: f32| {
+        if t <= from as f32 {
+            t
+        } else if t <= to as f32 {
+            from as f32 + (t - from as f32) * factor
+        } else {
+            from as f32 + (to - from) as f32 * factor + (t - to as f32)
+        }
+    };
+    let unwarp = |u: f32| {
+        let (mut lo, mut hi) = (0.0f32, swing.frames() as f32 * 2.0);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if warp(mid) < u {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        lo.min((swing.frames() - 1) as f32)
+    };
+    let frames = warp((swing.frames() - 1) as f32).floor() as usize + 1;
+    let last = swing.frames() - 1;
+    let positions = (0..frames)
+        .flat_map(|u| {
+            let t = unwarp(u as f32);
+            let (f, w) = (t.floor() as usize, t - t.floor());
+            let (a, b) = (swing.frame(f.min(last)), swing.frame((f + 1).min(last)));
+            a.iter()
+                .zip(b)
+                .map(move |(p, q)| p + (q - p) * w)
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    Motion {
+        positions,
+        missing: vec![false; frames * swing.skeleton.len()],
+        ..swing.clone()
+    }
+}
+
+/// Unit axes of the stance frame at address: toward target, toward ball, up.
+fn stance_axes(swing: &Motion, address: usize) -> [Vec3; 3] {
+    let s = &swing.skeleton;
+    let at = |j: Joint| swing.frame(address)[s.index_of(j).unwrap()];
+    let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z).normalize();
+    let target = flat(at(Joint::LeftAnkle) - at(Joint::RightAnkle));
+    let mut ball = Vec3::y().cross(&target);
+    let hands = (at(Joint::LeftWrist) + at(Joint::RightWrist)) * 0.5;
+    if ball.dot(&(hands - at(Joint::Thorax))) < 0.0 {
+        ball = -ball;
+    }
+    [target, ball, Vec3::y()]
+}
+
+/// `swing` with `joint` moved by `offset` at frame `at`, fading out over ±0.1 s.
+fn plant(swing: &Motion, joint: Joint, at: usize, offset: Vec3) -> Motion {
+    let k = swing.skeleton.index_of(joint).unwrap();
+    let n = swing.skeleton.len();
+    let width = 0.1 * swing.rate_hz;
+    let mut out = swing.clone();
+    for f in 0..swing.frames() {
+        let x = (f as f32 - at as f32) / width;
+        if x.abs() < 1.0 {
+            let weight = 0.5 * (1.0 + (std::f32::consts::PI * x).cos());
+            out.positions[f * n + k] += offset * weight;
+        }
+    }
+    out
+}
+
+#[test]
+fn identical_swings_score_100_with_nothing_to_fix() {
+    let swing = driver();
+    let report = run(&swing, &swing);
+    assert_eq!(report.score, 100.0);
+    assert_eq!(report.distance, 0.0);
+    assert!(report
+        .tempo
+        .iter()
+        .all(|t| t.verdict == Verdict::Ok && t.ratio == 1.0));
+    assert!(report.spatial.is_empty(), "{:?}", report.spatial);
+    assert!(report.advice.is_empty());
+    assert!(report.path.iter().all(|&(i, j)| i == j));
+    assert!((report.student_tempo_ratio - report.coach_tempo_ratio).abs() < 1e-6);
+}
+
+#[test]
+fn a_slowed_or_hurried_phase_is_named_first() {
+    let coach = driver();
+    let events = run(&coach, &coach).coach_events;
+    let cases = [
+        (
+            Phase::Backswing,
+            Event::Address,
+            Event::Top,
+            1.3,
+            Verdict::Slow,
+        ),
+        (
+            Phase::Backswing,
+            Event::Address,
+            Event::Top,
+            0.75,
+            Verdict::Fast,
+        ),
+        (
+            Phase::Downswing,
+            Event::Top,
+            Event::Impact,
+            1.4,
+            Verdict::Slow,
+        ),
+        (
+            Phase::Downswing,
+            Event::Top,
+            Event::Impact,
+            0.7,
+            Verdict::Fast,
+        ),
+        (
+            Phase::FollowThrough,
+            Event::Impact,
+            Event::Finish,
+            1.35,
+            Verdict::Slow,
+        ),
+        (
+            Phase::FollowThrough,
+            Event::Impact,
+            Event::Finish,
+            0.75,
+            Verdict::Fast,
+        ),
+    ];
+    for (phase, from, to, factor, verdict) in cases {
+        let student = warp_phase(&coach, events.frame(from), events.frame(to), factor);
+        let report = run(&student, &coach);
+        match report.advice.first() {
+            Some(Advice::Tempo(t)) => {
+                assert_eq!(
+                    (t.phase, t.verdict),
+                    (phase, verdict),
+                    "{phase:?} x{factor}: {report:?}"
+                )
+            }
+            other => panic!("{phase:?} x{factor}: first advice {other:?}"),
+        }
+        let entry = report.tempo.iter().find(|t| t.phase == phase).unwrap();
+        assert!(
+            (entry.ratio - factor).abs() < 0.1,
+            "{phase:?}: ratio {} for x{factor}",
+            entry.ratio
+        );
+    }
+}
+
+#[test]
+fn a_moved_joint_is_named_first_with_its_event_and_direction() {
+    let coach = driver();
+    let events = run(&coach, &coach).coach_events;
+    let axes = stance_axes(&coach, events.frame(Event::Address));
+    let cases = [
+        (Joint::LeftWrist, Event::Top, 2, -0.12, Direction::Down),
+        (Joint::Head, Event::Address, 1, 0.10, Direction::TowardBall),
+        (
+            Joint::Pelvis,
+            Event::Impact,
+            0,
+            0.08,
+            Direction::TowardTarget,
+        ),
+        (
+            Joint::RightElbow,
+            Event::Top,
+            1,
+            -0.15,
+            Direction::AwayFromBall,
+        ),
+        (
+            Joint::LeftKnee,
+            Event::Impact,
+            0,
+            -0.09,
+            Direction::AwayFromTarget,
+        ),
+        (Joint::RightShoulder, Event::Finish, 2, 0.11, Direction::Up),
+    ];
+    for (joint, event, axis, metres, direction) in cases {
+        let student = plant(&coach, joint, events.frame(event), axes[axis] * metres);
+        let report = run(&student, &coach);
+        match report.advice.first() {
+            Some(Advice::Spatial(d)) => {
+                assert_eq!(
+                    (d.joint, d.event, d.direction),
+                    (joint, event, direction),
+                    "{report:?}"
+                );
+                assert!(
+                    (d.distance_m - metres.abs()).abs() < 0.03,
+                    "{joint}: {} m",
+                    d.distance_m
+                );
+            }
+            other => panic!("{joint} at {event:?}: first advice {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn the_score_falls_strictly_as_a_planted_offset_grows() {
+    let coach = driver();
+    let events = run(&coach, &coach).coach_events;
+    let axes = stance_axes(&coach, events.frame(Event::Address));
+    let scores: Vec<f32> = [0.0, 0.03, 0.06, 0.09, 0.12, 0.15]
+        .iter()
+        .map(|&m| {
+            run(
+                &plant(
+                    &coach,
+                    Joint::LeftWrist,
+                    events.frame(Event::Top),
+                    axes[2] * -m,
+                ),
+                &coach,
+            )
+            .score
+        })
+        .collect();
+    assert!(scores.windows(2).all(|w| w[1] < w[0]), "{scores:?}");
+}
+
+#[test]
+fn advice_reads_as_sentences() {
+    let coach = driver();
+    let events = run(&coach, &coach).coach_events;
+    let axes = stance_axes(&coach, events.frame(Event::Address));
+    let student = plant(
+        &coach,
+        Joint::LeftWrist,
+        events.frame(Event::Top),
+        axes[2] * -0.12,
+    );
+    let report = run(&student, &coach);
+    // The nearest point of the coach's trajectory absorbs about a centimetre of the 12.
+    let sentence = report.advice[0].to_string();
+    assert!(
+        ["11", "12"].iter().any(|cm| sentence
+            == format!("At the top your left wrist is {cm} cm lower than the coach's.")),
+        "{sentence}"
+    );
+    let slow = warp_phase(
+        &coach,
+        events.frame(Event::Top),
+        events.frame(Event::Impact),
+        1.4,
+    );
+    let sentence = run(&slow, &coach).advice[0].to_string();
+    assert!(sentence.starts_with("Your downswing is "), "{sentence}");
+    assert!(sentence.contains("% slower than the coach's"), "{sentence}");
+}
