@@ -67,8 +67,9 @@ fn regenerate() {
         let c3d =
             C3d::parse(&std::fs::read(data.join(format!("golf/gears_tour_{club}.c3d"))).unwrap())
                 .unwrap();
-        let centres = golf::resample(&golf::joint_centres(&c3d).unwrap(), GOLF_RATE_HZ);
-        let swing = Motion::from_golf(&centres).unwrap();
+        let swing = Motion::from_golf(&golf::joint_centres(&c3d).unwrap())
+            .unwrap()
+            .resampled(GOLF_RATE_HZ);
         std::fs::write(
             fixture(&format!("golf_{club}_60hz.csv")),
             csv::write(&swing),

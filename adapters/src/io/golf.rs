@@ -254,48 +254,6 @@ fn hip_centres([left, right, lback, rback]: [Vec3; 4]) -> Option<[Vec3; 2]> {
     Some([hip(1.0), hip(-1.0)])
 }
 
-/// Resamples to `rate_hz` by linear interpolation in time, starting at the first frame and
-/// ending at or before the last; an output sample is invalid if either neighbouring input
-/// sample is. `filled` is carried over. Returns `jc` unchanged when either rate is not
-/// positive and finite or there are no frames.
-pub fn resample(jc: &JointCentres, rate_hz: f32) -> JointCentres {
-    let valid_rate = |r: f32| r > 0.0 && r.is_finite();
-    if !valid_rate(rate_hz) || !valid_rate(jc.rate_hz) || jc.frames == 0 {
-        return jc.clone();
-    }
-    let n = GOLF_JOINTS.len();
-    let step = f64::from(jc.rate_hz) / f64::from(rate_hz);
-    let frames = ((jc.frames - 1) as f64 / step + 1e-9).floor() as usize + 1;
-    let sample = |f: usize, j: usize| match jc.valid.get(f * n + j) {
-        Some(true) => jc.positions.get(f * n + j).copied(),
-        _ => None,
-    };
-    let mut out = JointCentres {
-        rate_hz,
-        frames,
-        positions: Vec::with_capacity(frames * n),
-        valid: Vec::with_capacity(frames * n),
-        filled: jc.filled,
-    };
-    for k in 0..frames {
-        // Snap times within rounding error of an input sample onto it.
-        let s = k as f64 * step;
-        let i = (s + 1e-9).floor() as usize;
-        let t = (s - i as f64).max(0.0) as f32;
-        for j in 0..n {
-            let next = if t > 0.0 {
-                sample(i + 1, j)
-            } else {
-                sample(i, j)
-            };
-            let p = sample(i, j).zip(next).map(|(a, b)| a + (b - a) * t);
-            out.positions.push(p.unwrap_or_default());
-            out.valid.push(p.is_some());
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
@@ -398,37 +356,6 @@ mod tests {
         assert_eq!(e.to_string(), "golf marker \"HeadSide\" is not in the file");
     }
 
-    #[test]
-    fn resample_interpolates_and_propagates_gaps() {
-        const IN_RATE: f32 = 6.0;
-        const OUT_RATE: f32 = 4.0;
-        let n = GOLF_JOINTS.len();
-        let path = |t: f32, j: usize| Vec3::new(t, 2.0 * t - j as f32, 0.5);
-        let mut jc = JointCentres {
-            rate_hz: IN_RATE,
-            frames: 7,
-            positions: (0..7 * n)
-                .map(|i| path((i / n) as f32 / IN_RATE, i % n))
-                .collect(),
-            valid: vec![true; 7 * n],
-            filled: 4,
-        };
-        jc.valid[2 * n] = false;
-        let out = resample(&jc, OUT_RATE);
-        assert_eq!((out.frames, out.rate_hz, out.filled), (5, OUT_RATE, 4));
-        for k in 0..5 {
-            for j in 0..n {
-                let i = k * n + j;
-                // Output 1 lies between inputs 1 and 2; output 2 falls exactly on input 3.
-                assert_eq!(out.valid[i], (k, j) != (1, 0), "{k} {j}");
-                if out.valid[i] {
-                    assert_near(out.positions[i], path(k as f32 / OUT_RATE, j));
-                }
-            }
-        }
-        assert_eq!(resample(&jc, 0.0), jc);
-    }
-
     /// Mean and standard deviation.
     fn mean_sd(xs: &[f32]) -> (f32, f32) {
         let m = xs.iter().sum::<f32>() / xs.len() as f32;
@@ -514,11 +441,6 @@ mod tests {
             assert!(club_speed.contains(&club), "{file}");
             assert!((4.0..15.0).contains(&wrist), "{file}");
             assert!(fastest < MAX_SPEED, "{file}");
-            let slow = resample(&jc, 60.0);
-            assert_eq!(
-                slow.frames,
-                ((jc.frames - 1) as f32 * 60.0 / jc.rate_hz) as usize + 1
-            );
         }
     }
 }

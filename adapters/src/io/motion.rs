@@ -71,6 +71,38 @@ impl Motion {
         })
     }
 
+    /// The motion resampled to `rate_hz` by linear interpolation in time; a sample is missing
+    /// if either neighbour was. A T-pose (rate 0) is returned unchanged.
+    pub fn resampled(&self, rate_hz: f32) -> Motion {
+        if self.rate_hz <= 0.0 || rate_hz <= 0.0 || self.frames() == 0 {
+            return self.clone();
+        }
+        let n = self.skeleton.len();
+        let last = self.frames() - 1;
+        // Times in f64, snapped onto input samples within rounding error.
+        let step = f64::from(self.rate_hz) / f64::from(rate_hz);
+        let frames = (last as f64 / step + 1e-9).floor() as usize + 1;
+        let mut positions = Vec::with_capacity(frames * n);
+        let mut missing = Vec::with_capacity(frames * n);
+        for f in 0..frames {
+            let t = f as f64 * step;
+            let i = ((t + 1e-9).floor() as usize).min(last);
+            let w = (t - i as f64).max(0.0) as f32;
+            let j = if w > 0.0 { (i + 1).min(last) } else { i };
+            for k in 0..n {
+                let (a, b) = (self.positions[i * n + k], self.positions[j * n + k]);
+                positions.push(a + (b - a) * w);
+                missing.push(self.missing[i * n + k] || self.missing[j * n + k]);
+            }
+        }
+        Motion {
+            rate_hz,
+            positions,
+            missing,
+            ..self.clone()
+        }
+    }
+
     /// How many samples were missing in the file, per joint.
     pub fn missing_per_joint(&self) -> Vec<usize> {
         let n = self.skeleton.len();
@@ -331,6 +363,36 @@ mod tests {
             .map(|j| j.name)
             .collect();
         assert_eq!(core, GOLF_JOINTS);
+    }
+
+    #[test]
+    fn resampling_interpolates_in_time() {
+        let skeleton = Format::Canonical.default_skeleton().unwrap();
+        let n = skeleton.len();
+        let positions: Vec<Vec3> = (0..3 * n)
+            .map(|i| Vec3::new((i / n) as f32, 0.0, 0.0))
+            .collect();
+        let motion = Motion {
+            names: vec![String::new(); n],
+            rate_hz: 10.0,
+            missing: vec![false; positions.len()],
+            positions,
+            skeleton,
+        };
+        let fine = motion.resampled(40.0);
+        assert_eq!(fine.frames(), 9);
+        assert_eq!(fine.frame(3)[0].x, 0.75);
+        assert_eq!(fine.frame(8)[n - 1].x, 2.0);
+        // A missing sample spreads to the output samples either side of it; an output that
+        // falls exactly on an input sample takes only that one.
+        let mut gappy = motion.clone();
+        gappy.missing[n] = true;
+        let fine = gappy.resampled(40.0);
+        let flagged: Vec<usize> = (0..9).filter(|&f| fine.missing[f * n]).collect();
+        assert_eq!(flagged, [1, 2, 3, 4, 5, 6, 7]);
+        let coarse = gappy.resampled(5.0);
+        assert_eq!(coarse.frames(), 2);
+        assert!(!coarse.missing[0] && !coarse.missing[n]);
     }
 
     #[test]
