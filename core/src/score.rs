@@ -16,7 +16,7 @@
 //!   only faster or slower is not reported as out of position.
 //! - **Stance frame**: origin between the feet at address, `toward_target` from the trail foot
 //!   to the lead foot (horizontal), `toward_ball` the horizontal direction the chest faces
-//!   (toward the hands), `up` = +Y; each swing in its own frame, so a pelvis that moves toward
+//!   (the side it leans out to, past the hips), `up` = +Y; each swing in its own frame, so a pelvis that moves toward
 //!   the ball is reported as the pelvis moving.
 
 use crate::config::MAX_SWING_FRAMES;
@@ -371,11 +371,11 @@ impl Stance {
         let target = flat(lead_foot - trail_foot)
             .try_normalize(1e-6)
             .unwrap_or(Vec3::x());
+        // The golfer bends over the ball: the chest leans out past the hips toward it. (The
+        // hands hang almost straight below the shoulders, too close to tell.)
         let mut ball = Vec3::y().cross(&target);
-        let chest = at(Joint::Thorax, Joint::Neck);
-        let hands =
-            (at(Joint::LeftWrist, Joint::LeftHand) + at(Joint::RightWrist, Joint::RightHand)) * 0.5;
-        if ball.dot(&(hands - chest)) < 0.0 {
+        let lean = at(Joint::Thorax, Joint::Neck) - at(Joint::Pelvis, Joint::Pelvis);
+        if ball.dot(&lean) < 0.0 {
             ball = -ball;
         }
         let origin = (left + right) * 0.5;

@@ -6,6 +6,7 @@
 mod bench;
 mod inspect;
 mod retarget;
+mod score;
 mod tpose;
 
 use clap::{Parser, Subcommand};
@@ -27,6 +28,8 @@ struct Cli {
 enum Command {
     /// Retarget a coach's motion onto a student's skeleton, given by a T-pose.
     Retarget(retarget::Args),
+    /// Score a student's swing against the coach's swing retargeted onto the student.
+    Score(score::Args),
     /// Describe a motion file: format, joints, frames, rate, height, segments, missing data.
     Inspect(inspect::Args),
     /// Write a keypoint format's standard T-pose scaled to a height, for use as a student.
@@ -39,6 +42,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Retarget(args) => retarget::run(&args),
+        Command::Score(args) => score::run(&args),
         Command::Inspect(args) => inspect::run(&args),
         Command::Tpose(args) => tpose::run(&args),
         Command::Bench(args) => bench::run(&args),

@@ -86,8 +86,7 @@ fn stance_axes(swing: &Motion, address: usize) -> [Vec3; 3] {
     let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z).normalize();
     let target = flat(at(Joint::LeftAnkle) - at(Joint::RightAnkle));
     let mut ball = Vec3::y().cross(&target);
-    let hands = (at(Joint::LeftWrist) + at(Joint::RightWrist)) * 0.5;
-    if ball.dot(&(hands - at(Joint::Thorax))) < 0.0 {
+    if ball.dot(&(at(Joint::Thorax) - at(Joint::Pelvis))) < 0.0 {
         ball = -ball;
     }
     [target, ball, Vec3::y()]

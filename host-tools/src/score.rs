@@ -1,0 +1,172 @@
+//! `posecoach score`: a student's swing against the coach's, retargeted onto the student.
+
+use anyhow::{anyhow, bail, Context, Result};
+use posecoach_adapters::io::{self, Motion};
+use posecoach_core::events::{Event, SwingEvents};
+use posecoach_core::score::{self, Advice, Report};
+use serde_json::{json, Map, Value};
+use std::fmt::Write;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The coach's swing (.bvh, .c3d or .csv).
+    #[arg(long)]
+    coach: PathBuf,
+    /// The student's swing (.bvh, .c3d or .csv).
+    #[arg(long)]
+    student: PathBuf,
+    /// The student's T-pose; without it the skeleton comes from the student's own frames.
+    #[arg(long)]
+    student_tpose: Option<PathBuf>,
+    /// Retarget with the analytic retargeter (bone-direction copy): the only method until
+    /// learned weights exist.
+    #[arg(long)]
+    analytic: bool,
+    /// DTW band radius in frames at the scoring rate.
+    #[arg(long, default_value_t = 10)]
+    band: u16,
+    /// One band around the whole diagonal instead of one per phase between the events.
+    #[arg(long)]
+    global_band: bool,
+    /// Both swings are resampled to this rate before scoring.
+    #[arg(long, default_value_t = 60.0)]
+    rate: f32,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Also write the JSON report to this file.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+pub fn run(args: &Args) -> Result<String> {
+    if !(args.rate.is_finite() && (10.0..=240.0).contains(&args.rate)) {
+        bail!("--rate {} must be between 10 and 240 Hz", args.rate);
+    }
+    let coach = io::load(&args.coach)?;
+    let student = io::load(&args.student)?;
+    // The student's body: the T-pose if given, else the skeleton measured from the swing. Both
+    // swings are compared on it, as rigid bones: the coach's retargeted, the student's own
+    // re-expressed (bone-direction copy), so measurement wobble in bone lengths is no fault.
+    let body = match &args.student_tpose {
+        Some(path) => io::load(path)?,
+        None => student.clone(),
+    };
+    let on_body = |motion: &Motion, who: &str| {
+        motion
+            .retarget_analytic(&body)
+            .map_err(|(f, e)| anyhow!("{who} frame {f} onto the student's skeleton: {e}"))
+    };
+    let student = on_body(&student, "student")?;
+    let virtual_coach = on_body(&coach, "coach")?;
+    let (student, virtual_coach) = (
+        student.resampled(args.rate),
+        virtual_coach.resampled(args.rate),
+    );
+    let report = score_swings(&student, &virtual_coach, args.band, !args.global_band)?;
+    let json = to_json(&report);
+    if let Some(path) = &args.report {
+        std::fs::write(path, format!("{json:#}\n"))
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(if args.json {
+        format!("{json}\n")
+    } else {
+        to_text(&report)
+    })
+}
+
+/// Scores `student` against `coach`, both on the student's skeleton.
+pub fn score_swings(student: &Motion, coach: &Motion, band: u16, anchored: bool) -> Result<Report> {
+    let len = score::scratch_len(student.skeleton.len(), student.frames(), coach.frames());
+    let (mut floats, mut bytes) = (vec![0.0; len.floats], vec![0u8; len.bytes]);
+    Ok(score::score(
+        &student.skeleton,
+        &student.positions,
+        student.rate_hz,
+        &coach.positions,
+        coach.rate_hz,
+        band,
+        anchored,
+        &mut floats,
+        &mut bytes,
+    )?)
+}
+
+fn events(e: &SwingEvents) -> Value {
+    Value::Object(
+        Event::ALL
+            .iter()
+            .map(|&ev| (ev.name().to_string(), json!(e.frame(ev))))
+            .collect::<Map<_, _>>(),
+    )
+}
+
+/// The report in the documented JSON shape.
+pub fn to_json(r: &Report) -> Value {
+    let cm = |m: f32| (m * 1000.0).round() / 10.0;
+    json!({
+        "score": r.score,
+        "dtw": {"distance": r.distance, "normalized": r.normalized, "path": r.path.iter().map(|&(i, j)| [i, j]).collect::<Vec<_>>()},
+        "events": {"student": events(&r.student_events), "coach": events(&r.coach_events),
+                   "lead_side": format!("{:?}", r.student_events.lead).to_lowercase()},
+        "tempo": {
+            "student_ratio": r.student_tempo_ratio,
+            "coach_ratio": r.coach_tempo_ratio,
+            "phases": r.tempo.iter().map(|t| json!({
+                "phase": t.phase.name(), "student_s": t.student_s, "coach_s": t.coach_s,
+                "ratio": t.ratio, "verdict": t.verdict.name()})).collect::<Vec<_>>(),
+        },
+        "spatial": r.spatial.iter().map(|d| json!({
+            "event": d.event.name(), "joint": d.joint.name(), "distance_cm": cm(d.distance_m),
+            "direction": d.direction.name(),
+            "offset_cm": {"toward_target": cm(d.offset_m[0]), "toward_ball": cm(d.offset_m[1]), "up": cm(d.offset_m[2])}})).collect::<Vec<_>>(),
+        "advice": r.advice.iter().map(Advice::to_string).collect::<Vec<_>>(),
+    })
+}
+
+fn to_text(r: &Report) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "score: {:.1} / 100 (mean joint distance {:.1} cm along the alignment)",
+        r.score,
+        r.normalized * 100.0
+    );
+    let _ = writeln!(
+        out,
+        "tempo (backswing:downswing): you {:.1}:1, coach {:.1}:1",
+        r.student_tempo_ratio, r.coach_tempo_ratio
+    );
+    for t in &r.tempo {
+        let _ = writeln!(
+            out,
+            "  {:<15} you {:.2} s, coach {:.2} s, x{:.2}  {}",
+            t.phase.name(),
+            t.student_s,
+            t.coach_s,
+            t.ratio,
+            t.verdict.name()
+        );
+    }
+    let _ = writeln!(out, "events (frame: you / coach):");
+    for e in Event::ALL {
+        let _ = writeln!(
+            out,
+            "  {:<19} {:>4} / {}",
+            e.name(),
+            r.student_events.frame(e),
+            r.coach_events.frame(e)
+        );
+    }
+    if r.advice.is_empty() {
+        let _ = writeln!(out, "advice: nothing to fix: you match the coach.");
+    } else {
+        let _ = writeln!(out, "advice, most important first:");
+        for a in &r.advice {
+            let _ = writeln!(out, "  - {a}");
+        }
+    }
+    out
+}

@@ -1,0 +1,144 @@
+//! The `posecoach` binary end to end on the committed fixtures.
+
+use serde_json::Value;
+use std::path::PathBuf;
+use std::process::Command;
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/fixtures")
+        .join(name)
+}
+
+fn posecoach(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_posecoach"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    )
+}
+
+fn score_json(coach: &str, student: &str, extra: &[&str]) -> Value {
+    let (coach, student) = (fixture(coach), fixture(student));
+    let mut args = vec![
+        "score",
+        "--coach",
+        coach.to_str().unwrap(),
+        "--student",
+        student.to_str().unwrap(),
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    let (ok, out, err) = posecoach(&args);
+    assert!(ok, "{err}");
+    serde_json::from_str(&out).unwrap()
+}
+
+#[test]
+fn score_json_has_the_documented_shape() {
+    let tpose = fixture("h36m17_tpose.csv");
+    let r = score_json(
+        "golf_driver_60hz.csv",
+        "golf_iron_60hz.csv",
+        &["--student-tpose", tpose.to_str().unwrap()],
+    );
+    assert!((0.0..=100.0).contains(&r["score"].as_f64().unwrap()));
+    for key in ["distance", "normalized"] {
+        assert!(r["dtw"][key].is_number(), "dtw.{key}");
+    }
+    let path = r["dtw"]["path"].as_array().unwrap();
+    assert_eq!(path[0], serde_json::json!([0, 0]));
+    for side in ["student", "coach"] {
+        for event in [
+            "address",
+            "toe_up",
+            "mid_backswing",
+            "top",
+            "mid_downswing",
+            "impact",
+            "mid_follow_through",
+            "finish",
+        ] {
+            assert!(r["events"][side][event].is_u64(), "events.{side}.{event}");
+        }
+    }
+    assert!(r["tempo"]["student_ratio"].is_number() && r["tempo"]["coach_ratio"].is_number());
+    let phases: Vec<&str> = r["tempo"]["phases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["phase"].as_str().unwrap())
+        .collect();
+    assert_eq!(phases, ["backswing", "downswing", "follow_through"]);
+    for p in r["tempo"]["phases"].as_array().unwrap() {
+        assert!(["ok", "slow", "fast"].contains(&p["verdict"].as_str().unwrap()));
+        for key in ["student_s", "coach_s", "ratio"] {
+            assert!(p[key].is_number());
+        }
+    }
+    for d in r["spatial"].as_array().unwrap() {
+        assert!(d["event"].is_string() && d["joint"].is_string() && d["distance_cm"].is_number());
+        let directions = [
+            "toward_target",
+            "away_from_target",
+            "toward_ball",
+            "away_from_ball",
+            "up",
+            "down",
+        ];
+        assert!(directions.contains(&d["direction"].as_str().unwrap()));
+        for axis in ["toward_target", "toward_ball", "up"] {
+            assert!(d["offset_cm"][axis].is_number());
+        }
+    }
+    assert!(r["advice"].as_array().unwrap().iter().all(Value::is_string));
+}
+
+#[test]
+fn a_swing_against_itself_scores_100() {
+    let r = score_json("golf_driver_60hz.csv", "golf_driver_60hz.csv", &[]);
+    assert_eq!(r["score"].as_f64(), Some(100.0));
+    assert!(r["spatial"].as_array().unwrap().is_empty());
+    assert!(r["advice"].as_array().unwrap().is_empty());
+}
+
+#[test]
+fn driver_against_iron_matches_its_golden_report() {
+    let r = score_json("golf_driver_60hz.csv", "golf_iron_60hz.csv", &[]);
+    let golden = fixture("score_iron_vs_driver.json");
+    if std::env::var_os("POSECOACH_BLESS").is_some() {
+        std::fs::write(&golden, format!("{r:#}\n")).unwrap();
+    }
+    let expected: Value = serde_json::from_str(&std::fs::read_to_string(&golden).unwrap()).unwrap();
+    assert_eq!(
+        r, expected,
+        "rerun with POSECOACH_BLESS=1 after an intended change"
+    );
+}
+
+#[test]
+fn errors_name_the_file_and_what_to_fix() {
+    let (ok, _, err) = posecoach(&[
+        "score",
+        "--coach",
+        "missing.csv",
+        "--student",
+        "missing.csv",
+    ]);
+    assert!(!ok);
+    assert!(err.contains("missing.csv"), "{err}");
+    let tpose = fixture("h36m17_tpose.csv");
+    let (ok, _, err) = posecoach(&[
+        "score",
+        "--coach",
+        tpose.to_str().unwrap(),
+        "--student",
+        tpose.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(err.contains("swing"), "{err}");
+}
