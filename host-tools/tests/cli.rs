@@ -1,4 +1,5 @@
 //! The `posecoach` binary end to end on the committed fixtures.
+#![allow(clippy::unwrap_used)] // test helpers fail the test by unwrapping
 
 use serde_json::Value;
 use std::path::PathBuf;
