@@ -8,7 +8,7 @@
 
 use posecoach_adapters::io;
 use posecoach_core::events::{detect, Event, Side};
-use posecoach_tests::fixture;
+use posecoach_tests::{fixture, Warp};
 
 /// Allowed distance from a hand label, in frames at 60 Hz.
 const TOLERANCE_FRAMES: i32 = 2;
@@ -68,14 +68,6 @@ fn assert_near(events: &posecoach_core::events::SwingEvents, expected: &[f32], w
     }
 }
 
-/// Frame `t` (fractional) of a motion, linearly interpolated.
-fn sample(swing: &io::Motion, t: f32) -> Vec<posecoach_core::Vec3> {
-    let last = swing.frames() - 1;
-    let (f, w) = (t.floor() as usize, t - t.floor());
-    let (a, b) = (swing.frame(f.min(last)), swing.frame((f + 1).min(last)));
-    a.iter().zip(b).map(|(p, q)| p + (q - p) * w).collect()
-}
-
 #[test]
 fn events_survive_pose_noise() {
     let (mut swing, labels) = driver();
@@ -98,45 +90,13 @@ fn events_follow_an_amateur_tempo() {
     let (swing, labels) = driver();
     // Backswing (address to top) 2.5x slower and downswing 1.5x slower: takeaway to impact
     // goes from 1.2 s to 2.9 s.
-    let (address, top) = (labels[0] as f32, labels[3] as f32);
-    let impact = labels[5] as f32;
-    let warp = |t: f32| {
-        if t <= address {
-            t
-        } else if t <= top {
-            address + (t - address) * 2.5
-        } else if t <= impact {
-            address + (top - address) * 2.5 + (t - top) * 1.5
-        } else {
-            address + (top - address) * 2.5 + (impact - top) * 1.5 + (t - impact)
-        }
-    };
-    let unwarp = |u: f32| {
-        let (a, b) = (0.0f32, swing.frames() as f32 * 4.0);
-        let (mut lo, mut hi) = (a, b);
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if warp(mid) < u {
-                lo = mid
-            } else {
-                hi = mid
-            }
-        }
-        lo.min((swing.frames() - 1) as f32)
-    };
-    let frames = warp((swing.frames() - 1) as f32).floor() as usize + 1;
-    let positions = (0..frames)
-        .flat_map(|u| sample(&swing, unwarp(u as f32)))
-        .collect();
-    let slow = io::Motion {
-        positions,
-        missing: vec![false; frames * swing.skeleton.len()],
-        ..swing.clone()
-    };
+    let (address, top, impact) = (labels[0] as f32, labels[3] as f32, labels[5] as f32);
+    let warp = Warp(vec![(address, top, 2.5), (top, impact, 1.5)]);
+    let slow = warp.apply(&swing);
     // Compared in the original timeline, where two frames are the same share of the swing.
     let events = detected(&slow);
     for (event, &label) in Event::ALL.iter().zip(&labels) {
-        let found = unwarp(events.frame(*event) as f32);
+        let found = warp.backward(events.frame(*event) as f32);
         assert!(
             (found - label as f32).abs() <= TOLERANCE_FRAMES as f32 + 0.5,
             "slow driver: {} at original frame {found:.1}, labelled {label}",

@@ -9,7 +9,7 @@ use posecoach_core::events::Event;
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{score, scratch_len, Advice, Direction, Phase, Report, Verdict};
 use posecoach_core::Vec3;
-use posecoach_tests::fixture;
+use posecoach_tests::{fixture, Warp};
 
 /// Band radius in frames at 60 Hz.
 const RADIUS: u16 = 10;
@@ -38,45 +38,7 @@ fn run(student: &Motion, coach: &Motion) -> Report {
 
 /// `swing` with the phase from event `from` to event `to` (coach frames) stretched by `factor`.
 fn warp_phase(swing: &Motion, from: usize, to: usize, factor: f32) -> Motion {
-    let warp = |t: f32| {
-        if t <= from as f32 {
-            t
-        } else if t <= to as f32 {
-            from as f32 + (t - from as f32) * factor
-        } else {
-            from as f32 + (to - from) as f32 * factor + (t - to as f32)
-        }
-    };
-    let unwarp = |u: f32| {
-        let (mut lo, mut hi) = (0.0f32, swing.frames() as f32 * 2.0);
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if warp(mid) < u {
-                lo = mid
-            } else {
-                hi = mid
-            }
-        }
-        lo.min((swing.frames() - 1) as f32)
-    };
-    let frames = warp((swing.frames() - 1) as f32).floor() as usize + 1;
-    let last = swing.frames() - 1;
-    let positions = (0..frames)
-        .flat_map(|u| {
-            let t = unwarp(u as f32);
-            let (f, w) = (t.floor() as usize, t - t.floor());
-            let (a, b) = (swing.frame(f.min(last)), swing.frame((f + 1).min(last)));
-            a.iter()
-                .zip(b)
-                .map(move |(p, q)| p + (q - p) * w)
-                .collect::<Vec<_>>()
-        })
-        .collect();
-    Motion {
-        positions,
-        missing: vec![false; frames * swing.skeleton.len()],
-        ..swing.clone()
-    }
+    Warp(vec![(from as f32, to as f32, factor)]).apply(swing)
 }
 
 /// Unit axes of the stance frame at address: toward target, toward ball, up.
