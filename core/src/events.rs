@@ -1,4 +1,5 @@
-//! Swing events: GolfDB's eight, from the hands, the lead arm and the club where it is tracked.
+//! Swing events: GolfDB's eight, from the hands, the lead arm and the club where it is tracked,
+//! and the putting variant (address, top of the backstroke, impact, finish).
 //!
 //! Trajectories are smoothed with a centred moving average of ±[`SMOOTHING_S`] before any
 //! speed or angle is taken, which absorbs 5–10 mm of pose noise. The search runs outwards from
@@ -6,7 +7,7 @@
 //!
 //! - **top**: walking back from the fastest hands, the first minimum of hand speed (the club
 //!   and hands reverse);
-//! - **lead side**: at the top the hands sit over the trail foot;
+//! - **lead side**: the backswing takes the hands toward the trail foot;
 //! - **address**: walking back from the top, the last frame of the still set-up (the club head,
 //!   else the hands, slower than [`STILL_FRACTION`] of their backswing peak for [`STILL_S`]),
 //!   so a waggle before it is skipped;
@@ -16,6 +17,9 @@
 //! - **impact**: after the top, the club head (else the hands) closest to where it was at
 //!   address;
 //! - **finish**: the hands' highest point after impact.
+//!
+//! A stroke whose hands rise less than [`PUTT_RISE_M`] is a putt: top, address and impact as
+//! above, and the finish where the forward stroke stops.
 //!
 //! On the two tour swings at 60 Hz every event lands within two frames of a hand label; without
 //! the club, address comes 5 frames (83 ms) later, when the hands rather than the club head
@@ -45,6 +49,9 @@ pub const STILL_FRACTION: f32 = 0.1;
 pub const TOE_UP_ARM_DEG: f32 = -52.0;
 /// Lead-arm elevation at mid-follow-through when no club is tracked (tour swings: -43°, -52°).
 pub const FOLLOW_ARM_DEG: f32 = -45.0;
+/// A stroke whose hands rise less than this (metres, over the whole motion) is a putt; a full
+/// swing raises them 0.8 m or more.
+pub const PUTT_RISE_M: f32 = 0.25;
 
 /// One of GolfDB's eight swing events, in swing order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -100,27 +107,69 @@ pub enum Side {
     Right,
 }
 
-/// The events of one swing.
+/// A full swing or a putt.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[allow(missing_docs)]
+pub enum SwingKind {
+    Full,
+    Putt,
+}
+
+/// The events of one swing: all eight for a full swing; address, top, impact and finish for a
+/// putt.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SwingEvents {
+    /// Full swing or putt.
+    pub kind: SwingKind,
     /// The lead side: left for a right-handed golfer.
     pub lead: Side,
     /// Whether the club was used (else hands and arms only).
     pub club: bool,
+    /// Per event in [`Event::ALL`] order, `u16::MAX` where the kind has no such event.
     frames: [u16; 8],
 }
 
+const ABSENT: u16 = u16::MAX;
+
 impl SwingEvents {
-    /// Frame of `event`.
-    pub fn frame(&self, event: Event) -> usize {
-        self.frames[event as usize] as usize
+    /// Frame of `event`, if this kind of swing has it.
+    pub fn frame(&self, event: Event) -> Option<usize> {
+        match self.frames[event as usize] {
+            ABSENT => None,
+            f => Some(f as usize),
+        }
     }
 
-    /// All frames in [`Event::ALL`] order.
-    pub fn frames(&self) -> [u16; 8] {
-        self.frames
+    /// Frame of the address (every swing has one).
+    pub fn address(&self) -> usize {
+        self.frames[Event::Address as usize] as usize
+    }
+
+    /// Frame of the top (of the backswing or backstroke).
+    pub fn top(&self) -> usize {
+        self.frames[Event::Top as usize] as usize
+    }
+
+    /// Frame of impact.
+    pub fn impact(&self) -> usize {
+        self.frames[Event::Impact as usize] as usize
+    }
+
+    /// Frame of the finish.
+    pub fn finish(&self) -> usize {
+        self.frames[Event::Finish as usize] as usize
+    }
+
+    /// The events this swing has, with their frames, in swing order.
+    pub fn iter(&self) -> impl Iterator<Item = (Event, usize)> + '_ {
+        Event::ALL
+            .into_iter()
+            .filter_map(|e| self.frame(e).map(|f| (e, f)))
     }
 }
 
@@ -219,7 +268,7 @@ fn crossing(
     None
 }
 
-/// Finds the eight events of the one full swing in `positions` (frames × skeleton joints,
+/// Finds the events of the one swing (eight) or putt (four) in `positions` (frames × skeleton joints,
 /// metres, +Y up) recorded at `rate_hz`.
 ///
 /// Needs both shoulders and wrists (or hands) and both feet; uses `club_grip` and `club_head`
@@ -291,7 +340,8 @@ pub fn detect(
         while top > 0 && hand_speed(top - 1) <= hand_speed(top) {
             top -= 1;
         }
-        if top == 0 || hands(top).y > 0.5 * (low + high) {
+        let putt = high - low < PUTT_RISE_M;
+        if top == 0 || putt || hands(top).y > 0.5 * (low + high) {
             break;
         }
         // Step off the low minimum (every pass moves back at least one frame), then climb.
@@ -303,20 +353,6 @@ pub fn detect(
     if top == 0 {
         return Err(EventError::NoSwing);
     }
-
-    // At the top the hands are over the trail foot.
-    let (left_foot, right_foot) = (track.at(feet[0], top), track.at(feet[1], top));
-    let across = right_foot - left_foot;
-    let lead = if (hands(top) - (left_foot + right_foot) * 0.5).dot(&across) > 0.0 {
-        Side::Left
-    } else {
-        Side::Right
-    };
-    let (lead_shoulder, lead_wrist) = match lead {
-        Side::Left => (shoulders[0], wrists[0]),
-        Side::Right => (shoulders[1], wrists[1]),
-    };
-    let arm = |t: usize| elevation(track.at(lead_wrist, t) - track.at(lead_shoulder, t));
 
     // Address: the last frame of a still set-up before the top.
     let probe: &dyn Fn(usize) -> Vec3 = match club {
@@ -332,6 +368,19 @@ pub fn detect(
         .find(|&t| (t.saturating_sub(window)..=t).all(|s| track.speed(probe, s) < still))
         .ok_or(EventError::NoSwing)?;
 
+    // The backswing takes the hands toward the trail foot.
+    let across = track.at(feet[1], address) - track.at(feet[0], address);
+    let lead = if (hands(top) - hands(address)).dot(&across) > 0.0 {
+        Side::Left
+    } else {
+        Side::Right
+    };
+    let (lead_shoulder, lead_wrist) = match lead {
+        Side::Left => (shoulders[0], wrists[0]),
+        Side::Right => (shoulders[1], wrists[1]),
+    };
+    let arm = |t: usize| elevation(track.at(lead_wrist, t) - track.at(lead_shoulder, t));
+
     // Impact: after the top, where the club head (or the hands) comes closest to where it was
     // at address.
     let home = probe(address);
@@ -343,6 +392,38 @@ pub fn detect(
         })
         .filter(|&t| t + 1 < frames)
         .ok_or(EventError::NoSwing)?;
+
+    if high - low < PUTT_RISE_M {
+        // A putt: the finish is where the forward stroke stops, the hands slower than
+        // STILL_FRACTION of their fastest after impact (a speed minimum would come late,
+        // once the smoothing window has passed the stop).
+        let mut peak = impact;
+        while peak + 1 < frames && hand_speed(peak + 1) >= hand_speed(peak) {
+            peak += 1;
+        }
+        let stopped = STILL_FRACTION * hand_speed(peak);
+        let finish = (peak..frames)
+            .find(|&t| hand_speed(t) < stopped)
+            .unwrap_or(frames - 1);
+        if finish <= impact {
+            return Err(EventError::NoSwing);
+        }
+        let mut frames = [ABSENT; 8];
+        for (event, frame) in [
+            (Event::Address, address),
+            (Event::Top, top),
+            (Event::Impact, impact),
+            (Event::Finish, finish),
+        ] {
+            frames[event as usize] = frame as u16;
+        }
+        return Ok(SwingEvents {
+            kind: SwingKind::Putt,
+            lead,
+            club: club.is_some(),
+            frames,
+        });
+    }
 
     let shaft = |t: usize| match club {
         Some((grip, head)) => elevation(track.at(head, t) - track.at(grip, t)),
@@ -384,6 +465,7 @@ pub fn detect(
         return Err(EventError::NoSwing);
     }
     Ok(SwingEvents {
+        kind: SwingKind::Full,
         lead,
         club: club.is_some(),
         frames,
@@ -418,8 +500,8 @@ mod tests {
             let frames = values.len() / (17 * 3);
             let positions: Vec<Vec3> = values[..frames * 17 * 3].chunks_exact(3).map(Vec3::from_column_slice).collect();
             if let Ok(events) = detect(&h36m, &positions, RATE_HZ) {
-                let f = events.frames();
-                proptest::prop_assert!(f.windows(2).all(|w| w[0] < w[1]) && (f[7] as usize) < frames);
+                let f: Vec<usize> = events.iter().map(|(_, f)| f).collect();
+                proptest::prop_assert!(f.windows(2).all(|w| w[0] < w[1]) && events.finish() < frames);
             }
         }
     }

@@ -68,14 +68,6 @@ impl Phase {
             Phase::FollowThrough => "follow_through",
         }
     }
-
-    const fn bounds(self) -> (Event, Event) {
-        match self {
-            Phase::Backswing => (Event::Address, Event::Top),
-            Phase::Downswing => (Event::Top, Event::Impact),
-            Phase::FollowThrough => (Event::Impact, Event::Finish),
-        }
-    }
 }
 
 /// How a phase's duration compares with the coach's.
@@ -282,6 +274,8 @@ pub enum ScoreError {
         /// Why.
         error: EventError,
     },
+    /// One swing is a putt and the other a full swing.
+    KindMismatch,
     /// A swing is longer than [`MAX_SWING_FRAMES`].
     TooLong {
         /// Its frames.
@@ -306,6 +300,9 @@ impl core::fmt::Display for ScoreError {
                     if *student { "student" } else { "coach" }
                 )
             }
+            ScoreError::KindMismatch => f.write_str(
+                "one swing is a putt and the other a full swing: compare like with like",
+            ),
             ScoreError::TooLong { frames } => {
                 write!(
                     f,
@@ -497,6 +494,9 @@ pub fn score(
             student: false,
             error,
         })?;
+    if student_events.kind != coach_events.kind {
+        return Err(ScoreError::KindMismatch);
+    }
     let (n, m) = (student.len() / joints, coach.len() / joints);
     for frames in [n, m] {
         if frames > MAX_SWING_FRAMES {
@@ -518,7 +518,10 @@ pub fn score(
     let mut anchors: HVec<(u16, u16), 8> = HVec::new();
     if anchored {
         for event in Event::ALL {
-            let (i, j) = (student_events.frame(event), coach_events.frame(event));
+            let (Some(i), Some(j)) = (student_events.frame(event), coach_events.frame(event))
+            else {
+                continue;
+            };
             let after_last = anchors
                 .last()
                 .is_none_or(|&(pi, pj)| i > pi as usize && j > pj as usize);
@@ -550,8 +553,12 @@ pub fn score(
 
     // Tempo.
     let duration = |e: &SwingEvents, hz: f32, phase: Phase| {
-        let (from, to) = phase.bounds();
-        (e.frame(to) - e.frame(from)) as f32 / hz
+        let (from, to) = match phase {
+            Phase::Backswing => (e.address(), e.top()),
+            Phase::Downswing => (e.top(), e.impact()),
+            Phase::FollowThrough => (e.impact(), e.finish()),
+        };
+        (to - from) as f32 / hz
     };
     let tempo = Phase::ALL.map(|phase| {
         let (student_s, coach_s) = (
@@ -581,17 +588,16 @@ pub fn score(
     // Spatial deviations at each event, in each swing's stance frame.
     let stance_s = Stance::new(
         skeleton,
-        frame(student, joints, student_events.frame(Event::Address)),
+        frame(student, joints, student_events.address()),
         student_events.lead,
     );
     let stance_c = Stance::new(
         skeleton,
-        frame(coach, joints, coach_events.frame(Event::Address)),
+        frame(coach, joints, coach_events.address()),
         coach_events.lead,
     );
     let mut spatial: HVec<Deviation, MAX_DEVIATIONS> = HVec::new();
-    for event in Event::ALL {
-        let i = student_events.frame(event);
+    for (event, i) in student_events.iter() {
         let fs = frame(student, joints, i);
         let fc = closest_coach_pose(joints, fs, coach, &path, i);
         let mut worst: HVec<Deviation, DEVIATIONS_PER_EVENT> = HVec::new();

@@ -2,7 +2,7 @@
 
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_adapters::io::{self, Motion};
-use posecoach_core::events::{Event, SwingEvents};
+use posecoach_core::events::SwingEvents;
 use posecoach_core::score::{self, Advice, Report};
 use serde_json::{json, Map, Value};
 use std::fmt::Write;
@@ -96,9 +96,8 @@ pub fn score_swings(student: &Motion, coach: &Motion, band: u16, anchored: bool)
 
 fn events(e: &SwingEvents) -> Value {
     Value::Object(
-        Event::ALL
-            .iter()
-            .map(|&ev| (ev.name().to_string(), json!(e.frame(ev))))
+        e.iter()
+            .map(|(ev, f)| (ev.name().to_string(), json!(f)))
             .collect::<Map<_, _>>(),
     )
 }
@@ -110,7 +109,8 @@ pub fn to_json(r: &Report) -> Value {
         "score": r.score,
         "dtw": {"distance": r.distance, "normalized": r.normalized, "path": r.path.iter().map(|&(i, j)| [i, j]).collect::<Vec<_>>()},
         "events": {"student": events(&r.student_events), "coach": events(&r.coach_events),
-                   "lead_side": format!("{:?}", r.student_events.lead).to_lowercase()},
+                   "lead_side": format!("{:?}", r.student_events.lead).to_lowercase(),
+                   "kind": format!("{:?}", r.student_events.kind).to_lowercase()},
         "tempo": {
             "student_ratio": r.student_tempo_ratio,
             "coach_ratio": r.coach_tempo_ratio,
@@ -151,14 +151,12 @@ fn to_text(r: &Report) -> String {
         );
     }
     let _ = writeln!(out, "events (frame: you / coach):");
-    for e in Event::ALL {
-        let _ = writeln!(
-            out,
-            "  {:<19} {:>4} / {}",
-            e.name(),
-            r.student_events.frame(e),
-            r.coach_events.frame(e)
-        );
+    for (e, f) in r.student_events.iter() {
+        let coach = r
+            .coach_events
+            .frame(e)
+            .map_or(String::from("-"), |c| c.to_string());
+        let _ = writeln!(out, "  {:<19} {f:>4} / {coach}", e.name());
     }
     if r.advice.is_empty() {
         let _ = writeln!(out, "advice: nothing to fix: you match the coach.");

@@ -100,3 +100,93 @@ impl Warp {
         }
     }
 }
+
+/// A synthetic putt at 60 Hz from the address pose (frame 0) of `golfer`: shoulders, arms and
+/// club rock about the spine axis through the thorax, eased: 0.5 s still, a backstroke of
+/// `back_deg` over `back_s`, a forward stroke to `through_deg` over `through_s`, 0.5 s still.
+/// Returns the motion and its events by construction: address, top, impact (the pose of
+/// address again) and finish, in frames.
+pub fn synthetic_putt(
+    golfer: &posecoach_adapters::io::Motion,
+    back_deg: f32,
+    back_s: f32,
+    through_deg: f32,
+    through_s: f32,
+) -> (posecoach_adapters::io::Motion, [f32; 4]) {
+    use posecoach_core::joint::Joint;
+    use posecoach_core::{Quat, Vec3};
+    const RATE_HZ: f32 = 60.0;
+    let s = &golfer.skeleton;
+    let address = golfer.frame(0).to_vec();
+    let at = |j: Joint| address[s.index_of(j).unwrap()];
+    let (thorax, pelvis) = (at(Joint::Thorax), at(Joint::Pelvis));
+    let axis = nalgebra::Unit::new_normalize(thorax - pelvis);
+    let moving: Vec<usize> = (0..s.len())
+        .filter(|&k| {
+            s.joint(k).is_some_and(|j| {
+                j.is_club()
+                    || matches!(
+                        j,
+                        Joint::LeftShoulder | Joint::LeftElbow | Joint::LeftWrist | Joint::LeftHand
+                    )
+                    || matches!(
+                        j,
+                        Joint::RightShoulder
+                            | Joint::RightElbow
+                            | Joint::RightWrist
+                            | Joint::RightHand
+                    )
+            })
+        })
+        .collect();
+    // Back is away from the target: from the lead (left) foot toward the trail foot.
+    let trail = at(Joint::RightAnkle) - at(Joint::LeftAnkle);
+    let hands = (at(Joint::LeftWrist) + at(Joint::RightWrist)) * 0.5;
+    let turned = Quat::from_axis_angle(&axis, 0.1) * (hands - thorax) + thorax;
+    let sign = if (turned - hands).dot(&trail) > 0.0 {
+        1.0
+    } else {
+        -1.0
+    };
+    let ease = |x: f32| 0.5 * (1.0 - (std::f32::consts::PI * x.clamp(0.0, 1.0)).cos());
+    let (still, back, through) = (
+        (0.5 * RATE_HZ) as usize,
+        back_s * RATE_HZ,
+        through_s * RATE_HZ,
+    );
+    let frames = still + back as usize + through as usize + still;
+    let (a, b) = (back_deg.to_radians(), through_deg.to_radians());
+    let mut positions: Vec<Vec3> = Vec::with_capacity(frames * s.len());
+    for f in 0..frames {
+        let t = f as f32 - still as f32;
+        let angle = if t <= back {
+            a * ease(t / back)
+        } else {
+            a - (a + b) * ease((t - back) / through)
+        };
+        let rotation = Quat::from_axis_angle(&axis, sign * angle);
+        positions.extend(address.iter().enumerate().map(|(k, &p)| {
+            if moving.contains(&k) {
+                rotation * (p - thorax) + thorax
+            } else {
+                p
+            }
+        }));
+    }
+    // Impact: the forward stroke passes the address angle where ease(x) = a / (a + b).
+    let impact =
+        still as f32 + back + through * (1.0 - 2.0 * a / (a + b)).acos() / std::f32::consts::PI;
+    let events = [
+        still as f32,
+        still as f32 + back,
+        impact,
+        still as f32 + back + through,
+    ];
+    let motion = posecoach_adapters::io::Motion {
+        rate_hz: RATE_HZ,
+        missing: vec![false; positions.len()],
+        positions,
+        ..golfer.clone()
+    };
+    (motion, events)
+}

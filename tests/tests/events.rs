@@ -33,7 +33,7 @@ fn events_on_both_tour_swings_are_within_two_frames_of_the_hand_labels() {
         assert_eq!(events.lead, Side::Left, "{name}: a right-handed golfer");
         assert!(events.club);
         for (event, &label) in Event::ALL.iter().zip(&expected) {
-            let found = events.frame(*event) as i32;
+            let found = events.frame(*event).unwrap() as i32;
             assert!(
                 (found - label).abs() <= TOLERANCE_FRAMES,
                 "{name}: {} at frame {found}, labelled {label}",
@@ -59,7 +59,7 @@ fn detected(swing: &io::Motion) -> posecoach_core::events::SwingEvents {
 
 fn assert_near(events: &posecoach_core::events::SwingEvents, expected: &[f32], what: &str) {
     for (event, &label) in Event::ALL.iter().zip(expected) {
-        let found = events.frame(*event) as f32;
+        let found = events.frame(*event).unwrap() as f32;
         assert!(
             (found - label).abs() <= TOLERANCE_FRAMES as f32 + 0.5,
             "{what}: {} at frame {found}, expected {label:.1}",
@@ -96,7 +96,7 @@ fn events_follow_an_amateur_tempo() {
     // Compared in the original timeline, where two frames are the same share of the swing.
     let events = detected(&slow);
     for (event, &label) in Event::ALL.iter().zip(&labels) {
-        let found = warp.backward(events.frame(*event) as f32);
+        let found = warp.backward(events.frame(*event).unwrap() as f32);
         assert!(
             (found - label as f32).abs() <= TOLERANCE_FRAMES as f32 + 0.5,
             "slow driver: {} at original frame {found:.1}, labelled {label}",
@@ -191,7 +191,7 @@ fn without_a_club_the_hands_and_lead_arm_give_the_events() {
         assert!(!events.club);
         assert_eq!(events.lead, Side::Left);
         for (event, &label) in Event::ALL.iter().zip(&expected) {
-            let found = events.frame(*event) as i32;
+            let found = events.frame(*event).unwrap() as i32;
             // The hands leave the set-up later than the club head does.
             let tolerance = if *event == Event::Address {
                 HANDS_ADDRESS_LAG_FRAMES
@@ -210,3 +210,36 @@ fn without_a_club_the_hands_and_lead_arm_give_the_events() {
 /// How much later than the club head the hands alone mark the address, at 60 Hz (5 frames on
 /// both tour swings).
 const HANDS_ADDRESS_LAG_FRAMES: i32 = 6;
+
+#[test]
+fn a_putt_has_address_top_impact_and_finish() {
+    let (golfer, _) = driver();
+    let (putt, expected) = posecoach_tests::synthetic_putt(&golfer, 8.0, 0.6, 12.0, 0.6);
+    let events = detected(&putt);
+    assert_eq!(events.kind, posecoach_core::events::SwingKind::Putt);
+    assert_eq!(events.lead, Side::Left);
+    let found = [
+        events.address(),
+        events.top(),
+        events.impact(),
+        events.finish(),
+    ];
+    for ((name, f), e) in ["address", "top", "impact", "finish"]
+        .iter()
+        .zip(found)
+        .zip(expected)
+    {
+        assert!(
+            (f as f32 - e).abs() <= TOLERANCE_FRAMES as f32 + 0.5,
+            "putt {name}: frame {f}, built at {e:.1}"
+        );
+    }
+    for event in [
+        Event::ToeUp,
+        Event::MidBackswing,
+        Event::MidDownswing,
+        Event::MidFollowThrough,
+    ] {
+        assert_eq!(events.frame(event), None);
+    }
+}

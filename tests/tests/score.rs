@@ -135,7 +135,12 @@ fn a_slowed_or_hurried_phase_is_named_first() {
         ),
     ];
     for (phase, from, to, factor, verdict) in cases {
-        let student = warp_phase(&coach, events.frame(from), events.frame(to), factor);
+        let student = warp_phase(
+            &coach,
+            events.frame(from).unwrap(),
+            events.frame(to).unwrap(),
+            factor,
+        );
         let report = run(&student, &coach);
         match report.advice.first() {
             Some(Advice::Tempo(t)) => {
@@ -160,7 +165,7 @@ fn a_slowed_or_hurried_phase_is_named_first() {
 fn a_moved_joint_is_named_first_with_its_event_and_direction() {
     let coach = driver();
     let events = run(&coach, &coach).coach_events;
-    let axes = stance_axes(&coach, events.frame(Event::Address));
+    let axes = stance_axes(&coach, events.frame(Event::Address).unwrap());
     let cases = [
         (Joint::LeftWrist, Event::Top, 2, -0.12, Direction::Down),
         (Joint::Head, Event::Address, 1, 0.10, Direction::TowardBall),
@@ -188,7 +193,12 @@ fn a_moved_joint_is_named_first_with_its_event_and_direction() {
         (Joint::RightShoulder, Event::Finish, 2, 0.11, Direction::Up),
     ];
     for (joint, event, axis, metres, direction) in cases {
-        let student = plant(&coach, joint, events.frame(event), axes[axis] * metres);
+        let student = plant(
+            &coach,
+            joint,
+            events.frame(event).unwrap(),
+            axes[axis] * metres,
+        );
         let report = run(&student, &coach);
         match report.advice.first() {
             Some(Advice::Spatial(d)) => {
@@ -212,7 +222,7 @@ fn a_moved_joint_is_named_first_with_its_event_and_direction() {
 fn the_score_falls_strictly_as_a_planted_offset_grows() {
     let coach = driver();
     let events = run(&coach, &coach).coach_events;
-    let axes = stance_axes(&coach, events.frame(Event::Address));
+    let axes = stance_axes(&coach, events.frame(Event::Address).unwrap());
     let scores: Vec<f32> = [0.0, 0.03, 0.06, 0.09, 0.12, 0.15]
         .iter()
         .map(|&m| {
@@ -220,7 +230,7 @@ fn the_score_falls_strictly_as_a_planted_offset_grows() {
                 &plant(
                     &coach,
                     Joint::LeftWrist,
-                    events.frame(Event::Top),
+                    events.frame(Event::Top).unwrap(),
                     axes[2] * -m,
                 ),
                 &coach,
@@ -235,11 +245,11 @@ fn the_score_falls_strictly_as_a_planted_offset_grows() {
 fn advice_reads_as_sentences() {
     let coach = driver();
     let events = run(&coach, &coach).coach_events;
-    let axes = stance_axes(&coach, events.frame(Event::Address));
+    let axes = stance_axes(&coach, events.frame(Event::Address).unwrap());
     let student = plant(
         &coach,
         Joint::LeftWrist,
-        events.frame(Event::Top),
+        events.frame(Event::Top).unwrap(),
         axes[2] * -0.12,
     );
     let report = run(&student, &coach);
@@ -252,11 +262,49 @@ fn advice_reads_as_sentences() {
     );
     let slow = warp_phase(
         &coach,
-        events.frame(Event::Top),
-        events.frame(Event::Impact),
+        events.frame(Event::Top).unwrap(),
+        events.frame(Event::Impact).unwrap(),
         1.4,
     );
     let sentence = run(&slow, &coach).advice[0].to_string();
     assert!(sentence.starts_with("Your downswing is "), "{sentence}");
     assert!(sentence.contains("% slower than the coach's"), "{sentence}");
+}
+
+#[test]
+fn putts_are_scored_like_putts() {
+    let golfer = driver();
+    let (coach, _) = posecoach_tests::synthetic_putt(&golfer, 8.0, 0.6, 12.0, 0.6);
+    let same = run(&coach, &coach);
+    assert_eq!(same.score, 100.0);
+    assert!(same.advice.is_empty());
+    // A backstroke of 0.9 s instead of 0.6 s: the tempo advice comes first.
+    let (student, _) = posecoach_tests::synthetic_putt(&golfer, 8.0, 0.9, 12.0, 0.6);
+    let report = run(&student, &coach);
+    match report.advice.first() {
+        Some(Advice::Tempo(t)) => {
+            assert_eq!((t.phase, t.verdict), (Phase::Backswing, Verdict::Slow))
+        }
+        other => panic!("first advice {other:?}"),
+    }
+    assert!(report.score < 100.0);
+    // A putt is not compared with a full swing.
+    let j = coach.skeleton.len();
+    let len = scratch_len(j, student.frames(), golfer.frames());
+    let (mut floats, mut bytes) = (vec![0.0; len.floats], vec![0u8; len.bytes]);
+    let mismatch = score(
+        &coach.skeleton,
+        &student.positions,
+        60.0,
+        &golfer.positions,
+        60.0,
+        RADIUS,
+        true,
+        &mut floats,
+        &mut bytes,
+    );
+    assert_eq!(
+        mismatch.unwrap_err(),
+        posecoach_core::score::ScoreError::KindMismatch
+    );
 }
