@@ -19,9 +19,9 @@ cargo clippy --workspace --all-targets -- -D warnings
 step "tests"
 cargo test --workspace
 
-step "thumbv7em-none-eabihf: core and adapters without std, with and without defmt and serde"
+step "thumbv7em-none-eabihf: core and adapters without std, with and without defmt"
 cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabihf
-cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabihf --features posecoach-core/defmt,posecoach-core/serde,posecoach-adapters/defmt
+cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabihf --features posecoach-core/defmt,posecoach-adapters/defmt
 
 step "no alloc: link both crates into a Cortex-M4F static library with no global allocator"
 (cd firmware-examples/no-alloc-check && cargo build --release && cargo build --release --features defmt)

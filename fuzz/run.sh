@@ -5,10 +5,14 @@ set -euo pipefail
 cd "$(dirname "$0")"
 seconds="${1:-30}"
 mkdir -p logs
-for target in bvh c3d csv; do
+# Seeds: the committed fixtures of each format; for the wire decoder, the pinned message stream.
+for target in bvh c3d csv wire; do
     corpus="corpus/$target"
     mkdir -p "$corpus"
-    find ../tests/fixtures -name "*.$target" -exec cp {} "$corpus/" \;
+    case "$target" in
+        wire) cp ../tests/fixtures/wire_messages.bin "$corpus/" ;;
+        *) find ../tests/fixtures -name "*.$target" -exec cp {} "$corpus/" \; ;;
+    esac
     log="logs/$target.txt"
     if ! cargo +nightly fuzz run "$target" "$corpus" -- -max_total_time="$seconds" -rss_limit_mb=2048 >"$log" 2>&1; then
         tail -40 "$log" >&2

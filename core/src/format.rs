@@ -24,7 +24,7 @@ use crate::Vec3;
 /// A keypoint format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub enum Format {
     /// Canonical joints by name, any subset that includes the pelvis (CSV files).
     Canonical,

@@ -22,6 +22,7 @@
 //! - [`events`]: the eight swing events.
 //! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
 //! - [`score`]: the score, tempo, spatial deviations and advice of one swing.
+//! - [`wire`]: the serial protocol: messages, COBS + CRC-32 framing, a streaming decoder.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
@@ -37,6 +38,7 @@ pub mod normalize;
 pub mod retarget;
 pub mod score;
 pub mod skeleton;
+pub mod wire;
 
 /// A position or offset in metres (+Y up).
 pub type Vec3 = nalgebra::Vector3<f32>;

@@ -45,8 +45,8 @@ pub const MAX_DEVIATIONS: usize = 8 * DEVIATIONS_PER_EVENT;
 /// A swing phase between two events.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Phase {
     /// Address to top.
     Backswing,
@@ -73,8 +73,8 @@ impl Phase {
 /// How a phase's duration compares with the coach's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 #[allow(missing_docs)]
 pub enum Verdict {
     Ok,
@@ -96,7 +96,7 @@ impl Verdict {
 /// One phase's tempo.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct PhaseTempo {
     /// The phase.
     pub phase: Phase,
@@ -113,8 +113,8 @@ pub struct PhaseTempo {
 /// Axes of the golfer's stance frame, and the six directions along them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 #[allow(missing_docs)]
 pub enum Direction {
     TowardTarget,
@@ -154,7 +154,7 @@ impl Direction {
 /// A joint off the coach's position at an event.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct Deviation {
     /// The event.
     pub event: Event,
@@ -171,7 +171,7 @@ pub struct Deviation {
 /// One piece of advice; [`core::fmt::Display`] renders it as a sentence.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(serde::Serialize, serde::Deserialize)]
 pub enum Advice {
     /// A phase too slow or fast.
     Tempo(PhaseTempo),
@@ -235,8 +235,7 @@ impl core::fmt::Display for Advice {
 }
 
 /// The result of scoring one swing.
-#[derive(Clone, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Report {
     /// 0 to 100.
     pub score: f32,

@@ -1,0 +1,570 @@
+//! The serial wire protocol between a device, the bridge and a phone.
+//!
+//! One frame carries one [`Message`]:
+//!
+//! ```text
+//! COBS( version:u8 · postcard(Message) · crc32:u32 little-endian ) · 0x00
+//! ```
+//!
+//! The CRC is CRC-32/ISO-HDLC (the zlib/Ethernet CRC) over the version byte and the postcard
+//! bytes. A frame is at most [`MAX_FRAME`] bytes, delimiter included. [`Decoder`] takes bytes
+//! one at a time or in chunks into a fixed buffer, hands back each good message, and after any
+//! damage (bad COBS, bad CRC, unknown version, undecodable message, overlong frame) drops
+//! bytes up to the next `0x00` and counts what went wrong in [`Counters`]. Nothing panics and
+//! nothing allocates.
+//!
+//! ```
+//! use posecoach_core::wire::{encode, Decoder, Message, MAX_FRAME};
+//!
+//! let mut frame = [0u8; MAX_FRAME];
+//! let n = encode(&Message::Ack { seq: 7 }, &mut frame).unwrap();
+//! let mut decoder = Decoder::new();
+//! let mut got = None;
+//! for &byte in &frame[..n] {
+//!     if let Some(message) = decoder.push(byte) {
+//!         got = Some(message);
+//!     }
+//! }
+//! assert_eq!(got, Some(Message::Ack { seq: 7 }));
+//! assert_eq!(decoder.counters().frames_ok, 1);
+//! ```
+
+use crate::format::Format;
+use heapless::Vec as HVec;
+use serde::{Deserialize, Serialize};
+
+/// Protocol version carried in every frame.
+pub const VERSION: u8 = 1;
+/// Largest frame on the wire, delimiter included.
+pub const MAX_FRAME: usize = 512;
+/// Most joints a pose frame or profile carries (BlazePose's 33 landmarks fit).
+pub const MAX_WIRE_JOINTS: usize = 33;
+/// Bytes of payload (version, message, CRC) a frame can hold.
+pub const MAX_PAYLOAD: usize = MAX_FRAME - 1 - (MAX_FRAME - 1).div_ceil(254);
+
+const _: () = assert!(cobs::max_encoding_length(MAX_PAYLOAD) < MAX_FRAME);
+
+const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// One 3D pose from a camera pose estimator.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PoseFrame {
+    /// Sender's sequence number.
+    pub seq: u32,
+    /// Capture time, microseconds on the sender's clock.
+    pub t_us: u64,
+    /// Keypoint format of `joints_mm` (its keypoint order).
+    pub format: Format,
+    /// Keypoints in millimetres, +Y up.
+    pub joints_mm: HVec<[i16; 3], MAX_WIRE_JOINTS>,
+    /// Per keypoint confidence, 0 (none) to 255 (certain).
+    pub confidence: HVec<u8, MAX_WIRE_JOINTS>,
+}
+
+/// One inertial sample.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImuSample {
+    /// Which sensor (as the layout configuration numbers them).
+    pub sensor: u8,
+    /// Sample time, microseconds.
+    pub t_us: u64,
+    /// Acceleration in milli-g (±32 g).
+    pub accel_mg: [i16; 3],
+    /// Angular rate in tenths of a degree per second (±3276 °/s).
+    pub gyro_ddps: [i16; 3],
+    /// Magnetic field in tenths of a microtesla, where the sensor has a magnetometer.
+    pub mag_dut: Option<[i16; 3]>,
+}
+
+/// The student's T-pose.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StudentProfile {
+    /// Keypoint format of `joints_mm`.
+    pub format: Format,
+    /// T-pose keypoints in millimetres, +Y up.
+    pub joints_mm: HVec<[i16; 3], MAX_WIRE_JOINTS>,
+}
+
+/// Scoring settings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Config {
+    /// Rate swings are resampled to, Hz.
+    pub model_rate_hz: u16,
+    /// DTW band radius, frames at that rate.
+    pub band_radius: u16,
+    /// Band per phase between events (true) or one band around the diagonal.
+    pub anchored: bool,
+}
+
+/// What a device has counted since it started.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Counters {
+    /// Frames decoded.
+    pub frames_ok: u32,
+    /// Frames whose CRC did not match.
+    pub crc_errors: u32,
+    /// Frames with bad COBS, an unknown version or an undecodable message.
+    pub malformed: u32,
+    /// Frames longer than [`MAX_FRAME`], dropped.
+    pub overflows: u32,
+    /// Messages or samples dropped for lack of room downstream.
+    pub drops: u32,
+}
+
+/// One joint off at one event, in a compact form.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WireDeviation {
+    /// Event index in swing order (address = 0 .. finish = 7).
+    pub event: u8,
+    /// Canonical joint index.
+    pub joint: u8,
+    /// Direction: 0 toward target, 1 away, 2 toward ball, 3 away, 4 up, 5 down.
+    pub direction: u8,
+    /// Student minus coach in the stance frame, millimetres: toward target, toward ball, up.
+    pub offset_mm: [i16; 3],
+}
+
+/// A swing's report, small enough for one frame (the frame correspondence stays on the device).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SwingReport {
+    /// Swing number since start.
+    pub swing: u32,
+    /// Score in hundredths (0..=10000).
+    pub score_centi: u16,
+    /// Student's event frames at the model rate (`u16::MAX` where a putt has none).
+    pub student_events: [u16; 8],
+    /// Coach's event frames.
+    pub coach_events: [u16; 8],
+    /// Student and coach durations of backswing, downswing, follow-through, milliseconds.
+    pub phases_ms: [[u16; 2]; 3],
+    /// The deviations, largest per event first.
+    pub deviations: HVec<WireDeviation, 24>,
+}
+
+/// Why a message was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum NackReason {
+    /// The message is not valid in the current state.
+    Unexpected,
+    /// The message's content is out of range.
+    Invalid,
+    /// No room to take it now.
+    Busy,
+}
+
+/// Every message of protocol version [`VERSION`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Message {
+    /// Phone → device: a 3D pose.
+    PoseFrame(PoseFrame),
+    /// Device internal or device → phone on request: an IMU sample.
+    ImuSample(ImuSample),
+    /// Phone → device: the student's T-pose.
+    StudentProfile(StudentProfile),
+    /// Phone → device: which stored coach reference to use.
+    CoachSelect {
+        /// Reference number.
+        coach: u16,
+    },
+    /// Phone → device: scoring settings.
+    Config(Config),
+    /// Device → phone: a scored swing.
+    SwingReport(SwingReport),
+    /// Device → phone: counters.
+    Status(Counters),
+    /// Either way: message `seq` taken.
+    Ack {
+        /// Sequence number acknowledged.
+        seq: u32,
+    },
+    /// Either way: message `seq` refused.
+    Nack {
+        /// Sequence number refused.
+        seq: u32,
+        /// Why.
+        reason: NackReason,
+    },
+}
+
+/// Why a message could not be framed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EncodeError {
+    /// The message does not fit in [`MAX_PAYLOAD`] bytes, or `out` is too short.
+    TooLong,
+}
+
+impl core::fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "the message does not fit in a {MAX_FRAME}-byte frame")
+    }
+}
+
+impl core::error::Error for EncodeError {}
+
+/// Frames `message` into `out`; returns the frame's length, delimiter included.
+///
+/// # Errors
+/// [`EncodeError::TooLong`] if the message does not fit.
+pub fn encode(message: &Message, out: &mut [u8]) -> Result<usize, EncodeError> {
+    let mut payload = [0u8; MAX_PAYLOAD];
+    payload[0] = VERSION;
+    let body = postcard::to_slice(message, &mut payload[1..MAX_PAYLOAD - 4])
+        .map_err(|_| EncodeError::TooLong)?
+        .len();
+    let crc = CRC.checksum(&payload[..1 + body]);
+    payload[1 + body..5 + body].copy_from_slice(&crc.to_le_bytes());
+    let n = cobs::try_encode(&payload[..5 + body], out).map_err(|_| EncodeError::TooLong)?;
+    let delimiter = out.get_mut(n).ok_or(EncodeError::TooLong)?;
+    *delimiter = 0;
+    Ok(n + 1)
+}
+
+/// A streaming frame decoder with a fixed [`MAX_FRAME`] buffer.
+#[derive(Clone, Debug)]
+pub struct Decoder {
+    buffer: [u8; MAX_FRAME],
+    len: usize,
+    /// Skipping to the next delimiter after an overflow.
+    skipping: bool,
+    counters: Counters,
+}
+
+impl Default for Decoder {
+    fn default() -> Self {
+        Decoder::new()
+    }
+}
+
+impl Decoder {
+    /// An empty decoder.
+    pub const fn new() -> Decoder {
+        Decoder {
+            buffer: [0; MAX_FRAME],
+            len: 0,
+            skipping: false,
+            counters: Counters {
+                frames_ok: 0,
+                crc_errors: 0,
+                malformed: 0,
+                overflows: 0,
+                drops: 0,
+            },
+        }
+    }
+
+    /// What has been decoded and dropped so far.
+    pub fn counters(&self) -> Counters {
+        self.counters
+    }
+
+    /// Takes one byte; returns a message when it completes a good frame.
+    pub fn push(&mut self, byte: u8) -> Option<Message> {
+        if byte != 0 {
+            if self.skipping {
+                return None;
+            }
+            if self.len == MAX_FRAME - 1 {
+                self.counters.overflows += 1;
+                self.skipping = true;
+                self.len = 0;
+                return None;
+            }
+            self.buffer[self.len] = byte;
+            self.len += 1;
+            return None;
+        }
+        let len = core::mem::take(&mut self.len);
+        if core::mem::take(&mut self.skipping) || len == 0 {
+            return None;
+        }
+        let message = self.frame(len);
+        match message {
+            Ok(m) => {
+                self.counters.frames_ok += 1;
+                Some(m)
+            }
+            Err(FrameFault::Crc) => {
+                self.counters.crc_errors += 1;
+                None
+            }
+            Err(FrameFault::Malformed) => {
+                self.counters.malformed += 1;
+                None
+            }
+        }
+    }
+
+    /// Takes a chunk of bytes and calls `on_message` for each good frame in it.
+    pub fn push_all(&mut self, bytes: &[u8], mut on_message: impl FnMut(Message)) {
+        for &b in bytes {
+            if let Some(m) = self.push(b) {
+                on_message(m);
+            }
+        }
+    }
+
+    fn frame(&mut self, len: usize) -> Result<Message, FrameFault> {
+        let payload = &mut self.buffer[..len];
+        let n = cobs::decode_in_place(payload).map_err(|_| FrameFault::Malformed)?;
+        let payload = payload.get(..n).ok_or(FrameFault::Malformed)?;
+        if n < 6 {
+            return Err(FrameFault::Malformed);
+        }
+        let (body, crc) = payload.split_at(n - 4);
+        let expected = u32::from_le_bytes([crc[0], crc[1], crc[2], crc[3]]);
+        if CRC.checksum(body) != expected {
+            return Err(FrameFault::Crc);
+        }
+        if body[0] != VERSION {
+            return Err(FrameFault::Malformed);
+        }
+        postcard::from_bytes(&body[1..]).map_err(|_| FrameFault::Malformed)
+    }
+}
+
+enum FrameFault {
+    Crc,
+    Malformed,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    fn frame(message: &Message) -> Vec<u8> {
+        let mut out = [0u8; MAX_FRAME];
+        let n = encode(message, &mut out).unwrap();
+        out[..n].to_vec()
+    }
+
+    fn decode_all(bytes: &[u8]) -> (Vec<Message>, Counters) {
+        let mut decoder = Decoder::new();
+        let mut got = Vec::new();
+        decoder.push_all(bytes, |m| got.push(m));
+        (got, decoder.counters())
+    }
+
+    fn joints() -> impl Strategy<Value = HVec<[i16; 3], MAX_WIRE_JOINTS>> {
+        prop::collection::vec(any::<[i16; 3]>(), 0..=MAX_WIRE_JOINTS)
+            .prop_map(|v| v.into_iter().collect())
+    }
+
+    fn format() -> impl Strategy<Value = Format> {
+        prop::sample::select(Format::BUILT_IN.to_vec())
+    }
+
+    fn message() -> impl Strategy<Value = Message> {
+        prop_oneof![
+            (
+                any::<u32>(),
+                any::<u64>(),
+                format(),
+                joints(),
+                prop::collection::vec(any::<u8>(), 0..=MAX_WIRE_JOINTS)
+            )
+                .prop_map(|(seq, t_us, format, joints_mm, c)| Message::PoseFrame(
+                    PoseFrame {
+                        seq,
+                        t_us,
+                        format,
+                        joints_mm,
+                        confidence: c.into_iter().collect()
+                    }
+                )),
+            (
+                any::<u8>(),
+                any::<u64>(),
+                any::<[i16; 3]>(),
+                any::<[i16; 3]>(),
+                any::<Option<[i16; 3]>>()
+            )
+                .prop_map(|(sensor, t_us, accel_mg, gyro_ddps, mag_dut)| {
+                    Message::ImuSample(ImuSample {
+                        sensor,
+                        t_us,
+                        accel_mg,
+                        gyro_ddps,
+                        mag_dut,
+                    })
+                }),
+            (format(), joints()).prop_map(|(format, joints_mm)| Message::StudentProfile(
+                StudentProfile { format, joints_mm }
+            )),
+            any::<u16>().prop_map(|coach| Message::CoachSelect { coach }),
+            (any::<u16>(), any::<u16>(), any::<bool>()).prop_map(
+                |(model_rate_hz, band_radius, anchored)| Message::Config(Config {
+                    model_rate_hz,
+                    band_radius,
+                    anchored
+                })
+            ),
+            (
+                any::<u32>(),
+                any::<u16>(),
+                any::<[u16; 8]>(),
+                any::<[u16; 8]>(),
+                any::<[[u16; 2]; 3]>(),
+                prop::collection::vec(
+                    (any::<u8>(), any::<u8>(), any::<u8>(), any::<[i16; 3]>()),
+                    0..=24
+                )
+            )
+                .prop_map(
+                    |(swing, score_centi, student_events, coach_events, phases_ms, d)| {
+                        Message::SwingReport(SwingReport {
+                            swing,
+                            score_centi,
+                            student_events,
+                            coach_events,
+                            phases_ms,
+                            deviations: d
+                                .into_iter()
+                                .map(|(event, joint, direction, offset_mm)| WireDeviation {
+                                    event,
+                                    joint,
+                                    direction,
+                                    offset_mm,
+                                })
+                                .collect(),
+                        })
+                    }
+                ),
+            (
+                any::<u32>(),
+                any::<u32>(),
+                any::<u32>(),
+                any::<u32>(),
+                any::<u32>()
+            )
+                .prop_map(|(frames_ok, crc_errors, malformed, overflows, drops)| {
+                    Message::Status(Counters {
+                        frames_ok,
+                        crc_errors,
+                        malformed,
+                        overflows,
+                        drops,
+                    })
+                }),
+            any::<u32>().prop_map(|seq| Message::Ack { seq }),
+            (
+                any::<u32>(),
+                prop::sample::select(vec![
+                    NackReason::Unexpected,
+                    NackReason::Invalid,
+                    NackReason::Busy
+                ])
+            )
+                .prop_map(|(seq, reason)| Message::Nack { seq, reason }),
+        ]
+    }
+
+    proptest! {
+        #[test]
+        fn every_message_round_trips(messages in prop::collection::vec(message(), 1..6), noise in prop::collection::vec(1u8..=255, 0..40)) {
+            // Frames back to back, with a run of junk (and its delimiter) before them.
+            let mut stream = noise.clone();
+            stream.push(0);
+            for m in &messages {
+                let f = frame(m);
+                prop_assert!(f.len() <= MAX_FRAME && f[..f.len() - 1].iter().all(|&b| b != 0));
+                stream.extend(f);
+            }
+            let (got, counters) = decode_all(&stream);
+            prop_assert_eq!(&got, &messages);
+            prop_assert_eq!(counters.frames_ok as usize, messages.len());
+            prop_assert_eq!(counters.crc_errors + counters.malformed, u32::from(!noise.is_empty()));
+        }
+
+        #[test]
+        fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..2000)) {
+            let (_, counters) = decode_all(&bytes);
+            let delimiters = bytes.iter().filter(|&&b| b == 0).count() as u32;
+            prop_assert!(counters.frames_ok + counters.crc_errors + counters.malformed <= delimiters);
+        }
+
+        #[test]
+        fn a_damaged_frame_is_lost_alone(message in message(), at in any::<prop::sample::Index>(), flip in 1u8..=255) {
+            let (f, next) = (frame(&message), frame(&Message::Ack { seq: 1 }));
+            let mut damaged = f.clone();
+            let i = at.index(f.len() - 1);
+            damaged[i] ^= flip;
+            let mut stream = damaged;
+            stream.extend(&next);
+            let (got, counters) = decode_all(&stream);
+            // The good frame after it always survives; the damaged one never comes out changed.
+            prop_assert_eq!(got.last(), Some(&Message::Ack { seq: 1 }));
+            prop_assert!(got.len() == 1 || (got.len() == 2 && got[0] == message));
+            prop_assert!(counters.frames_ok >= 1);
+        }
+    }
+
+    #[test]
+    fn an_overlong_frame_is_dropped_and_the_next_one_read() {
+        let mut stream = std::vec![0x55u8; 3 * MAX_FRAME];
+        stream.push(0);
+        stream.extend(frame(&Message::CoachSelect { coach: 3 }));
+        let (got, counters) = decode_all(&stream);
+        assert_eq!(got, [Message::CoachSelect { coach: 3 }]);
+        assert_eq!((counters.overflows, counters.frames_ok), (1, 1));
+    }
+
+    #[test]
+    fn the_largest_messages_fit_a_frame() {
+        let full = |v: [i16; 3]| -> HVec<[i16; 3], MAX_WIRE_JOINTS> {
+            core::iter::repeat_n(v, MAX_WIRE_JOINTS).collect()
+        };
+        let biggest = [
+            Message::PoseFrame(PoseFrame {
+                seq: u32::MAX,
+                t_us: u64::MAX,
+                format: Format::BlazePose33,
+                joints_mm: full([i16::MIN; 3]),
+                confidence: core::iter::repeat_n(255, MAX_WIRE_JOINTS).collect(),
+            }),
+            Message::SwingReport(SwingReport {
+                swing: u32::MAX,
+                score_centi: u16::MAX,
+                student_events: [u16::MAX; 8],
+                coach_events: [u16::MAX; 8],
+                phases_ms: [[u16::MAX; 2]; 3],
+                deviations: core::iter::repeat_n(
+                    WireDeviation {
+                        event: 255,
+                        joint: 255,
+                        direction: 255,
+                        offset_mm: [i16::MIN; 3],
+                    },
+                    24,
+                )
+                .collect(),
+            }),
+        ];
+        for m in &biggest {
+            let mut out = [0u8; MAX_FRAME];
+            let n = encode(m, &mut out).unwrap();
+            assert!(n <= MAX_FRAME);
+            assert_eq!(decode_all(&out[..n]).0, core::slice::from_ref(m));
+        }
+        let mut short = [0u8; 4];
+        assert_eq!(
+            encode(&Message::Ack { seq: 1 }, &mut short),
+            Err(EncodeError::TooLong)
+        );
+    }
+
+    #[test]
+    fn frames_have_the_documented_layout() {
+        // Ack { seq: 7 }: version 1, variant 7 (varint), seq 7 (varint), CRC-32 LE; COBS; 0x00.
+        let f = frame(&Message::Ack { seq: 7 });
+        let mut payload = f[..f.len() - 1].to_vec();
+        let n = cobs::decode_in_place(&mut payload).unwrap();
+        let crc = CRC.checksum(&[1, 7, 7]).to_le_bytes();
+        assert_eq!(&payload[..n], &[1, 7, 7, crc[0], crc[1], crc[2], crc[3]]);
+        assert_eq!(*f.last().unwrap(), 0);
+    }
+}

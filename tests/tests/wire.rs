@@ -1,0 +1,91 @@
+//! The wire protocol's bytes are pinned: one frame of every message kind, compared with a
+//! committed stream (`fixtures/wire_messages.bin`, which also seeds the decoder's fuzz target).
+
+use posecoach_core::format::Format;
+use posecoach_core::wire::{
+    self, Config, Counters, Decoder, ImuSample, Message, NackReason, PoseFrame, StudentProfile,
+    SwingReport, WireDeviation, MAX_FRAME,
+};
+use posecoach_tests::fixture;
+
+fn every_message() -> Vec<Message> {
+    let joints = [[12, 950, -3], [-88, 903, 0], [88, 903, 0]]
+        .into_iter()
+        .collect::<heapless::Vec<_, 33>>();
+    vec![
+        Message::PoseFrame(PoseFrame {
+            seq: 1,
+            t_us: 33_333,
+            format: Format::H36m17,
+            joints_mm: joints.clone(),
+            confidence: [200, 180, 255].into_iter().collect(),
+        }),
+        Message::ImuSample(ImuSample {
+            sensor: 2,
+            t_us: 5_000,
+            accel_mg: [0, -1000, 12],
+            gyro_ddps: [150, -20000, 3],
+            mag_dut: Some([200, 0, -400]),
+        }),
+        Message::StudentProfile(StudentProfile {
+            format: Format::Coco17,
+            joints_mm: joints,
+        }),
+        Message::CoachSelect { coach: 4 },
+        Message::Config(Config {
+            model_rate_hz: 60,
+            band_radius: 10,
+            anchored: true,
+        }),
+        Message::SwingReport(SwingReport {
+            swing: 3,
+            score_centi: 7745,
+            student_events: [8, 34, 49, 64, 73, 80, 84, 99],
+            coach_events: [9, 34, 50, 65, 72, 79, 83, 94],
+            phases_ms: [[933, 933], [267, 233], [317, 250]],
+            deviations: [WireDeviation {
+                event: 5,
+                joint: 16,
+                direction: 5,
+                offset_mm: [4, -20, -159],
+            }]
+            .into_iter()
+            .collect(),
+        }),
+        Message::Status(Counters {
+            frames_ok: 10,
+            crc_errors: 1,
+            malformed: 2,
+            overflows: 0,
+            drops: 3,
+        }),
+        Message::Ack { seq: 9 },
+        Message::Nack {
+            seq: 10,
+            reason: NackReason::Busy,
+        },
+    ]
+}
+
+#[test]
+fn the_bytes_of_every_message_are_pinned() {
+    let mut stream = Vec::new();
+    for m in every_message() {
+        let mut frame = [0u8; MAX_FRAME];
+        let n = wire::encode(&m, &mut frame).unwrap();
+        stream.extend_from_slice(&frame[..n]);
+    }
+    let golden = fixture("wire_messages.bin");
+    if std::env::var_os("POSECOACH_BLESS").is_some() {
+        std::fs::write(&golden, &stream).unwrap();
+    }
+    assert_eq!(
+        stream,
+        std::fs::read(&golden).unwrap(),
+        "protocol bytes changed: bump wire::VERSION, then POSECOACH_BLESS=1"
+    );
+    let mut decoder = Decoder::new();
+    let mut got = Vec::new();
+    decoder.push_all(&stream, |m| got.push(m));
+    assert_eq!(got, every_message());
+}
