@@ -49,6 +49,9 @@ pub const STILL_FRACTION: f32 = 0.1;
 pub const TOE_UP_ARM_DEG: f32 = -52.0;
 /// Lead-arm elevation at mid-follow-through when no club is tracked (tour swings: -43°, -52°).
 pub const FOLLOW_ARM_DEG: f32 = -45.0;
+/// Impact comes within this long after the top (a slow amateur downswing takes half of it):
+/// a club set back down at the ball later, to address the next shot, is not an impact.
+pub const IMPACT_WITHIN_S: f32 = 1.0;
 /// A stroke whose hands rise less than this (metres, over the whole motion) is a putt; a full
 /// swing raises them 0.8 m or more.
 pub const PUTT_RISE_M: f32 = 0.25;
@@ -384,7 +387,8 @@ pub fn detect(
     // Impact: after the top, where the club head (or the hands) comes closest to where it was
     // at address.
     let home = probe(address);
-    let impact = (top + 1..frames)
+    let reach = top + 1 + (libm::roundf(IMPACT_WITHIN_S * rate_hz) as usize).min(frames);
+    let impact = (top + 1..reach.min(frames))
         .min_by(|&a, &b| {
             (probe(a) - home)
                 .norm()

@@ -19,6 +19,7 @@
 //! - [`kinematics`]: forward and inverse kinematics with per-bone rotations.
 //! - [`normalize`]: parent-relative positions and the height-normalized root trajectory.
 //! - [`retarget`]: the analytic retargeter.
+//! - [`detector`]: which stretch of a live pose stream is a swing.
 //! - [`events`]: the eight swing events.
 //! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
 //! - [`score`]: the score, tempo, spatial deviations and advice of one swing.
@@ -28,6 +29,7 @@
 #![warn(missing_docs)]
 
 pub mod config;
+pub mod detector;
 pub mod dtw;
 pub mod events;
 pub mod format;

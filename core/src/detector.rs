@@ -1,0 +1,321 @@
+//! Streaming swing detection: which stretch of a live pose stream is a swing.
+//!
+//! [`SwingDetector`] keeps the latest frames in a ring buffer the caller owns. The hands'
+//! speed (over [`SPEED_WINDOW_S`], which absorbs pose noise) opens a candidate when it passes
+//! `open_speed`, with `pre_s` of history kept before it for the set-up; the candidate closes once
+//! the hands have stayed under `close_speed` for `settle_s`. It is a swing only if the hands
+//! peaked above `min_peak_speed` and rose at least `min_rise`: walking, waggles and practice
+//! half swings open candidates that fail those tests. A swing hands back a [`SwingWindow`] to
+//! copy out with [`SwingDetector::copy_window`] and score.
+//!
+//! ```
+//! use posecoach_core::detector::{DetectorConfig, SwingDetector};
+//! use posecoach_core::format::Format;
+//! use posecoach_core::Vec3;
+//!
+//! let skeleton = Format::H36m17.default_skeleton().unwrap();
+//! let mut storage = [Vec3::zeros(); 17 * 240];
+//! let mut detector = SwingDetector::new(&skeleton, DetectorConfig::full_swing(60.0), &mut storage).unwrap();
+//! let mut rest = [Vec3::zeros(); 17];
+//! skeleton.rest_positions(&mut rest);
+//! assert_eq!(detector.push(&rest), Ok(None));
+//! ```
+
+use crate::joint::Joint;
+use crate::skeleton::Skeleton;
+use crate::Vec3;
+
+/// Hand speed is measured over this long a stretch of frames.
+pub const SPEED_WINDOW_S: f32 = 0.1;
+
+/// Thresholds of the detector.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DetectorConfig {
+    /// Frame rate of the stream.
+    pub rate_hz: f32,
+    /// Hand speed that opens a candidate, m/s.
+    pub open_speed: f32,
+    /// Hand speed under which the hands count as settled, m/s.
+    pub close_speed: f32,
+    /// How long the hands must stay settled to close a candidate, seconds.
+    pub settle_s: f32,
+    /// History kept before the opening (the set-up and the start of the takeaway), seconds.
+    pub pre_s: f32,
+    /// A swing's hands must peak above this speed, m/s.
+    pub min_peak_speed: f32,
+    /// A swing's hands must rise at least this much, metres.
+    pub min_rise: f32,
+}
+
+impl DetectorConfig {
+    /// Full swings at `rate_hz`: a tour downswing moves the hands at 8-9 m/s and lifts them
+    /// 0.8 m; walking swings them at about 1 m/s and barely lifts them.
+    pub const fn full_swing(rate_hz: f32) -> DetectorConfig {
+        DetectorConfig {
+            rate_hz,
+            open_speed: 1.0,
+            close_speed: 0.4,
+            settle_s: 0.4,
+            pre_s: 1.0,
+            min_peak_speed: 5.0,
+            min_rise: 0.6,
+        }
+    }
+}
+
+/// A detected swing: `len` frames starting at stream frame `start`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SwingWindow {
+    /// Stream index of the first frame.
+    pub start: u64,
+    /// Frames in the window.
+    pub len: usize,
+}
+
+/// Why the detector cannot be built or fed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DetectorError {
+    /// The skeleton lacks a wrist (or hand).
+    MissingJoint(Joint),
+    /// The storage holds less than two seconds of frames, or a rate or threshold is not a
+    /// positive number.
+    Config,
+    /// A frame has the wrong number of joints or a non-finite position.
+    Frame,
+    /// The window no longer is in the ring buffer, or `out` is too short.
+    Window,
+}
+
+impl core::fmt::Display for DetectorError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            DetectorError::MissingJoint(j) => write!(f, "swing detection needs the joint `{j}`"),
+            DetectorError::Config => {
+                f.write_str("storage under two seconds of frames, or a non-positive setting")
+            }
+            DetectorError::Frame => {
+                f.write_str("a frame has the wrong joint count or a non-finite position")
+            }
+            DetectorError::Window => {
+                f.write_str("the window has left the buffer, or the output is too short")
+            }
+        }
+    }
+}
+
+impl core::error::Error for DetectorError {}
+
+/// A candidate being watched.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    start: u64,
+    peak: f32,
+    low: f32,
+    high: f32,
+    settled: usize,
+}
+
+/// The streaming detector over caller-owned frame storage.
+#[derive(Debug)]
+pub struct SwingDetector<'s> {
+    storage: &'s mut [Vec3],
+    joints: usize,
+    wrists: [usize; 2],
+    config: DetectorConfig,
+    capacity: usize,
+    /// Frames pushed so far.
+    seen: u64,
+    candidate: Option<Candidate>,
+}
+
+impl<'s> SwingDetector<'s> {
+    /// A detector for frames of `skeleton`, keeping as many frames as `storage` holds.
+    ///
+    /// # Errors
+    /// [`DetectorError::MissingJoint`] without wrists or hands; [`DetectorError::Config`] for
+    /// storage under two seconds or a non-positive setting.
+    pub fn new(
+        skeleton: &Skeleton,
+        config: DetectorConfig,
+        storage: &'s mut [Vec3],
+    ) -> Result<Self, DetectorError> {
+        let side = |wrist: Joint, hand: Joint| {
+            skeleton
+                .index_of(wrist)
+                .or(skeleton.index_of(hand))
+                .ok_or(DetectorError::MissingJoint(wrist))
+        };
+        let wrists = [
+            side(Joint::LeftWrist, Joint::LeftHand)?,
+            side(Joint::RightWrist, Joint::RightHand)?,
+        ];
+        let joints = skeleton.len();
+        let capacity = storage.len() / joints;
+        let c = config;
+        let positive = [
+            c.rate_hz,
+            c.open_speed,
+            c.close_speed,
+            c.settle_s,
+            c.pre_s,
+            c.min_peak_speed,
+            c.min_rise,
+        ];
+        if !positive.iter().all(|v| v.is_finite() && *v > 0.0)
+            || (capacity as f32) < 2.0 * c.rate_hz
+        {
+            return Err(DetectorError::Config);
+        }
+        Ok(SwingDetector {
+            storage,
+            joints,
+            wrists,
+            config,
+            capacity,
+            seen: 0,
+            candidate: None,
+        })
+    }
+
+    /// Frames pushed so far.
+    pub fn frames_seen(&self) -> u64 {
+        self.seen
+    }
+
+    fn slot(&self, frame: u64) -> usize {
+        (frame % self.capacity as u64) as usize * self.joints
+    }
+
+    fn hands(&self, frame: u64) -> Vec3 {
+        let at = self.slot(frame);
+        (self.storage[at + self.wrists[0]] + self.storage[at + self.wrists[1]]) * 0.5
+    }
+
+    /// Takes the next frame; returns a window when it closes a swing.
+    ///
+    /// # Errors
+    /// [`DetectorError::Frame`] for a frame of the wrong length or with a non-finite position
+    /// (it is not stored).
+    pub fn push(&mut self, frame: &[Vec3]) -> Result<Option<SwingWindow>, DetectorError> {
+        if frame.len() != self.joints || !frame.iter().all(|p| p.iter().all(|v| v.is_finite())) {
+            return Err(DetectorError::Frame);
+        }
+        let now = self.seen;
+        let at = self.slot(now);
+        self.storage[at..at + self.joints].copy_from_slice(frame);
+        self.seen += 1;
+
+        let rate = self.config.rate_hz;
+        let lag = ((SPEED_WINDOW_S * rate) as u64).max(1).min(now);
+        let speed = if lag == 0 {
+            0.0
+        } else {
+            (self.hands(now) - self.hands(now - lag)).norm() * rate / lag as f32
+        };
+        let height = self.hands(now).y;
+        let c = self.config;
+        let Some(mut candidate) = self.candidate else {
+            if speed > c.open_speed {
+                let pre = (c.pre_s * rate) as u64;
+                self.candidate = Some(Candidate {
+                    start: now.saturating_sub(pre),
+                    peak: speed,
+                    low: height,
+                    high: height,
+                    settled: 0,
+                });
+            }
+            return Ok(None);
+        };
+        candidate.peak = candidate.peak.max(speed);
+        candidate.low = candidate.low.min(height);
+        candidate.high = candidate.high.max(height);
+        candidate.settled = if speed < c.close_speed {
+            candidate.settled + 1
+        } else {
+            0
+        };
+        let len = (now + 1 - candidate.start) as usize;
+        if len >= self.capacity {
+            // Longer than the buffer holds: not a swing we can score.
+            self.candidate = None;
+            return Ok(None);
+        }
+        if (candidate.settled as f32) < c.settle_s * rate {
+            self.candidate = Some(candidate);
+            return Ok(None);
+        }
+        self.candidate = None;
+        let swing =
+            candidate.peak >= c.min_peak_speed && candidate.high - candidate.low >= c.min_rise;
+        Ok(swing.then_some(SwingWindow {
+            start: candidate.start,
+            len,
+        }))
+    }
+
+    /// Copies `window`'s frames, oldest first, into `out`; returns the number of positions
+    /// written (`window.len` × joints).
+    ///
+    /// # Errors
+    /// [`DetectorError::Window`] when the window's oldest frames have been overwritten or `out`
+    /// is too short.
+    pub fn copy_window(
+        &self,
+        window: &SwingWindow,
+        out: &mut [Vec3],
+    ) -> Result<usize, DetectorError> {
+        let n = window.len * self.joints;
+        let end = window.start + window.len as u64;
+        if end > self.seen || self.seen - window.start > self.capacity as u64 || out.len() < n {
+            return Err(DetectorError::Window);
+        }
+        for (f, chunk) in (window.start..end).zip(out.chunks_exact_mut(self.joints)) {
+            let at = self.slot(f);
+            chunk.copy_from_slice(&self.storage[at..at + self.joints]);
+        }
+        Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::format::Format;
+
+    const RATE_HZ: f32 = 60.0;
+
+    #[test]
+    fn bad_setup_and_frames_are_errors() {
+        let s = Format::H36m17.default_skeleton().unwrap();
+        let mut small = [Vec3::zeros(); 17 * 60];
+        assert_eq!(
+            SwingDetector::new(&s, DetectorConfig::full_swing(RATE_HZ), &mut small).err(),
+            Some(DetectorError::Config)
+        );
+        let mut storage = [Vec3::zeros(); 17 * 200];
+        let bad_rate = DetectorConfig {
+            rate_hz: f32::NAN,
+            ..DetectorConfig::full_swing(RATE_HZ)
+        };
+        assert_eq!(
+            SwingDetector::new(&s, bad_rate, &mut storage).err(),
+            Some(DetectorError::Config)
+        );
+        let mut d =
+            SwingDetector::new(&s, DetectorConfig::full_swing(RATE_HZ), &mut storage).unwrap();
+        assert_eq!(d.push(&[Vec3::zeros(); 3]), Err(DetectorError::Frame));
+        let mut nan = [Vec3::zeros(); 17];
+        nan[4].z = f32::INFINITY;
+        assert_eq!(d.push(&nan), Err(DetectorError::Frame));
+        assert_eq!(d.frames_seen(), 0);
+        let mut out = [Vec3::zeros(); 17];
+        assert_eq!(
+            d.copy_window(&SwingWindow { start: 0, len: 1 }, &mut out),
+            Err(DetectorError::Window)
+        );
+    }
+}
