@@ -144,8 +144,7 @@ impl<'s> SwingDetector<'s> {
     ) -> Result<Self, DetectorError> {
         let side = |wrist: Joint, hand: Joint| {
             skeleton
-                .index_of(wrist)
-                .or(skeleton.index_of(hand))
+                .find(&[wrist, hand])
                 .ok_or(DetectorError::MissingJoint(wrist))
         };
         let wrists = [

@@ -300,12 +300,7 @@ pub fn detect(
         return Err(EventError::NonFinite);
     }
     let need = |j: Joint| skeleton.index_of(j).ok_or(EventError::MissingJoint(j));
-    let either = |a: Joint, b: Joint| {
-        skeleton
-            .index_of(a)
-            .or(skeleton.index_of(b))
-            .ok_or(EventError::MissingJoint(b))
-    };
+    let either = |a: Joint, b: Joint| skeleton.find(&[a, b]).ok_or(EventError::MissingJoint(b));
     let wrists = [
         either(Joint::LeftWrist, Joint::LeftHand)?,
         either(Joint::RightWrist, Joint::RightHand)?,

@@ -349,16 +349,11 @@ struct Stance {
 
 impl Stance {
     fn new(skeleton: &Skeleton, frame: &[Vec3], lead: Side) -> Stance {
-        let at = |j: Joint, fallback: Joint| {
-            skeleton
-                .index_of(j)
-                .or(skeleton.index_of(fallback))
-                .map_or(Vec3::zeros(), |k| frame[k])
-        };
+        let at = |joints: &[Joint]| skeleton.find(joints).map_or(Vec3::zeros(), |k| frame[k]);
         let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
         let (left, right) = (
-            at(Joint::LeftAnkle, Joint::LeftToe),
-            at(Joint::RightAnkle, Joint::RightToe),
+            at(&[Joint::LeftAnkle, Joint::LeftToe]),
+            at(&[Joint::RightAnkle, Joint::RightToe]),
         );
         let (lead_foot, trail_foot) = match lead {
             Side::Left => (left, right),
@@ -370,7 +365,7 @@ impl Stance {
         // The golfer bends over the ball: the chest leans out past the hips toward it. (The
         // hands hang almost straight below the shoulders, too close to tell.)
         let mut ball = Vec3::y().cross(&target);
-        let lean = at(Joint::Thorax, Joint::Neck) - at(Joint::Pelvis, Joint::Pelvis);
+        let lean = at(&[Joint::Thorax, Joint::Neck]) - at(&[Joint::Pelvis]);
         if ball.dot(&lean) < 0.0 {
             ball = -ball;
         }

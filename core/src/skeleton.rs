@@ -227,11 +227,10 @@ impl Skeleton {
             return Err(SkeletonError::RootNotPelvis);
         }
         for (k, effector) in EndEffector::ALL.into_iter().enumerate() {
-            let [preferred, fallback] = effector.candidates();
+            let candidates = effector.candidates();
             skeleton.end_effectors[k] = skeleton
-                .index_of(preferred)
-                .or_else(|| skeleton.index_of(fallback))
-                .ok_or(SkeletonError::MissingJoint(fallback))?
+                .find(&candidates)
+                .ok_or(SkeletonError::MissingJoint(candidates[1]))?
                 as u8;
         }
         skeleton.segments = skeleton.cut_segments();
@@ -385,6 +384,11 @@ impl Skeleton {
             NO_JOINT => None,
             i => Some(i as usize),
         }
+    }
+
+    /// Index of the first of `joints` this skeleton has (a joint, then its fallbacks).
+    pub fn find(&self, joints: &[Joint]) -> Option<usize> {
+        joints.iter().find_map(|&j| self.index_of(j))
     }
 
     /// Index of an end effector's joint.
