@@ -30,6 +30,7 @@
 //! ```
 
 use crate::format::Format;
+use crate::joint::Joint;
 use heapless::Vec as HVec;
 use serde::{Deserialize, Serialize};
 
@@ -39,6 +40,8 @@ pub const VERSION: u8 = 1;
 pub const MAX_FRAME: usize = 512;
 /// Most joints a pose frame or profile carries (BlazePose's 33 landmarks fit).
 pub const MAX_WIRE_JOINTS: usize = 33;
+/// Most IMUs a [`SensorLayout`] places.
+pub const MAX_SENSORS: usize = 8;
 /// Bytes of payload (version, message, CRC) a frame can hold.
 pub const MAX_PAYLOAD: usize = MAX_FRAME - 1 - (MAX_FRAME - 1).div_ceil(254);
 
@@ -83,6 +86,27 @@ pub struct StudentProfile {
     pub format: Format,
     /// T-pose keypoints in millimetres, +Y up.
     pub joints_mm: HVec<[i16; 3], MAX_WIRE_JOINTS>,
+}
+
+/// Where one IMU is strapped.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SensorPlacement {
+    /// The sensor's number in [`ImuSample::sensor`].
+    pub sensor: u8,
+    /// The joint whose incoming bone carries the sensor ([`Joint::Pelvis`]: the pelvis itself).
+    pub joint: Joint,
+    /// Nominal mounting: the sensor's orientation in the segment's rest frame, a unit
+    /// quaternion `(w, x, y, z)` in units of 1/16384. Only used to fix a sensor's heading when
+    /// it has no magnetometer.
+    pub mounting_q14: [i16; 4],
+}
+
+/// Which IMU sits on which segment.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SensorLayout {
+    /// One entry per sensor.
+    pub sensors: HVec<SensorPlacement, MAX_SENSORS>,
 }
 
 /// Scoring settings.
@@ -186,6 +210,8 @@ pub enum Message {
         /// Why.
         reason: NackReason,
     },
+    /// Phone → device: where the IMUs are.
+    SensorLayout(SensorLayout),
 }
 
 /// Why a message could not be framed.
@@ -460,6 +486,20 @@ mod tests {
                 ])
             )
                 .prop_map(|(seq, reason)| Message::Nack { seq, reason }),
+            prop::collection::vec(
+                (any::<u8>(), 0..Joint::ALL.len(), any::<[i16; 4]>()),
+                0..=MAX_SENSORS
+            )
+            .prop_map(|sensors| Message::SensorLayout(SensorLayout {
+                sensors: sensors
+                    .into_iter()
+                    .map(|(sensor, j, mounting_q14)| SensorPlacement {
+                        sensor,
+                        joint: Joint::ALL[j],
+                        mounting_q14,
+                    })
+                    .collect()
+            })),
         ]
     }
 

@@ -2,9 +2,10 @@
 //! committed stream (`fixtures/wire_messages.bin`, which also seeds the decoder's fuzz target).
 
 use posecoach_core::format::Format;
+use posecoach_core::joint::Joint;
 use posecoach_core::wire::{
-    self, Config, Counters, Decoder, ImuSample, Message, NackReason, PoseFrame, StudentProfile,
-    SwingReport, WireDeviation, MAX_FRAME,
+    self, Config, Counters, Decoder, ImuSample, Message, NackReason, PoseFrame, SensorLayout,
+    SensorPlacement, StudentProfile, SwingReport, WireDeviation, MAX_FRAME,
 };
 use posecoach_tests::fixture;
 
@@ -64,6 +65,19 @@ fn every_message() -> Vec<Message> {
             seq: 10,
             reason: NackReason::Busy,
         },
+        Message::SensorLayout(SensorLayout {
+            sensors: [
+                (0, Joint::Pelvis, [16384, 0, 0, 0]),
+                (1, Joint::LeftWrist, [11585, 0, 11585, 0]),
+            ]
+            .into_iter()
+            .map(|(sensor, joint, mounting_q14)| SensorPlacement {
+                sensor,
+                joint,
+                mounting_q14,
+            })
+            .collect(),
+        }),
     ]
 }
 
