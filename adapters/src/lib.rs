@@ -7,3 +7,4 @@
 
 #[cfg(feature = "std")]
 pub mod io;
+pub mod pose_stream;
