@@ -7,4 +7,6 @@
 
 #[cfg(feature = "std")]
 pub mod io;
+pub mod log;
 pub mod pose_stream;
+pub mod session;

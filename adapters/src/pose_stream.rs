@@ -27,7 +27,7 @@
 //! for (seq, t_us) in [(0, 0), (1, 33_333), (2, 66_667)] {
 //!     stream
 //!         .push(&pose(seq, t_us), |event| {
-//!             if let StreamEvent::Frame(joints) = event {
+//!             if let StreamEvent::Frame { joints, .. } = event {
 //!                 assert_eq!(joints.len(), 17);
 //!                 frames += 1;
 //!             }
@@ -73,8 +73,13 @@ impl StreamConfig {
 /// What the stream hands on.
 #[derive(Debug, PartialEq)]
 pub enum StreamEvent<'a> {
-    /// The next frame on the grid: the stream format's joints, metres.
-    Frame(&'a [Vec3]),
+    /// The next frame on the grid.
+    Frame {
+        /// Its time on the sender's clock, microseconds.
+        t_us: u64,
+        /// The stream format's joints, metres.
+        joints: &'a [Vec3],
+    },
     /// Time is missing before the next frame: whatever was in progress is broken.
     Gap,
 }
@@ -95,6 +100,18 @@ pub struct StreamCounters {
     pub masked: u32,
     /// Frames emitted on the grid.
     pub emitted: u32,
+}
+
+impl StreamCounters {
+    /// Adds `other`'s counts to these.
+    pub fn add(&mut self, other: &StreamCounters) {
+        self.accepted += other.accepted;
+        self.duplicates += other.duplicates;
+        self.out_of_order += other.out_of_order;
+        self.gaps += other.gaps;
+        self.masked += other.masked;
+        self.emitted += other.emitted;
+    }
 }
 
 /// Why a frame or a configuration was refused.
@@ -258,7 +275,10 @@ impl PoseStream {
                         *o = a + (b - a) * w;
                     }
                     self.counters.emitted += 1;
-                    emit(StreamEvent::Frame(&out[..self.joints]));
+                    emit(StreamEvent::Frame {
+                        t_us: t,
+                        joints: &out[..self.joints],
+                    });
                     k += 1;
                 }
                 self.grid = Some((t0, k));
@@ -266,7 +286,10 @@ impl PoseStream {
             _ if ready => {
                 self.grid = Some((t_us, 1));
                 self.counters.emitted += 1;
-                emit(StreamEvent::Frame(&current[..self.joints]));
+                emit(StreamEvent::Frame {
+                    t_us,
+                    joints: &current[..self.joints],
+                });
             }
             _ => {}
         }
@@ -346,7 +369,7 @@ mod tests {
             stream
                 .push(f, |e| {
                     out.push(match e {
-                        StreamEvent::Frame(j) => Some(j[0].x),
+                        StreamEvent::Frame { joints, .. } => Some(joints[0].x),
                         StreamEvent::Gap => None,
                     })
                 })
@@ -502,7 +525,7 @@ mod tests {
         let mut joints = Vec::new();
         stream
             .push(&f, |e| {
-                if let StreamEvent::Frame(j) = e {
+                if let StreamEvent::Frame { joints: j, .. } = e {
                     joints.extend_from_slice(j);
                 }
             })
@@ -526,8 +549,8 @@ mod tests {
             let mut xs = Vec::new();
             for (seq, t, x) in arrivals {
                 let _ = stream.push(&frame(seq, t, x), |e| {
-                    if let StreamEvent::Frame(j) = e {
-                        xs.push(j[0].x);
+                    if let StreamEvent::Frame { joints, .. } = e {
+                        xs.push(joints[0].x);
                     }
                 });
             }

@@ -1,0 +1,534 @@
+//! A scoring session: the device's pipeline from wire messages to swing reports.
+//!
+//! [`Session::handle`] takes each decoded message. A `StudentProfile` gives the student's body
+//! (bone lengths measured from the T-pose, directions from the format's standard T-pose) and
+//! retargets the selected coach reference onto it once; `Config` and `CoachSelect` change the
+//! settings. Pose frames then go through the [`PoseStream`] onto the model rate's grid, are
+//! put onto the student's skeleton as rigid bones (the analytic retargeter, which also maps a
+//! stream format other than the profile's), and feed the [`SwingDetector`]. Each swing it
+//! closes is copied out (its last [`MAX_SWING_FRAMES`] frames), cut to the swing itself
+//! (set-up to finish with [`SWING_MARGIN_S`] either side, as is the coach's reference) and
+//! scored against the virtual coach; the caller hears of it as an [`Outcome`]. A break in the stream drops a
+//! swing in progress. Every buffer belongs to the caller ([`Buffers`], sized by
+//! [`BufferLens::new`]); nothing allocates and nothing panics.
+//!
+//! Only full swings are detected (the detector wants the hands fast and high); putts are scored
+//! from files on the host.
+
+use crate::pose_stream::{PoseStream, StreamConfig, StreamCounters, StreamError, StreamEvent};
+use core::ops::Range;
+use posecoach_core::config::MAX_SWING_FRAMES;
+use posecoach_core::detector::{DetectorConfig, DetectorError, SwingDetector, SwingWindow};
+use posecoach_core::events::{self, EventError, STILL_S};
+use posecoach_core::format::Format;
+use posecoach_core::retarget::Analytic;
+use posecoach_core::score::{self, Report, ScoreError};
+use posecoach_core::skeleton::{Skeleton, SkeletonError};
+use posecoach_core::wire::{Config, Message, PoseFrame, StudentProfile};
+use posecoach_core::{config::MAX_JOINTS, Vec3};
+
+/// Settings until a `Config` message arrives.
+pub const DEFAULT_CONFIG: Config = Config {
+    model_rate_hz: 60,
+    band_radius: 10,
+    anchored: true,
+};
+/// Seconds of frames the detector keeps.
+pub const RING_S: f32 = 6.0;
+/// Swings are scored from this long before the set-up to this long after the finish (the
+/// still set-up that the event detector looks for), seconds.
+pub const SWING_MARGIN_S: f32 = STILL_S;
+/// Lowest and highest model rates, Hz.
+pub const RATES_HZ: (u16, u16) = (20, 120);
+
+/// A stored coach reference swing.
+#[derive(Clone, Copy, Debug)]
+pub struct Coach<'c> {
+    /// The coach's skeleton.
+    pub skeleton: &'c Skeleton,
+    /// Frames × joints of `skeleton`.
+    pub positions: &'c [Vec3],
+    /// Frame rate, Hz.
+    pub rate_hz: f32,
+}
+
+impl Coach<'_> {
+    fn frames(&self) -> usize {
+        self.positions.len() / self.skeleton.len().max(1)
+    }
+}
+
+/// Lengths of the buffers a session needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BufferLens {
+    /// Positions of the detector's history.
+    pub ring: usize,
+    /// Positions of one swing.
+    pub window: usize,
+    /// Positions of the virtual coach.
+    pub coach: usize,
+    /// Scoring floats.
+    pub floats: usize,
+    /// Scoring bytes.
+    pub bytes: usize,
+}
+
+impl BufferLens {
+    /// For students of up to `joints` joints, coaches of up to `coach_frames` frames and model
+    /// rates up to `rate_hz`.
+    pub fn new(joints: usize, coach_frames: usize, rate_hz: u16) -> BufferLens {
+        let scratch = score::scratch_len(joints, MAX_SWING_FRAMES, coach_frames);
+        BufferLens {
+            ring: joints * (RING_S * f32::from(rate_hz)) as usize,
+            window: joints * MAX_SWING_FRAMES,
+            coach: joints * coach_frames,
+            floats: scratch.floats,
+            bytes: scratch.bytes,
+        }
+    }
+}
+
+/// The caller's buffers, at least [`BufferLens`] long.
+#[derive(Debug)]
+pub struct Buffers<'b> {
+    /// The detector's history.
+    pub ring: &'b mut [Vec3],
+    /// One swing.
+    pub window: &'b mut [Vec3],
+    /// The virtual coach.
+    pub coach: &'b mut [Vec3],
+    /// Scoring floats.
+    pub floats: &'b mut [f32],
+    /// Scoring bytes.
+    pub bytes: &'b mut [u8],
+}
+
+/// Where a swing sits in the stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Swing {
+    /// Swings found so far in this session, this one included.
+    pub number: u32,
+    /// Time of its first frame on the sender's clock, microseconds.
+    pub start_us: u64,
+    /// Its frames at the model rate.
+    pub frames: usize,
+}
+
+/// What a message led to.
+#[derive(Debug)]
+pub enum Outcome<'r> {
+    /// A swing, scored.
+    Scored {
+        /// Where it is.
+        swing: Swing,
+        /// Its report.
+        report: &'r Report,
+    },
+    /// A swing that could not be scored (its events not found, or not like the coach's).
+    Unscored {
+        /// Where it is.
+        swing: Swing,
+        /// Why.
+        error: ScoreError,
+    },
+    /// The message was refused (a phone would get a `Nack`).
+    Refused(Refusal),
+}
+
+/// Why a message was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Refusal {
+    /// Pose frames before any `StudentProfile`.
+    NoProfile,
+    /// The profile's keypoints do not make a skeleton.
+    Profile(SkeletonError),
+    /// The profile's format has no joint table, or its keypoint count is wrong.
+    ProfileFormat(Format),
+    /// No stored coach reference has this number.
+    UnknownCoach(u16),
+    /// The buffers are too small for this student, coach or rate.
+    Buffers,
+    /// A model rate outside [`RATES_HZ`] or a zero band.
+    Config,
+    /// The student's skeleton lacks what swing detection needs.
+    Detector(DetectorError),
+    /// The pose frame does not fit the stream.
+    Stream(StreamError),
+    /// The coach cannot be retargeted onto the student (degenerate skeleton).
+    Retarget,
+    /// No swing found in the coach reference on the student's body.
+    CoachSwing(EventError),
+}
+
+impl core::fmt::Display for Refusal {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Refusal::NoProfile => f.write_str("pose frames before a student profile"),
+            Refusal::Profile(e) => write!(f, "student profile: {e}"),
+            Refusal::ProfileFormat(format) => write!(
+                f,
+                "student profile in format `{}` with no joint table or the wrong keypoint count",
+                format.name()
+            ),
+            Refusal::UnknownCoach(n) => write!(f, "no coach reference number {n}"),
+            Refusal::Buffers => f.write_str("buffers too small for this student, coach or rate"),
+            Refusal::Config => write!(
+                f,
+                "model rate outside {} to {} Hz, or a zero band",
+                RATES_HZ.0, RATES_HZ.1
+            ),
+            Refusal::Detector(e) => write!(f, "swing detection: {e}"),
+            Refusal::Stream(e) => write!(f, "pose stream: {e}"),
+            Refusal::Retarget => f.write_str("the coach cannot be retargeted onto the student"),
+            Refusal::CoachSwing(e) => write!(f, "the coach reference on this student: {e}"),
+        }
+    }
+}
+
+/// Everything that follows the student's body.
+#[derive(Debug)]
+struct Student<'b> {
+    skeleton: Skeleton,
+    /// Skeleton of the stream's format scaled to the student, once the format is known.
+    source: Option<Skeleton>,
+    stream: PoseStream,
+    detector: SwingDetector<'b>,
+    /// Stream time of the detector's frame 0.
+    t0_us: Option<u64>,
+    /// The virtual coach's swing: frames from its set-up to its finish.
+    coach_swing: Range<usize>,
+}
+
+/// One session; see the [module documentation](self).
+#[derive(Debug)]
+pub struct Session<'b> {
+    coaches: &'b [Coach<'b>],
+    config: Config,
+    coach: u16,
+    profile: Option<Skeleton>,
+    student: Option<Student<'b>>,
+    /// The ring while no detector holds it.
+    spare: &'b mut [Vec3],
+    window: &'b mut [Vec3],
+    virtual_coach: &'b mut [Vec3],
+    floats: &'b mut [f32],
+    bytes: &'b mut [u8],
+    swings: u32,
+    report: Option<Report>,
+    /// Counters of the pose streams before the current one.
+    counted: StreamCounters,
+}
+
+impl<'b> Session<'b> {
+    /// A session choosing among `coaches` (reference 0 until a `CoachSelect`).
+    pub fn new(coaches: &'b [Coach<'b>], buffers: Buffers<'b>) -> Session<'b> {
+        Session {
+            coaches,
+            config: DEFAULT_CONFIG,
+            coach: 0,
+            profile: None,
+            student: None,
+            spare: buffers.ring,
+            window: buffers.window,
+            virtual_coach: buffers.coach,
+            floats: buffers.floats,
+            bytes: buffers.bytes,
+            swings: 0,
+            report: None,
+            counted: StreamCounters::default(),
+        }
+    }
+
+    /// The settings in force.
+    pub fn config(&self) -> Config {
+        self.config
+    }
+
+    /// What the pose streams of this session have taken and dropped.
+    pub fn stream_counters(&self) -> StreamCounters {
+        let mut total = self.counted;
+        if let Some(s) = &self.student {
+            total.add(&s.stream.counters());
+        }
+        total
+    }
+
+    /// The student's skeleton, once a profile has been taken.
+    pub fn student(&self) -> Option<&Skeleton> {
+        self.profile.as_ref()
+    }
+
+    /// Takes one message and calls `on` with what it led to. Messages a device sends rather
+    /// than receives are ignored.
+    pub fn handle(&mut self, message: &Message, mut on: impl FnMut(Outcome<'_>)) {
+        let refusal = match message {
+            Message::StudentProfile(p) => self.profile(p).err(),
+            Message::Config(c) => {
+                let rates = RATES_HZ.0..=RATES_HZ.1;
+                if !rates.contains(&c.model_rate_hz) || c.band_radius == 0 {
+                    Some(Refusal::Config)
+                } else {
+                    self.reconfigure(|s| &mut s.config, *c).err()
+                }
+            }
+            Message::CoachSelect { coach } => {
+                if usize::from(*coach) >= self.coaches.len() {
+                    Some(Refusal::UnknownCoach(*coach))
+                } else {
+                    self.reconfigure(|s| &mut s.coach, *coach).err()
+                }
+            }
+            Message::PoseFrame(frame) => self.pose(frame, &mut on).err(),
+            _ => None,
+        };
+        if let Some(r) = refusal {
+            on(Outcome::Refused(r));
+        }
+    }
+
+    fn profile(&mut self, profile: &StudentProfile) -> Result<(), Refusal> {
+        let format = profile.format;
+        let table = format.joints();
+        if table.is_empty() || profile.joints_mm.len() != format.keypoints().len() {
+            return Err(Refusal::ProfileFormat(format));
+        }
+        let mut keypoints = [Vec3::zeros(); MAX_JOINTS];
+        for (k, [x, y, z]) in keypoints.iter_mut().zip(&profile.joints_mm) {
+            *k = Vec3::new(f32::from(*x), f32::from(*y), f32::from(*z)) * 1e-3;
+        }
+        let mut joints = [Vec3::zeros(); MAX_JOINTS];
+        format
+            .map_keypoints(&keypoints[..profile.joints_mm.len()], &mut joints)
+            .map_err(|_| Refusal::ProfileFormat(format))?;
+        let template = format.default_skeleton().map_err(Refusal::Profile)?;
+        let lengths: [f32; MAX_JOINTS] = core::array::from_fn(|k| {
+            (k < template.len())
+                .then(|| template.parent(k))
+                .flatten()
+                .map_or(0.0, |p| (joints[k] - joints[p]).norm())
+        });
+        let skeleton = template
+            .with_bone_lengths(&lengths[..template.len()])
+            .map_err(Refusal::Profile)?;
+        self.reconfigure(|s| &mut s.profile, Some(skeleton))
+    }
+
+    /// Sets a field and rebuilds what follows it; if that fails the field gets its old value
+    /// back and the session is rebuilt as it was (a swing in progress is dropped either way).
+    fn reconfigure<T>(&mut self, field: fn(&mut Self) -> &mut T, value: T) -> Result<(), Refusal> {
+        let previous = core::mem::replace(field(self), value);
+        self.restart().inspect_err(|_| {
+            *field(self) = previous;
+            // What worked before works again.
+            let _ = self.restart();
+        })
+    }
+
+    /// Rebuilds everything that follows the profile, coach and settings.
+    fn restart(&mut self) -> Result<(), Refusal> {
+        let Some(skeleton) = self.profile.clone() else {
+            return Ok(());
+        };
+        let coach = self
+            .coaches
+            .get(usize::from(self.coach))
+            .ok_or(Refusal::UnknownCoach(self.coach))?;
+        let rate = self.config.model_rate_hz;
+        let joints = skeleton.len();
+        let detector = DetectorConfig::full_swing(f32::from(rate));
+        let ring = match self.student.take() {
+            Some(s) => {
+                self.counted.add(&s.stream.counters());
+                s.detector.into_storage()
+            }
+            None => core::mem::take(&mut self.spare),
+        };
+        let checked = SwingDetector::check(&skeleton, detector, ring.len())
+            .map_err(Refusal::Detector)
+            .and_then(|_| {
+                let needed = BufferLens::new(joints, coach.frames(), rate);
+                let fits = ring.len() >= needed.ring
+                    && self.window.len() >= needed.window
+                    && self.virtual_coach.len() >= needed.coach
+                    && self.floats.len() >= needed.floats
+                    && self.bytes.len() >= needed.bytes;
+                fits.then_some(()).ok_or(Refusal::Buffers)
+            })
+            .and_then(|()| {
+                let retarget =
+                    Analytic::new(coach.skeleton, &skeleton).map_err(|_| Refusal::Retarget)?;
+                for (source, out) in coach
+                    .positions
+                    .chunks_exact(coach.skeleton.len())
+                    .zip(self.virtual_coach.chunks_exact_mut(joints))
+                {
+                    retarget.frame(source, out).map_err(|_| Refusal::Retarget)?;
+                }
+                Ok(())
+            })
+            .and_then(|()| {
+                let frames = &self.virtual_coach[..coach.frames() * joints];
+                let swing =
+                    swing_span(&skeleton, frames, coach.rate_hz).map_err(Refusal::CoachSwing)?;
+                let stream = PoseStream::new(StreamConfig::new(rate)).map_err(Refusal::Stream)?;
+                Ok((stream, swing))
+            });
+        let (stream, coach_swing) = match checked {
+            Ok(done) => done,
+            Err(e) => {
+                self.spare = ring;
+                return Err(e);
+            }
+        };
+        let detector = SwingDetector::new(&skeleton, detector, ring).map_err(Refusal::Detector)?;
+        self.student = Some(Student {
+            skeleton,
+            source: None,
+            stream,
+            detector,
+            t0_us: None,
+            coach_swing,
+        });
+        Ok(())
+    }
+
+    fn pose(&mut self, frame: &PoseFrame, on: &mut impl FnMut(Outcome<'_>)) -> Result<(), Refusal> {
+        let student = self.student.as_mut().ok_or(Refusal::NoProfile)?;
+        if student.source.is_none() {
+            student.source = Some(stream_skeleton(&student.skeleton, frame.format)?);
+        }
+        let Student {
+            skeleton,
+            source,
+            stream,
+            detector,
+            t0_us,
+            ..
+        } = student;
+        let source = source.as_ref().ok_or(Refusal::NoProfile)?;
+        let retarget = Analytic::new(source, skeleton).map_err(|_| Refusal::Retarget)?;
+        let rate = f32::from(self.config.model_rate_hz);
+        let mut closed: Option<(SwingWindow, u64)> = None;
+        stream
+            .push(frame, |event| match event {
+                StreamEvent::Gap => {
+                    detector.clear();
+                    *t0_us = None;
+                }
+                StreamEvent::Frame { t_us, joints } => {
+                    let mut out = [Vec3::zeros(); MAX_JOINTS];
+                    let out = &mut out[..skeleton.len()];
+                    if retarget.frame(joints, out).is_err() {
+                        return;
+                    }
+                    let t0 = *t0_us.get_or_insert(t_us);
+                    if let Ok(Some(window)) = detector.push(out) {
+                        closed = Some((window, t0));
+                    }
+                }
+            })
+            .map_err(Refusal::Stream)?;
+        if let Some((window, t0)) = closed {
+            self.score(window, t0, rate, on);
+        }
+        Ok(())
+    }
+
+    /// Scores a closed window.
+    fn score(
+        &mut self,
+        window: SwingWindow,
+        t0_us: u64,
+        rate: f32,
+        on: &mut impl FnMut(Outcome<'_>),
+    ) {
+        let Some(student) = &self.student else {
+            return;
+        };
+        let Some(coach_hz) = self.coaches.get(usize::from(self.coach)).map(|c| c.rate_hz) else {
+            return;
+        };
+        let cut = window.len.saturating_sub(MAX_SWING_FRAMES);
+        let window = SwingWindow {
+            start: window.start + cut as u64,
+            len: window.len - cut,
+        };
+        let joints = student.skeleton.len();
+        let Ok(n) = student.detector.copy_window(&window, self.window) else {
+            return;
+        };
+        self.swings += 1;
+        let frames = &self.window[..n];
+        let at = |frame: u64| t0_us + (frame as f64 * 1e6 / f64::from(rate)) as u64;
+        let span = match swing_span(&student.skeleton, frames, rate) {
+            Ok(span) => span,
+            Err(error) => {
+                let swing = Swing {
+                    number: self.swings,
+                    start_us: at(window.start),
+                    frames: window.len,
+                };
+                let error = ScoreError::Events {
+                    student: true,
+                    error,
+                };
+                return on(Outcome::Unscored { swing, error });
+            }
+        };
+        let swing = Swing {
+            number: self.swings,
+            start_us: at(window.start + span.start as u64),
+            frames: span.len(),
+        };
+        let coach = &student.coach_swing;
+        let result = score::score(
+            &student.skeleton,
+            &frames[span.start * joints..span.end * joints],
+            rate,
+            &self.virtual_coach[coach.start * joints..coach.end * joints],
+            coach_hz,
+            self.config.band_radius,
+            self.config.anchored,
+            self.floats,
+            self.bytes,
+        );
+        match result {
+            Ok(report) => {
+                let report = &*self.report.insert(report);
+                on(Outcome::Scored { swing, report });
+            }
+            Err(error) => on(Outcome::Unscored { swing, error }),
+        }
+    }
+}
+
+/// Frames of `positions` from [`SWING_MARGIN_S`] before the set-up to as long after the finish.
+fn swing_span(
+    skeleton: &Skeleton,
+    positions: &[Vec3],
+    rate_hz: f32,
+) -> Result<Range<usize>, EventError> {
+    let events = events::detect(skeleton, positions, rate_hz)?;
+    let margin = (SWING_MARGIN_S * rate_hz) as usize;
+    let frames = positions.len() / skeleton.len().max(1);
+    Ok(events.address().saturating_sub(margin)..(events.finish() + margin + 1).min(frames))
+}
+
+/// The skeleton pose frames of `format` are read on: the student's own when the formats
+/// match, else the format's standard skeleton scaled to the student's leg length.
+fn stream_skeleton(student: &Skeleton, format: Format) -> Result<Skeleton, Refusal> {
+    if format == student.format() {
+        return Ok(student.clone());
+    }
+    let standard = format
+        .default_skeleton()
+        .map_err(|_| Refusal::Stream(StreamError::Format(format)))?;
+    let scale = student.leg_length() / standard.leg_length().max(f32::EPSILON);
+    let lengths: [f32; MAX_JOINTS] =
+        core::array::from_fn(|k| standard.offsets().get(k).map_or(0.0, |o| o.norm() * scale));
+    standard
+        .with_bone_lengths(&lengths[..standard.len()])
+        .map_err(Refusal::Profile)
+}
