@@ -3,11 +3,7 @@
 //! Every command returns its output as text (a readable summary, or one JSON object with
 //! `--json`) and `main` prints it.
 
-mod bench;
-mod inspect;
-mod retarget;
-mod score;
-mod tpose;
+use posecoach_cli::{bench, inspect, replay, retarget, score, synth, tpose};
 
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -36,6 +32,10 @@ enum Command {
     Tpose(tpose::Args),
     /// Measure the speed of the core's hot paths.
     Bench(bench::Args),
+    /// Run a recorded session (.pclog) through the device's pipeline and report every swing.
+    Replay(replay::Args),
+    /// Make a realistic recorded session (.pclog and its expected swings) from swing files.
+    SynthLog(synth::Args),
 }
 
 fn main() -> ExitCode {
@@ -46,6 +46,8 @@ fn main() -> ExitCode {
         Command::Inspect(args) => inspect::run(&args),
         Command::Tpose(args) => tpose::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Replay(args) => replay::run(&args),
+        Command::SynthLog(args) => synth::run(&args),
     };
     match result {
         Ok(output) => {

@@ -126,7 +126,8 @@ pub fn to_json(r: &Report) -> Value {
     })
 }
 
-fn to_text(r: &Report) -> String {
+/// The report as readable lines.
+pub fn to_text(r: &Report) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,

@@ -1,0 +1,13 @@
+//! The `posecoach` command-line tool's commands, as a library so that tests replay logs and
+//! score swings through exactly the code the tool runs.
+//!
+//! Each command module has clap `Args` and a `run` that returns the text to print.
+
+pub mod bench;
+pub mod coaches;
+pub mod inspect;
+pub mod replay;
+pub mod retarget;
+pub mod score;
+pub mod synth;
+pub mod tpose;

@@ -1,0 +1,132 @@
+//! `posecoach replay`: a recorded session through the device's pipeline, swing by swing.
+
+use crate::{coaches, score};
+use anyhow::{Context, Result};
+use posecoach_adapters::log::LogReader;
+use posecoach_adapters::session::{BufferLens, Buffers, Coach, Outcome, Session, RATES_HZ};
+use posecoach_core::config::MAX_JOINTS;
+use posecoach_core::Vec3;
+use serde_json::{json, Value};
+use std::fmt::Write;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The recorded session (.pclog).
+    log: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// What a replay found.
+pub struct Replay {
+    /// One entry per swing: where it is, and its report's JSON or why it was not scored.
+    pub swings: Vec<Value>,
+    /// Readable lines, one block per swing.
+    pub text: String,
+    /// Messages refused, in order.
+    pub refused: Vec<String>,
+    /// Decoder and stream counters.
+    pub counters: Value,
+}
+
+pub fn run(args: &Args) -> Result<String> {
+    let bytes =
+        std::fs::read(&args.log).with_context(|| format!("reading {}", args.log.display()))?;
+    let replay = replay(&bytes).with_context(|| format!("replaying {}", args.log.display()))?;
+    if args.json {
+        let out = json!({"swings": replay.swings, "refused": replay.refused, "counters": replay.counters});
+        return Ok(format!("{out}\n"));
+    }
+    let mut out = replay.text;
+    for r in &replay.refused {
+        let _ = writeln!(out, "refused: {r}");
+    }
+    let _ = writeln!(out, "counters: {}", replay.counters);
+    Ok(out)
+}
+
+/// Replays `log` (a whole .pclog file) as a device would.
+///
+/// # Errors
+/// If the bytes are not a log.
+pub fn replay(log: &[u8]) -> Result<Replay> {
+    let coaches = coaches::all()?;
+    let refs: Vec<Coach<'_>> = coaches
+        .iter()
+        .map(|(_, m)| Coach {
+            skeleton: &m.skeleton,
+            positions: &m.positions,
+            rate_hz: m.rate_hz,
+        })
+        .collect();
+    let longest = coaches.iter().map(|(_, m)| m.frames()).max().unwrap_or(0);
+    let lens = BufferLens::new(MAX_JOINTS, longest, RATES_HZ.1);
+    let (mut ring, mut window, mut coach) = (
+        vec![Vec3::zeros(); lens.ring],
+        vec![Vec3::zeros(); lens.window],
+        vec![Vec3::zeros(); lens.coach],
+    );
+    let (mut floats, mut bytes) = (vec![0.0; lens.floats], vec![0u8; lens.bytes]);
+    let mut session = Session::new(
+        &refs,
+        Buffers {
+            ring: &mut ring,
+            window: &mut window,
+            coach: &mut coach,
+            floats: &mut floats,
+            bytes: &mut bytes,
+        },
+    );
+    let mut reader = LogReader::new(log)?;
+    let (mut swings, mut text, mut refused) = (Vec::new(), String::new(), Vec::new());
+    for message in reader.by_ref() {
+        session.handle(&message, |outcome| match outcome {
+            Outcome::Scored { swing, report } => {
+                let start_s = swing.start_us as f64 * 1e-6;
+                let _ = writeln!(
+                    text,
+                    "swing {} at {start_s:.2} s ({} frames):",
+                    swing.number, swing.frames
+                );
+                text.push_str(&score::to_text(report));
+                swings.push(
+                    json!({"swing": swing.number, "start_s": start_s, "frames": swing.frames,
+                                   "report": score::to_json(report)}),
+                );
+            }
+            Outcome::Unscored { swing, error } => {
+                let start_s = swing.start_us as f64 * 1e-6;
+                let _ = writeln!(
+                    text,
+                    "swing {} at {start_s:.2} s ({} frames): not scored: {error}",
+                    swing.number, swing.frames
+                );
+                swings.push(
+                    json!({"swing": swing.number, "start_s": start_s, "frames": swing.frames,
+                                   "error": error.to_string()}),
+                );
+            }
+            Outcome::Refused(r) => refused.push(r.to_string()),
+        });
+    }
+    let wire = reader.counters();
+    let stream = session.stream_counters();
+    let counters = json!({
+        "frames_ok": wire.frames_ok, "crc_errors": wire.crc_errors, "malformed": wire.malformed,
+        "overflows": wire.overflows,
+        "pose_accepted": stream.accepted, "pose_duplicates": stream.duplicates,
+        "pose_out_of_order": stream.out_of_order, "pose_gaps": stream.gaps,
+        "pose_masked": stream.masked, "frames_at_model_rate": stream.emitted,
+    });
+    if swings.is_empty() {
+        text.push_str("no swing found\n");
+    }
+    Ok(Replay {
+        swings,
+        text,
+        refused,
+        counters,
+    })
+}
