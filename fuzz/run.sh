@@ -5,12 +5,14 @@ set -euo pipefail
 cd "$(dirname "$0")"
 seconds="${1:-30}"
 mkdir -p logs
-# Seeds: the committed fixtures of each format; for the wire decoder, the pinned message stream.
-for target in bvh c3d csv wire; do
+# Seeds: the committed fixtures of each format; for the wire decoder, the pinned message stream;
+# for the log reader and session, the committed recordings.
+for target in bvh c3d csv wire log; do
     corpus="corpus/$target"
     mkdir -p "$corpus"
     case "$target" in
         wire) cp ../tests/fixtures/wire_messages.bin "$corpus/" ;;
+        log) cp ../tests/logs/*.pclog "$corpus/" ;;
         *) find ../tests/fixtures -name "*.$target" -exec cp {} "$corpus/" \; ;;
     esac
     log="logs/$target.txt"

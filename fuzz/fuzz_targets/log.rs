@@ -1,0 +1,59 @@
+//! Any bytes, read as a recorded session (behind a valid header when they lack one), must
+//! never make the log reader or the device's session panic.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use posecoach_adapters::io::{csv, Motion};
+use posecoach_adapters::log::{header, LogReader};
+use posecoach_adapters::session::{BufferLens, Buffers, Coach, Session};
+use posecoach_core::config::MAX_JOINTS;
+use posecoach_core::Vec3;
+use std::sync::OnceLock;
+
+fn coach() -> &'static Motion {
+    static COACH: OnceLock<Motion> = OnceLock::new();
+    COACH.get_or_init(|| {
+        csv::read(include_str!("../../tests/fixtures/golf_driver_60hz.csv"))
+            .expect("the bundled coach reads")
+    })
+}
+
+fuzz_target!(|data: &[u8]| {
+    let mut framed;
+    let log = if LogReader::new(data).is_ok() {
+        data
+    } else {
+        framed = header().to_vec();
+        framed.extend_from_slice(data);
+        &framed[..]
+    };
+    let Ok(reader) = LogReader::new(log) else {
+        return;
+    };
+    let coach = coach();
+    let coaches = [Coach {
+        skeleton: &coach.skeleton,
+        positions: &coach.positions,
+        rate_hz: coach.rate_hz,
+    }];
+    let lens = BufferLens::new(MAX_JOINTS, coach.frames(), 120);
+    let (mut ring, mut window, mut virtual_coach) = (
+        vec![Vec3::zeros(); lens.ring],
+        vec![Vec3::zeros(); lens.window],
+        vec![Vec3::zeros(); lens.coach],
+    );
+    let (mut floats, mut bytes) = (vec![0.0; lens.floats], vec![0u8; lens.bytes]);
+    let mut session = Session::new(
+        &coaches,
+        Buffers {
+            ring: &mut ring,
+            window: &mut window,
+            coach: &mut virtual_coach,
+            floats: &mut floats,
+            bytes: &mut bytes,
+        },
+    );
+    for message in reader {
+        session.handle(&message, |_| {});
+    }
+});

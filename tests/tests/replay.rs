@@ -1,0 +1,196 @@
+//! Every committed recording in `tests/logs` replayed as the device would: the swings its
+//! sidecar lists are found, at the right moments, and their reports equal the golden ones. A
+//! seeded fault injector then damages the bytes the way a bad serial link does.
+
+use posecoach_cli::replay::{replay, Replay};
+use posecoach_core::wire::{Decoder, Message};
+use posecoach_tests::files;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// Events other than address must be found within this many seconds (two frames at 60 Hz).
+const EVENT_TOLERANCE_S: f64 = 0.034;
+
+fn logs() -> Vec<PathBuf> {
+    let found = files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("logs"), "pclog");
+    assert!(!found.is_empty(), "no committed logs");
+    found
+}
+
+fn sidecar(log: &Path) -> Value {
+    let text = std::fs::read_to_string(log.with_extension("swings.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+/// Checks the replay found exactly the sidecar's swings with their events.
+fn check_swings(name: &str, replay: &Replay, expected: &Value) {
+    let expected = expected["swings"].as_array().unwrap();
+    assert_eq!(
+        replay.swings.len(),
+        expected.len(),
+        "{name}: swings found\n{}",
+        replay.text
+    );
+    for (found, truth) in replay.swings.iter().zip(expected) {
+        let report = &found["report"];
+        assert!(report.is_object(), "{name}: not scored: {found}");
+        let start = found["start_s"].as_f64().unwrap();
+        let rate = 60.0;
+        for (event, frame) in report["events"]["student"].as_object().unwrap() {
+            let at = start + frame.as_f64().unwrap() / rate;
+            let want = truth["events_s"][event].as_f64().unwrap();
+            if event == "address" {
+                // Anywhere in the still set-up before the takeaway.
+                let still = truth["still_from_s"].as_f64().unwrap();
+                assert!(
+                    at >= still - EVENT_TOLERANCE_S && at <= want + EVENT_TOLERANCE_S,
+                    "{name}: address at {at:.3} s, still from {still:.3} s to {want:.3} s"
+                );
+            } else {
+                assert!(
+                    (at - want).abs() <= EVENT_TOLERANCE_S,
+                    "{name}: {event} at {at:.3} s, expected {want:.3} s"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn every_log_replays_to_its_swings_and_golden_reports() {
+    for log in logs() {
+        let name = log.file_name().unwrap().to_string_lossy().into_owned();
+        let bytes = std::fs::read(&log).unwrap();
+        let replay = replay(&bytes).unwrap();
+        assert!(replay.refused.is_empty(), "{name}: {:?}", replay.refused);
+        check_swings(&name, &replay, &sidecar(&log));
+        let golden = log.with_extension("replay.json");
+        let got = format!("{:#}\n", serde_json::Value::Array(replay.swings.clone()));
+        if std::env::var_os("POSECOACH_BLESS").is_some() {
+            std::fs::write(&golden, &got).unwrap();
+        }
+        let want = std::fs::read_to_string(&golden).unwrap_or_else(|_| {
+            panic!("{}: missing; POSECOACH_BLESS=1 writes it", golden.display())
+        });
+        assert!(
+            got == want,
+            "{name}: the reports differ from {} (POSECOACH_BLESS=1 rewrites it after a deliberate change)",
+            golden.display()
+        );
+    }
+}
+
+/// The wire frames of a log after its header, each with its delimiter.
+fn frames(log: &[u8]) -> Vec<&[u8]> {
+    log[posecoach_adapters::log::HEADER_LEN..]
+        .split_inclusive(|&b| b == 0)
+        .collect()
+}
+
+fn decode(frame: &[u8]) -> Option<Message> {
+    let mut decoder = Decoder::new();
+    frame.iter().find_map(|&b| decoder.push(b))
+}
+
+/// What the injector did.
+struct Faults {
+    bytes: Vec<u8>,
+    /// Messages of the frames that reached the device undamaged, in order.
+    intact: Vec<Message>,
+    damaged: usize,
+    dropped: usize,
+    duplicated: usize,
+}
+
+/// Drops `drop` of the frames, sends `duplicate` of them twice, then flips each byte with
+/// probability `flip`. The first `keep` frames (the set-up a phone resends until it is
+/// acknowledged) pass untouched.
+fn inject(log: &[u8], seed: u64, flip: f64, drop: f64, duplicate: f64, keep: usize) -> Faults {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut sent: Vec<&[u8]> = Vec::new();
+    let (mut dropped, mut duplicated) = (0, 0);
+    for (i, frame) in frames(log).into_iter().enumerate() {
+        if i >= keep && rng.random_bool(drop) {
+            dropped += 1;
+            continue;
+        }
+        sent.push(frame);
+        if i >= keep && rng.random_bool(duplicate) {
+            duplicated += 1;
+            sent.push(frame);
+        }
+    }
+    let mut bytes = log[..posecoach_adapters::log::HEADER_LEN].to_vec();
+    let mut intact = Vec::new();
+    let mut damaged = 0;
+    // A frame is lost if any of its bytes flips, or if the delimiter before it flips (the
+    // two run together).
+    let mut previous_delimiter_hit = false;
+    for (i, frame) in sent.iter().enumerate() {
+        let mut hit = false;
+        let mut delimiter_hit = false;
+        for (k, &b) in frame.iter().enumerate() {
+            let mut b = b;
+            if i >= keep && rng.random_bool(flip) {
+                b ^= rng.random_range(1..=255u8);
+                hit = true;
+                delimiter_hit |= k + 1 == frame.len();
+            }
+            bytes.push(b);
+        }
+        if hit || previous_delimiter_hit {
+            damaged += 1;
+        } else {
+            intact.push(decode(frame).unwrap());
+        }
+        previous_delimiter_hit = delimiter_hit;
+    }
+    Faults {
+        bytes,
+        intact,
+        damaged,
+        dropped,
+        duplicated,
+    }
+}
+
+#[test]
+fn a_damaged_link_loses_only_the_damaged_frames() {
+    for log in logs() {
+        let bytes = std::fs::read(&log).unwrap();
+        for (seed, flip) in [(1, 0.01), (2, 0.001)] {
+            let faults = inject(&bytes, seed, flip, 0.05, 0.02, 3);
+            let got: Vec<Message> = posecoach_adapters::log::LogReader::new(&faults.bytes)
+                .unwrap()
+                .collect();
+            assert!(faults.damaged > 0 && faults.dropped > 0 && faults.duplicated > 0);
+            assert!(
+                got == faults.intact,
+                "{}: {} messages read, {} intact frames sent",
+                log.display(),
+                got.len(),
+                faults.intact.len()
+            );
+        }
+    }
+}
+
+#[test]
+fn every_swing_survives_a_noisy_link() {
+    for log in logs() {
+        let name = log.file_name().unwrap().to_string_lossy().into_owned();
+        let bytes = std::fs::read(&log).unwrap();
+        let faults = inject(&bytes, 7, 0.001, 0.05, 0.02, 3);
+        let replay = replay(&faults.bytes).unwrap();
+        eprintln!(
+            "{name}: {} frames damaged, {} dropped, {} duplicated; counters {}",
+            faults.damaged, faults.dropped, faults.duplicated, replay.counters
+        );
+        // A duplicate whose copy was damaged is not seen as one.
+        let duplicates = replay.counters["pose_duplicates"].as_u64().unwrap();
+        assert!(duplicates > 0 && duplicates <= faults.duplicated as u64);
+        check_swings(&name, &replay, &sidecar(&log));
+    }
+}
