@@ -4,6 +4,8 @@
 //! `alloc`; this library defines none, so it only builds while both crates stay free of it.
 #![no_std]
 
+use posecoach_adapters::log::LogReader;
+use posecoach_adapters::session::{Buffers, Session};
 use posecoach_core::format::Format;
 use posecoach_core::retarget::Analytic;
 use posecoach_core::Vec3;
@@ -28,6 +30,35 @@ pub extern "C" fn posecoach_no_alloc_check() -> i32 {
         Ok(()) => (out[10].y * 1000.0) as i32,
         Err(_) => -1,
     }
+}
+
+/// Replays a recorded session from `log` (the start of a `.pclog`) through the device's
+/// session with no coach and buffers on the stack; returns the messages read, or -1 if the
+/// bytes are not a log.
+#[no_mangle]
+pub extern "C" fn posecoach_no_alloc_replay(log: &[u8; 64]) -> i32 {
+    let Ok(reader) = LogReader::new(log) else {
+        return -1;
+    };
+    let (mut ring, mut window, mut coach) =
+        ([Vec3::zeros(); 8], [Vec3::zeros(); 8], [Vec3::zeros(); 8]);
+    let (mut floats, mut bytes) = ([0.0; 8], [0u8; 8]);
+    let mut session = Session::new(
+        &[],
+        Buffers {
+            ring: &mut ring,
+            window: &mut window,
+            coach: &mut coach,
+            floats: &mut floats,
+            bytes: &mut bytes,
+        },
+    );
+    let mut read = 0;
+    for message in reader {
+        session.handle(&message, |_| {});
+        read += 1;
+    }
+    read
 }
 
 #[panic_handler]
