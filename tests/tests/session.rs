@@ -110,3 +110,128 @@ fn bad_messages_are_refused_and_change_nothing() {
         [Refusal::Stream(_)]
     ));
 }
+
+/// Pose frames at 30 Hz of `motion` (on a skeleton of `format`, whose keypoints are its joints).
+fn pose_frames(motion: &io::Motion, format: Format) -> Vec<Message> {
+    let swing = motion.resampled(30.0);
+    (0..swing.frames())
+        .map(|f| {
+            Message::PoseFrame(PoseFrame {
+                seq: f as u32,
+                t_us: f as u64 * 33_333,
+                format,
+                joints_mm: swing
+                    .frame(f)
+                    .iter()
+                    .map(|p| [p.x, p.y, p.z].map(|v| (v * 1000.0).round() as i16))
+                    .collect(),
+                confidence: heapless::Vec::new(),
+            })
+        })
+        .collect()
+}
+
+/// Replays `messages`; returns each swing's score and its events' frames.
+fn scores(coach: &io::Motion, messages: &[Message]) -> Vec<(f32, Vec<usize>)> {
+    let coaches = [Coach {
+        skeleton: &coach.skeleton,
+        positions: &coach.positions,
+        rate_hz: coach.rate_hz,
+    }];
+    let lens = BufferLens::new(31, coach.frames(), 60);
+    let (mut ring, mut window, mut virtual_coach) = (
+        vec![Vec3::zeros(); lens.ring],
+        vec![Vec3::zeros(); lens.window],
+        vec![Vec3::zeros(); lens.coach],
+    );
+    let (mut floats, mut bytes) = (vec![0.0; lens.floats], vec![0u8; lens.bytes]);
+    let mut session = Session::new(
+        &coaches,
+        Buffers {
+            ring: &mut ring,
+            window: &mut window,
+            coach: &mut virtual_coach,
+            floats: &mut floats,
+            bytes: &mut bytes,
+        },
+    );
+    let mut found = Vec::new();
+    for m in messages {
+        session.handle(m, |o| match o {
+            Outcome::Scored { report, .. } => found.push((
+                report.score,
+                report.student_events.iter().map(|(_, f)| f).collect(),
+            )),
+            other => panic!("{other:?}"),
+        });
+    }
+    found
+}
+
+#[test]
+fn a_stream_in_another_format_is_mapped_onto_the_profile() {
+    // The student (1.75 m, H3.6M profile) swings the driver; one phone sends H3.6M keypoints,
+    // another CMU-31 keypoints of the same motion.
+    let coach = io::load(&fixture("golf_driver_60hz.csv")).unwrap();
+    let student = io::load(&fixture("h36m17_tpose.csv")).unwrap();
+    let on_h36m = coach.retarget_analytic(&student).unwrap();
+    let h36m = Format::H36m17.default_skeleton().unwrap();
+    let h36m = io::Motion {
+        skeleton: h36m.clone(),
+        names: vec![String::new(); h36m.len()],
+        rate_hz: 0.0,
+        missing: vec![false; h36m.len()],
+        positions: {
+            let mut rest = vec![Vec3::zeros(); h36m.len()];
+            h36m.rest_positions(&mut rest);
+            let scale = student.skeleton.height() / h36m.height();
+            rest.iter().map(|p| p * scale).collect()
+        },
+    };
+    let on_h36m = on_h36m.retarget_analytic(&h36m).unwrap();
+    let cmu = Format::Cmu31.default_skeleton().unwrap();
+    let cmu = io::Motion {
+        skeleton: cmu.clone(),
+        names: vec![String::new(); cmu.len()],
+        rate_hz: 0.0,
+        missing: vec![false; cmu.len()],
+        positions: {
+            let mut rest = vec![Vec3::zeros(); cmu.len()];
+            cmu.rest_positions(&mut rest);
+            let scale = student.skeleton.leg_length() / cmu.leg_length();
+            rest.iter().map(|p| p * scale).collect()
+        },
+    };
+    let on_cmu = coach.retarget_analytic(&cmu).unwrap();
+    let profile = Message::StudentProfile(StudentProfile {
+        format: Format::H36m17,
+        joints_mm: h36m
+            .positions
+            .iter()
+            .map(|p| [p.x, p.y, p.z].map(|v| (v * 1000.0).round() as i16))
+            .collect(),
+    });
+    // Still set-up before and after, so the detector sees a whole swing.
+    let padded = |m: &io::Motion| {
+        let (first, last) = (m.frame(0).to_vec(), m.frame(m.frames() - 1).to_vec());
+        let mut positions = first.repeat(60);
+        positions.extend_from_slice(&m.positions);
+        positions.extend(last.repeat(90));
+        io::Motion {
+            missing: vec![false; positions.len()],
+            positions,
+            ..m.clone()
+        }
+    };
+    let mut same = vec![profile.clone()];
+    same.extend(pose_frames(&padded(&on_h36m), Format::H36m17));
+    let mut mapped = vec![profile];
+    mapped.extend(pose_frames(&padded(&on_cmu), Format::Cmu31));
+    let (same, mapped) = (scores(&coach, &same), scores(&coach, &mapped));
+    assert_eq!((same.len(), mapped.len()), (1, 1));
+    eprintln!("H3.6M stream {:?}\nCMU-31 stream {:?}", same[0], mapped[0]);
+    assert!(mapped[0].0 > 95.0 && (mapped[0].0 - same[0].0).abs() < 3.0);
+    for (a, b) in same[0].1.iter().zip(&mapped[0].1) {
+        assert!(a.abs_diff(*b) <= 1);
+    }
+}
