@@ -7,6 +7,9 @@ mod bench;
 mod inspect;
 mod retarget;
 mod score;
+// `posecoach synth-log` will write these recordings; until then only the tests use them.
+#[cfg_attr(not(test), allow(dead_code))]
+mod synth_imu;
 mod tpose;
 
 use clap::{Parser, Subcommand};
