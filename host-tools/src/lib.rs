@@ -10,4 +10,5 @@ pub mod replay;
 pub mod retarget;
 pub mod score;
 pub mod synth;
+pub mod synth_imu;
 pub mod tpose;

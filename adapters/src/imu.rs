@@ -1,0 +1,735 @@
+//! Body poses from IMUs strapped to the student's segments.
+//!
+//! ```text
+//!  ImuSample ──fusion::Reading──▶ still T-pose?  ── CALIBRATION_S ──▶ bias, attitude, offsets
+//!                                     │ (after calibration)
+//!                                     ▼
+//!             Mahony filter per sensor ──▶ segment rotations on the output grid
+//!                                     ──kinematics::forward──▶ joint positions, activity
+//! ```
+//!
+//! **Calibration.** A session starts with the student holding a still T-pose for
+//! [`CALIBRATION_S`]; any sample that is not still ([`StillPeriod::is_still`]) starts the period
+//! over. At its end each sensor's gyro bias is its mean rate, its filter starts from its mean
+//! acceleration (and field), and its sensor-to-segment offset follows from the T-pose, where
+//! every bone's global rotation is the identity. A filter's heading is arbitrary without a
+//! magnetometer: the heading correction is the yaw that brings the calibrated mounting closest
+//! to the layout's nominal one. Sensors with magnetometers share magnetic north, so one yaw,
+//! fitted over all of them, serves them all and their relative headings stay exact.
+//!
+//! **Tracking.** Every sample updates its sensor's filter. Outputs lie on a fixed grid at the
+//! adapter's rate, starting one period after calibration; each sensor's orientation is
+//! interpolated to a grid time when a sample passes it, and once every sensor has passed it
+//! one frame of positions goes out. A sensed bone's global rotation comes from its sensor;
+//! unsensed thighs, shins and feet keep their T-pose (vertical, planted) rotation; every other
+//! unsensed bone follows its parent (the hip bones move with the pelvis). The root stays at
+//! the skeleton's rest position. With each frame goes the activity for swing detection: the
+//! largest bias-free gyro rate (rad/s) of the wrist, hand and club sensors (of all sensors if
+//! there are none of those) since the previous frame.
+//!
+//! ```
+//! use posecoach_adapters::imu::ImuAdapter;
+//! use posecoach_core::format::Format;
+//! use posecoach_core::joint::Joint;
+//! use posecoach_core::wire::{ImuSample, SensorLayout, SensorPlacement};
+//!
+//! let skeleton = Format::H36m17.default_skeleton().unwrap();
+//! let mut layout = SensorLayout { sensors: Default::default() };
+//! let placement = SensorPlacement { sensor: 0, joint: Joint::Pelvis, mounting_q14: [16384, 0, 0, 0] };
+//! layout.sensors.push(placement).unwrap();
+//! let mut adapter = ImuAdapter::new(&layout, &skeleton, 60.0).unwrap();
+//! let mut frames = 0;
+//! for k in 0..400u64 {
+//!     let sample = ImuSample {
+//!         sensor: 0,
+//!         t_us: k * 5_000,
+//!         accel_mg: [0, 1000, 0],
+//!         gyro_ddps: [0, 0, 0],
+//!         mag_dut: None,
+//!     };
+//!     adapter.push(&skeleton, &sample, |positions, _activity| {
+//!         assert_eq!(positions.len(), 17);
+//!         frames += 1;
+//!     }).unwrap();
+//! }
+//! assert_eq!(frames, 59); // 2 s at 200 Hz: 1 s of calibration, then 60 Hz
+//! ```
+
+use crate::fusion::{self, FusionError, Gains, Mahony, Reading, StillPeriod};
+use posecoach_core::config::MAX_JOINTS;
+use posecoach_core::joint::Joint;
+use posecoach_core::kinematics::forward;
+use posecoach_core::skeleton::{Segment, Skeleton};
+use posecoach_core::wire::{SensorLayout, MAX_SENSORS};
+use posecoach_core::{Quat, Vec3};
+
+/// Length of the still T-pose that starts a session, seconds.
+pub const CALIBRATION_S: f32 = 1.0;
+const CALIBRATION_US: u64 = 1_000_000;
+/// Output rates the adapter accepts, Hz.
+pub const RATE_RANGE_HZ: core::ops::RangeInclusive<f32> = 1.0..=1000.0;
+/// A nominal mounting's `q14` norm must be within this fraction of 1.
+const MOUNTING_TOLERANCE: f32 = 0.1;
+/// Units of a `mounting_q14` component.
+const Q14: f32 = 16384.0;
+/// Joints whose sensors give the activity.
+const ACTIVITY_JOINTS: [Joint; 6] = [
+    Joint::LeftWrist,
+    Joint::RightWrist,
+    Joint::LeftHand,
+    Joint::RightHand,
+    Joint::ClubGrip,
+    Joint::ClubHead,
+];
+const NO_SENSOR: u8 = u8::MAX;
+/// Millihertz times microseconds per cycle.
+const MHZ_US: u64 = 1_000_000_000;
+
+/// Why a layout was refused or a sample not used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ImuError {
+    /// The layout places no sensor.
+    EmptyLayout,
+    /// A sensor's joint is not in the skeleton.
+    #[allow(missing_docs)]
+    MissingJoint { sensor: u8, joint: Joint },
+    /// Two placements use the same sensor number, or the same joint.
+    #[allow(missing_docs)]
+    DuplicateSensor { sensor: u8 },
+    /// A nominal mounting is not a unit quaternion.
+    #[allow(missing_docs)]
+    Mounting { sensor: u8 },
+    /// The output rate is outside [`RATE_RANGE_HZ`].
+    #[allow(missing_docs)]
+    Rate { rate_hz: f32 },
+    /// The skeleton passed to `push` is not the one given to `new`.
+    SkeletonMismatch,
+    /// A sample from a sensor the layout does not place.
+    #[allow(missing_docs)]
+    UnknownSensor { sensor: u8 },
+    /// A sample that could not be used; the adapter carries on without it.
+    #[allow(missing_docs)]
+    Sample { sensor: u8, error: FusionError },
+}
+
+impl core::fmt::Display for ImuError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ImuError::EmptyLayout => f.write_str("the sensor layout is empty"),
+            ImuError::MissingJoint { sensor, joint } => {
+                write!(
+                    f,
+                    "sensor {sensor} is on `{joint}`, which the skeleton lacks"
+                )
+            }
+            ImuError::DuplicateSensor { sensor } => {
+                write!(f, "sensor {sensor} is placed twice, or shares its joint")
+            }
+            ImuError::Mounting { sensor } => {
+                write!(f, "sensor {sensor}: the mounting is not a unit quaternion")
+            }
+            ImuError::Rate { rate_hz } => write!(
+                f,
+                "output rate {rate_hz} Hz is outside {}..={} Hz",
+                RATE_RANGE_HZ.start(),
+                RATE_RANGE_HZ.end()
+            ),
+            ImuError::SkeletonMismatch => {
+                f.write_str("the skeleton differs from the one the adapter was built for")
+            }
+            ImuError::UnknownSensor { sensor } => {
+                write!(f, "sensor {sensor} is not in the layout")
+            }
+            ImuError::Sample { sensor, error } => write!(f, "sensor {sensor}: {error}"),
+        }
+    }
+}
+
+impl core::error::Error for ImuError {}
+
+/// One sensor: its placement, calibration and filter.
+#[derive(Clone, Copy, Debug)]
+struct Track {
+    sensor: u8,
+    joint: Joint,
+    /// Skeleton index of `joint`.
+    index: u8,
+    /// Whether its rate counts toward the activity.
+    activity: bool,
+    nominal: Quat,
+    still: StillPeriod,
+    bias: Vec3,
+    filter: Mahony,
+    last_us: Option<u64>,
+    /// The segment's global rotation is `left · q · right` for filter orientation `q`.
+    left: Quat,
+    right: Quat,
+    /// Filter orientation at the pending output time, once a sample has passed it.
+    snapshot: Option<Quat>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Phase {
+    /// Waiting for a still T-pose; the still period began at the given time.
+    Calibrating(Option<u64>),
+    /// Output `next` of the grid starting at `origin_us` is pending.
+    Tracking { origin_us: u64, next: u64 },
+}
+
+/// Turns IMU samples into joint positions on a skeleton (see the [module](self) docs).
+#[derive(Clone, Debug)]
+pub struct ImuAdapter {
+    tracks: [Track; MAX_SENSORS],
+    len: u8,
+    /// Track of each joint's sensor, [`NO_SENSOR`] where none.
+    sensed: [u8; MAX_JOINTS],
+    /// Joints whose bones keep their T-pose global rotation (bit `i` = joint `i`).
+    planted: u64,
+    joints: u8,
+    root: Vec3,
+    rate_mhz: u64,
+    gains: Gains,
+    phase: Phase,
+    activity: f32,
+}
+
+impl ImuAdapter {
+    /// An adapter for `layout`'s sensors on `skeleton`, emitting frames at `rate_hz`, with the
+    /// filter gains [`Gains::DEFAULT`].
+    ///
+    /// # Errors
+    /// [`ImuError::EmptyLayout`], [`ImuError::MissingJoint`], [`ImuError::DuplicateSensor`],
+    /// [`ImuError::Mounting`] or [`ImuError::Rate`].
+    pub fn new(
+        layout: &SensorLayout,
+        skeleton: &Skeleton,
+        rate_hz: f32,
+    ) -> Result<ImuAdapter, ImuError> {
+        if !RATE_RANGE_HZ.contains(&rate_hz) {
+            return Err(ImuError::Rate { rate_hz });
+        }
+        if layout.sensors.is_empty() {
+            return Err(ImuError::EmptyLayout);
+        }
+        let unplaced = Track {
+            sensor: 0,
+            joint: Joint::Pelvis,
+            index: 0,
+            activity: false,
+            nominal: Quat::identity(),
+            still: StillPeriod::new(),
+            bias: Vec3::zeros(),
+            filter: Mahony::starting_at(Gains::DEFAULT, Quat::identity()),
+            last_us: None,
+            left: Quat::identity(),
+            right: Quat::identity(),
+            snapshot: None,
+        };
+        let mut tracks = [unplaced; MAX_SENSORS];
+        let mut sensed = [NO_SENSOR; MAX_JOINTS];
+        for (t, (placement, track)) in layout.sensors.iter().zip(&mut tracks).enumerate() {
+            let sensor = placement.sensor;
+            let index = skeleton
+                .index_of(placement.joint)
+                .ok_or(ImuError::MissingJoint {
+                    sensor,
+                    joint: placement.joint,
+                })?;
+            let duplicate = layout.sensors[..t].iter().any(|p| p.sensor == sensor);
+            if duplicate || sensed[index] != NO_SENSOR {
+                return Err(ImuError::DuplicateSensor { sensor });
+            }
+            sensed[index] = t as u8;
+            let [w, x, y, z] = placement.mounting_q14.map(|c| f32::from(c) / Q14);
+            let raw = nalgebra::Quaternion::new(w, x, y, z);
+            if (raw.norm() - 1.0).abs() > MOUNTING_TOLERANCE {
+                return Err(ImuError::Mounting { sensor });
+            }
+            *track = Track {
+                sensor,
+                joint: placement.joint,
+                index: index as u8,
+                nominal: Quat::new_normalize(raw),
+                ..unplaced
+            };
+        }
+        let len = layout.sensors.len();
+        let any_activity = tracks[..len]
+            .iter()
+            .any(|t| ACTIVITY_JOINTS.contains(&t.joint));
+        for track in &mut tracks[..len] {
+            track.activity = !any_activity || ACTIVITY_JOINTS.contains(&track.joint);
+        }
+        let legs =
+            skeleton.segment_mask(Segment::LeftLeg) | skeleton.segment_mask(Segment::RightLeg);
+        let planted = (1..skeleton.len())
+            .filter(|&k| legs & (1 << k) != 0 && skeleton.parent(k) != Some(0))
+            .fold(0u64, |mask, k| mask | 1 << k);
+        Ok(ImuAdapter {
+            tracks,
+            len: len as u8,
+            sensed,
+            planted,
+            joints: skeleton.len() as u8,
+            root: skeleton.offset(0),
+            rate_mhz: (rate_hz * 1000.0) as u64,
+            gains: Gains::DEFAULT,
+            phase: Phase::Calibrating(None),
+            activity: 0.0,
+        })
+    }
+
+    /// The same adapter with other filter gains (before any sample).
+    pub fn with_gains(self, gains: Gains) -> ImuAdapter {
+        ImuAdapter { gains, ..self }
+    }
+
+    /// Whether calibration is over and frames are being emitted.
+    pub fn is_tracking(&self) -> bool {
+        matches!(self.phase, Phase::Tracking { .. })
+    }
+
+    /// Global rotation of the segment of the sensor numbered `sensor` at its latest sample,
+    /// once tracking.
+    pub fn segment_rotation(&self, sensor: u8) -> Option<Quat> {
+        let track = self.tracks().iter().find(|t| t.sensor == sensor)?;
+        self.is_tracking()
+            .then(|| track.left * track.filter.orientation() * track.right)
+    }
+
+    /// Feeds one sample; calls `emit(positions, activity)` for every output frame it
+    /// completes (positions on `skeleton`, activity in rad/s).
+    ///
+    /// # Errors
+    /// [`ImuError::SkeletonMismatch`] if `skeleton` is not the one given to
+    /// [`ImuAdapter::new`], [`ImuError::UnknownSensor`], or [`ImuError::Sample`] for a sample
+    /// that is saturated (dropped; but once tracking, a saturated accelerometer is no error
+    /// and the gyro is used), out of time order (dropped), or that follows a gap longer than
+    /// [`fusion::MAX_STEP_US`] (its time is kept so the next sample is used, and its sensor's
+    /// orientation is held over the gap).
+    pub fn push(
+        &mut self,
+        skeleton: &Skeleton,
+        sample: &posecoach_core::wire::ImuSample,
+        mut emit: impl FnMut(&[Vec3], f32),
+    ) -> Result<(), ImuError> {
+        let matches = skeleton.len() == usize::from(self.joints)
+            && self
+                .tracks()
+                .iter()
+                .all(|t| skeleton.joint(usize::from(t.index)) == Some(t.joint));
+        if !matches {
+            return Err(ImuError::SkeletonMismatch);
+        }
+        let sensor = sample.sensor;
+        let t = self
+            .tracks()
+            .iter()
+            .position(|t| t.sensor == sensor)
+            .ok_or(ImuError::UnknownSensor { sensor })?;
+        let fail = |error| ImuError::Sample { sensor, error };
+        let reading = match Reading::from_wire(sample) {
+            // Arms and clubs pass the accelerometer's range in a swing; tracking needs only
+            // the gyro then.
+            Err(FusionError::SaturatedAccel { .. }) if self.is_tracking() => {
+                Reading::without_accel(sample)
+            }
+            reading => reading,
+        }
+        .map_err(fail)?;
+        let t_us = sample.t_us;
+        let step = match self.tracks[t].last_us {
+            Some(previous) => match fusion::time_step(previous, t_us) {
+                Err(e @ FusionError::TimeNotIncreasing { .. }) => return Err(fail(e)),
+                step => Some(step),
+            },
+            None => None,
+        };
+        self.tracks[t].last_us = Some(t_us);
+        let result = match self.phase {
+            Phase::Calibrating(start) => self.calibrate(t, &reading, start, t_us),
+            Phase::Tracking { .. } => {
+                let dt = step.and_then(Result::ok);
+                self.track(t, &reading, dt, t_us);
+                self.emit_ready(skeleton, &mut emit);
+                Ok(())
+            }
+        };
+        match step {
+            Some(Err(e)) => Err(fail(e)),
+            _ => result.map_err(fail),
+        }
+    }
+
+    fn tracks(&self) -> &[Track] {
+        &self.tracks[..usize::from(self.len)]
+    }
+
+    /// Adds a reading to the still period, starting it over if the reading is not still, and
+    /// calibrates every sensor once the period is long enough and each sensor is in it.
+    fn calibrate(
+        &mut self,
+        t: usize,
+        reading: &Reading,
+        start: Option<u64>,
+        t_us: u64,
+    ) -> Result<(), FusionError> {
+        let start = match start {
+            Some(start) if StillPeriod::is_still(reading) => start,
+            _ => {
+                for track in &mut self.tracks {
+                    track.still = StillPeriod::new();
+                }
+                t_us
+            }
+        };
+        self.phase = Phase::Calibrating(Some(start));
+        if !StillPeriod::is_still(reading) {
+            return Ok(());
+        }
+        self.tracks[t].still.push(reading);
+        let origin_us = start.saturating_add(CALIBRATION_US);
+        if t_us < origin_us || self.tracks().iter().any(|t| t.still.samples() == 0) {
+            return Ok(());
+        }
+        self.finish_calibration()?;
+        self.phase = Phase::Tracking { origin_us, next: 1 };
+        Ok(())
+    }
+
+    /// Biases, filters and sensor-to-segment offsets from the still T-pose.
+    fn finish_calibration(&mut self) -> Result<(), FusionError> {
+        let gains = self.gains;
+        let len = usize::from(self.len);
+        for track in &mut self.tracks[..len] {
+            track.filter = track.still.filter(gains)?;
+            track.bias = track.still.gyro_bias();
+        }
+        // In the T-pose the filter reads `yaw · mounting`: compare it with the nominal one.
+        let heading = |t: &Track| t.filter.orientation() * t.nominal.inverse();
+        let magnetic = heading_fit(
+            self.tracks()
+                .iter()
+                .filter(|t| t.filter.is_magnetic())
+                .map(heading),
+        );
+        for track in &mut self.tracks[..len] {
+            let yaw = if track.filter.is_magnetic() {
+                magnetic
+            } else {
+                heading_fit(core::iter::once(heading(track)))
+            };
+            track.left = yaw.inverse();
+            track.right = track.filter.orientation().inverse() * yaw;
+            track.snapshot = None;
+        }
+        self.activity = 0.0;
+        Ok(())
+    }
+
+    /// Updates a sensor's filter (over `dt` seconds, or holds it after a gap) and records its
+    /// orientation at the pending output time if this sample passed it.
+    fn track(&mut self, t: usize, reading: &Reading, dt: Option<f32>, t_us: u64) {
+        let due = self.output_time();
+        let track = &mut self.tracks[t];
+        let before = track.filter.orientation();
+        let gyro = reading.gyro - track.bias;
+        if let Some(dt) = dt {
+            track.filter.update(gyro, reading.accel, reading.mag, dt);
+            if track.activity {
+                self.activity = self.activity.max(gyro.norm());
+            }
+        }
+        if track.snapshot.is_none() && t_us >= due {
+            let after = track.filter.orientation();
+            track.snapshot = Some(match dt {
+                Some(dt) => {
+                    let behind = (t_us - due) as f32 * 1e-6;
+                    interpolate(before, after, 1.0 - behind / dt)
+                }
+                None => after,
+            });
+        }
+    }
+
+    /// Emits every output frame all sensors have passed. Grid times that every sensor is
+    /// already past (a gap in all their streams) are skipped rather than repeated.
+    fn emit_ready(&mut self, skeleton: &Skeleton, emit: &mut impl FnMut(&[Vec3], f32)) {
+        while self.tracks().iter().all(|t| t.snapshot.is_some()) {
+            self.emit_frame(skeleton, emit);
+            let latest = self.tracks().iter().filter_map(|t| t.last_us).min();
+            if let (Phase::Tracking { origin_us, next }, Some(latest)) = (&mut self.phase, latest) {
+                let passed = latest
+                    .saturating_sub(*origin_us)
+                    .saturating_mul(self.rate_mhz)
+                    / MHZ_US;
+                *next = (*next + 1).max(passed);
+            }
+            let due = self.output_time();
+            let len = usize::from(self.len);
+            for track in &mut self.tracks[..len] {
+                track.snapshot = track
+                    .last_us
+                    .filter(|&last| last >= due)
+                    .map(|_| track.filter.orientation());
+            }
+        }
+    }
+
+    /// Time of the pending output frame, microseconds (`u64::MAX` before tracking).
+    fn output_time(&self) -> u64 {
+        match self.phase {
+            Phase::Calibrating(_) => u64::MAX,
+            Phase::Tracking { origin_us, next } => {
+                origin_us.saturating_add(next.saturating_mul(MHZ_US) / self.rate_mhz.max(1))
+            }
+        }
+    }
+
+    fn emit_frame(&mut self, skeleton: &Skeleton, emit: &mut impl FnMut(&[Vec3], f32)) {
+        let n = skeleton.len();
+        let mut global = [Quat::identity(); MAX_JOINTS];
+        let mut local = [Quat::identity(); MAX_JOINTS];
+        for k in 0..n {
+            let parent = skeleton.parent(k).map_or(Quat::identity(), |p| global[p]);
+            global[k] = match self.tracks.get(usize::from(self.sensed[k])) {
+                Some(track) => {
+                    let q = track.snapshot.unwrap_or_else(|| track.filter.orientation());
+                    track.left * q * track.right
+                }
+                None if self.planted & (1 << k) != 0 => Quat::identity(),
+                None => parent,
+            };
+            local[k] = parent.inverse() * global[k];
+        }
+        let mut positions = [Vec3::zeros(); MAX_JOINTS];
+        if forward(skeleton, &local[..n], self.root, &mut positions[..n]).is_ok() {
+            emit(&positions[..n], self.activity);
+        }
+        self.activity = 0.0;
+    }
+}
+
+/// The rotation about +Y closest to all of `rotations` (least squares over their quaternions'
+/// `w` and `y` parts, sign-free); the identity for none.
+fn heading_fit(rotations: impl Iterator<Item = Quat>) -> Quat {
+    let (mut ww, mut yy, mut wy) = (0.0f32, 0.0f32, 0.0f32);
+    for q in rotations {
+        ww += q.w * q.w;
+        yy += q.j * q.j;
+        wy += q.w * q.j;
+    }
+    let half = 0.5 * libm::atan2f(2.0 * wy, ww - yy);
+    Quat::from_axis_angle(&Vec3::y_axis(), 2.0 * half)
+}
+
+/// The rotation a fraction `f` of the way from `a` to `b` (shortest arc).
+fn interpolate(a: Quat, b: Quat, f: f32) -> Quat {
+    a * Quat::from_scaled_axis((a.inverse() * b).scaled_axis() * f.clamp(0.0, 1.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use posecoach_core::format::Format;
+    use posecoach_core::wire::{ImuSample, SensorPlacement};
+    use std::vec::Vec;
+
+    const STEP_US: u64 = 5_000;
+    const IDENTITY_Q14: [i16; 4] = [16384, 0, 0, 0];
+    const TOLERANCE_M: f32 = 1e-4;
+
+    fn skeleton() -> Skeleton {
+        Format::H36m17.default_skeleton().unwrap()
+    }
+
+    fn layout(joints: &[(u8, Joint)]) -> SensorLayout {
+        SensorLayout {
+            sensors: joints
+                .iter()
+                .map(|&(sensor, joint)| SensorPlacement {
+                    sensor,
+                    joint,
+                    mounting_q14: IDENTITY_Q14,
+                })
+                .collect(),
+        }
+    }
+
+    fn still(sensor: u8, k: u64) -> ImuSample {
+        ImuSample {
+            sensor,
+            t_us: k * STEP_US,
+            accel_mg: [0, 1000, 0],
+            gyro_ddps: [0, 0, 0],
+            mag_dut: None,
+        }
+    }
+
+    fn pelvis_and_wrist() -> SensorLayout {
+        layout(&[(3, Joint::Pelvis), (7, Joint::LeftWrist)])
+    }
+
+    #[test]
+    fn bad_layouts_and_rates_are_refused() {
+        let s = skeleton();
+        let ok = pelvis_and_wrist();
+        assert_eq!(
+            ImuAdapter::new(&layout(&[]), &s, 60.0).err(),
+            Some(ImuError::EmptyLayout)
+        );
+        assert_eq!(
+            ImuAdapter::new(&layout(&[(1, Joint::ClubHead)]), &s, 60.0).err(),
+            Some(ImuError::MissingJoint {
+                sensor: 1,
+                joint: Joint::ClubHead
+            })
+        );
+        let twice = layout(&[(1, Joint::Pelvis), (1, Joint::Thorax)]);
+        assert_eq!(
+            ImuAdapter::new(&twice, &s, 60.0).err(),
+            Some(ImuError::DuplicateSensor { sensor: 1 })
+        );
+        let mut zero = ok.clone();
+        zero.sensors[1].mounting_q14 = [0; 4];
+        assert_eq!(
+            ImuAdapter::new(&zero, &s, 60.0).err(),
+            Some(ImuError::Mounting { sensor: 7 })
+        );
+        for rate_hz in [0.0, -60.0, 5000.0] {
+            assert_eq!(
+                ImuAdapter::new(&ok, &s, rate_hz).err(),
+                Some(ImuError::Rate { rate_hz })
+            );
+        }
+        assert!(ImuAdapter::new(&ok, &s, f32::NAN).is_err());
+    }
+
+    #[test]
+    fn a_still_t_pose_gives_the_rest_pose_after_calibration() {
+        let s = skeleton();
+        let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 50.0).unwrap();
+        let mut rest = [Vec3::zeros(); 17];
+        s.rest_positions(&mut rest);
+        let mut frames = 0;
+        for k in 0..300 {
+            for sensor in [3, 7] {
+                adapter
+                    .push(&s, &still(sensor, k), |p, activity| {
+                        frames += 1;
+                        assert_eq!(activity, 0.0);
+                        for (a, b) in p.iter().zip(&rest) {
+                            assert!((a - b).norm() < TOLERANCE_M);
+                        }
+                    })
+                    .unwrap();
+            }
+            assert_eq!(adapter.is_tracking(), k >= 200);
+        }
+        // 1.495 s: calibration to 1 s, then a frame every 20 ms.
+        assert_eq!(frames, 24);
+    }
+
+    #[test]
+    fn motion_restarts_calibration() {
+        let s = skeleton();
+        let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 60.0).unwrap();
+        for k in 0..400 {
+            for sensor in [3, 7] {
+                let mut sample = still(sensor, k);
+                if k == 150 {
+                    sample.gyro_ddps = [0, 300, 0];
+                }
+                adapter.push(&s, &sample, |_, _| {}).unwrap();
+            }
+            assert_eq!(adapter.is_tracking(), k >= 350, "{k}");
+        }
+    }
+
+    #[test]
+    fn a_turning_pelvis_turns_the_body_and_the_wrist_gives_activity() {
+        let s = skeleton();
+        let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 100.0).unwrap();
+        let (rate_ddps, turn_samples) = (900i16, 100u64);
+        let mut last = Vec::new();
+        let mut activity = 0.0f32;
+        // Calibration ends with the samples at 1 s, then both sensors turn.
+        for k in 0..=200 + turn_samples {
+            for sensor in [3, 7] {
+                let mut sample = still(sensor, k);
+                if k > 200 {
+                    sample.gyro_ddps = [0, rate_ddps, 0];
+                }
+                adapter
+                    .push(&s, &sample, |p, a| {
+                        last = p.to_vec();
+                        activity = a;
+                    })
+                    .unwrap();
+            }
+        }
+        // The pelvis turned 90 °/s for 0.5 s about up, and the body with it.
+        let turned = (f32::from(rate_ddps) / 10.0 * 0.5).to_radians();
+        let mut rest = [Vec3::zeros(); 17];
+        s.rest_positions(&mut rest);
+        let shoulder = s.index_of(Joint::LeftShoulder).unwrap();
+        let expected = Quat::from_axis_angle(&Vec3::y_axis(), turned) * (rest[shoulder] - rest[0]);
+        // The last frame is at most one 10 ms period before the last sample.
+        let tolerance = (f32::from(rate_ddps) / 10.0 * 0.01).to_radians();
+        assert!((last[shoulder] - last[0]).angle(&expected) <= tolerance);
+        assert!((activity - f32::from(rate_ddps).to_radians() / 10.0).abs() < 1e-3);
+        let rotation = adapter.segment_rotation(3).unwrap();
+        assert!((rotation.angle() - turned).abs() < 1e-3);
+        assert_eq!(adapter.segment_rotation(9), None);
+    }
+
+    #[test]
+    fn bad_samples_are_errors_and_the_adapter_carries_on() {
+        let s = skeleton();
+        let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 60.0).unwrap();
+        let other = Format::Coco17.default_skeleton().unwrap();
+        assert_eq!(
+            adapter.push(&other, &still(3, 0), |_, _| {}),
+            Err(ImuError::SkeletonMismatch)
+        );
+        assert_eq!(
+            adapter.push(&s, &still(4, 0), |_, _| {}),
+            Err(ImuError::UnknownSensor { sensor: 4 })
+        );
+        adapter.push(&s, &still(3, 1), |_, _| {}).unwrap();
+        let sample_error = |error| Err(ImuError::Sample { sensor: 3, error });
+        assert_eq!(
+            adapter.push(&s, &still(3, 1), |_, _| {}),
+            sample_error(FusionError::TimeNotIncreasing {
+                previous_us: STEP_US,
+                t_us: STEP_US
+            })
+        );
+        let saturated = ImuSample {
+            accel_mg: [0, i16::MAX, 0],
+            ..still(3, 2)
+        };
+        assert_eq!(
+            adapter.push(&s, &saturated, |_, _| {}),
+            sample_error(FusionError::SaturatedAccel { axis: 1 })
+        );
+        let late = 2 * STEP_US + fusion::MAX_STEP_US;
+        assert_eq!(
+            adapter.push(&s, &still(3, late / STEP_US), |_, _| {}),
+            sample_error(FusionError::TimeStep {
+                step_us: late - STEP_US,
+                max_us: fusion::MAX_STEP_US
+            })
+        );
+        let mut frames = 0;
+        for k in late / STEP_US + 1..late / STEP_US + 400 {
+            for sensor in [3, 7] {
+                adapter
+                    .push(&s, &still(sensor, k), |_, _| frames += 1)
+                    .unwrap();
+            }
+        }
+        assert!(adapter.is_tracking() && frames > 0);
+    }
+}
