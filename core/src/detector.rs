@@ -28,21 +28,23 @@ use crate::Vec3;
 /// Hand speed is measured over this long a stretch of frames.
 pub const SPEED_WINDOW_S: f32 = 0.1;
 
-/// Thresholds of the detector.
+/// Thresholds of the detector. The speeds are of its activity signal: the hands' speed in m/s
+/// for [`SwingDetector::push`], the caller's measure (rad/s for gyros) for
+/// [`SwingDetector::push_with_activity`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DetectorConfig {
     /// Frame rate of the stream.
     pub rate_hz: f32,
-    /// Hand speed that opens a candidate, m/s.
+    /// Activity that opens a candidate.
     pub open_speed: f32,
-    /// Hand speed under which the hands count as settled, m/s.
+    /// Activity under which the hands count as settled.
     pub close_speed: f32,
     /// How long the hands must stay settled to close a candidate, seconds.
     pub settle_s: f32,
     /// History kept before the opening (the set-up and the start of the takeaway), seconds.
     pub pre_s: f32,
-    /// A swing's hands must peak above this speed, m/s.
+    /// A swing's activity must peak above this.
     pub min_peak_speed: f32,
     /// A swing's hands must rise at least this much, metres.
     pub min_rise: f32,
@@ -61,6 +63,18 @@ impl DetectorConfig {
             pre_s: 1.0,
             min_peak_speed: 3.5,
             min_rise: 0.6,
+        }
+    }
+
+    /// Full swings at `rate_hz` from the wrist sensors' angular speed in rad/s (to
+    /// [`SwingDetector::push_with_activity`]): on synthetic wrist IMUs a driver and an iron
+    /// peak at 25-33 rad/s, walking and practice half swings at 3-5, waggles at about 1.
+    pub const fn gyro_swing(rate_hz: f32) -> DetectorConfig {
+        DetectorConfig {
+            open_speed: 2.5,
+            close_speed: 1.0,
+            min_peak_speed: 10.0,
+            ..DetectorConfig::full_swing(rate_hz)
         }
     }
 }
@@ -220,12 +234,38 @@ impl<'s> SwingDetector<'s> {
         (self.storage[at + self.wrists[0]] + self.storage[at + self.wrists[1]]) * 0.5
     }
 
-    /// Takes the next frame; returns a window when it closes a swing.
+    /// Takes the next frame; returns a window when it closes a swing. Activity is the hands'
+    /// speed over [`SPEED_WINDOW_S`].
     ///
     /// # Errors
     /// [`DetectorError::Frame`] for a frame of the wrong length or with a non-finite position
     /// (it is not stored).
     pub fn push(&mut self, frame: &[Vec3]) -> Result<Option<SwingWindow>, DetectorError> {
+        self.step(frame, None)
+    }
+
+    /// As [`SwingDetector::push`], with the activity measured by the caller: for IMUs, the
+    /// angular speed of the wrist or club sensors in rad/s (the thresholds of
+    /// [`DetectorConfig::gyro_swing`]).
+    ///
+    /// # Errors
+    /// As [`SwingDetector::push`], and [`DetectorError::Frame`] for a non-finite activity.
+    pub fn push_with_activity(
+        &mut self,
+        frame: &[Vec3],
+        activity: f32,
+    ) -> Result<Option<SwingWindow>, DetectorError> {
+        if !activity.is_finite() {
+            return Err(DetectorError::Frame);
+        }
+        self.step(frame, Some(activity))
+    }
+
+    fn step(
+        &mut self,
+        frame: &[Vec3],
+        activity: Option<f32>,
+    ) -> Result<Option<SwingWindow>, DetectorError> {
         if frame.len() != self.joints || !frame.iter().all(|p| p.iter().all(|v| v.is_finite())) {
             return Err(DetectorError::Frame);
         }
@@ -236,10 +276,10 @@ impl<'s> SwingDetector<'s> {
 
         let rate = self.config.rate_hz;
         let lag = ((SPEED_WINDOW_S * rate) as u64).max(1).min(now);
-        let speed = if lag == 0 {
-            0.0
-        } else {
-            (self.hands(now) - self.hands(now - lag)).norm() * rate / lag as f32
+        let speed = match activity {
+            Some(a) => a,
+            None if lag == 0 => 0.0,
+            None => (self.hands(now) - self.hands(now - lag)).norm() * rate / lag as f32,
         };
         let height = self.hands(now).y;
         let c = self.config;
