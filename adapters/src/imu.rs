@@ -58,7 +58,7 @@
 use crate::fusion::{self, FusionError, Gains, Mahony, Reading, StillPeriod};
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::joint::Joint;
-use posecoach_core::kinematics::forward;
+use posecoach_core::kinematics::{forward, inverse};
 use posecoach_core::skeleton::{Segment, Skeleton};
 use posecoach_core::wire::{SensorLayout, MAX_SENSORS};
 use posecoach_core::{Quat, Vec3};
@@ -489,25 +489,74 @@ impl ImuAdapter {
 
     fn emit_frame(&mut self, skeleton: &Skeleton, emit: &mut impl FnMut(&[Vec3], f32)) {
         let n = skeleton.len();
+        let mut positions = [Vec3::zeros(); MAX_JOINTS];
+        let sensed = |k: usize| {
+            let track = self.tracks.get(usize::from(self.sensed[k]))?;
+            let q = track.snapshot.unwrap_or_else(|| track.filter.orientation());
+            Some(track.left * q * track.right)
+        };
+        if self.compose(skeleton, sensed, &mut positions[..n]) {
+            emit(&positions[..n], self.activity);
+        }
+        self.activity = 0.0;
+    }
+
+    /// `frame` (positions on `skeleton`) as these sensors would see it: sensed bones keep
+    /// their rotation, the others follow the tracking rules and the root goes to its rest
+    /// position. An IMU session's swings are scored against a coach seen this way, so that
+    /// what no sensor measures is not held against the student.
+    ///
+    /// # Errors
+    /// [`ImuError::SkeletonMismatch`] if `skeleton` is not the one given to
+    /// [`ImuAdapter::new`] or `frame` or `out` is shorter than it.
+    pub fn view(
+        &self,
+        skeleton: &Skeleton,
+        frame: &[Vec3],
+        out: &mut [Vec3],
+    ) -> Result<(), ImuError> {
+        let n = skeleton.len();
+        if n != usize::from(self.joints) || out.len() < n {
+            return Err(ImuError::SkeletonMismatch);
+        }
+        let mut local = [Quat::identity(); MAX_JOINTS];
+        inverse(skeleton, frame, &mut local[..n]).map_err(|_| ImuError::SkeletonMismatch)?;
+        let mut global = [Quat::identity(); MAX_JOINTS];
+        for k in 0..n {
+            let parent = skeleton.parent(k).map_or(Quat::identity(), |p| global[p]);
+            global[k] = parent * local[k];
+        }
+        let sensed = |k: usize| {
+            self.tracks
+                .get(usize::from(self.sensed[k]))
+                .map(|_| global[k])
+        };
+        self.compose(skeleton, sensed, &mut out[..n])
+            .then_some(())
+            .ok_or(ImuError::SkeletonMismatch)
+    }
+
+    /// Positions from the global rotations of the sensed bones (`sensed(k)`, `None` for an
+    /// unsensed joint): planted legs keep the T-pose, other bones follow their parent.
+    fn compose(
+        &self,
+        skeleton: &Skeleton,
+        sensed: impl Fn(usize) -> Option<Quat>,
+        out: &mut [Vec3],
+    ) -> bool {
+        let n = skeleton.len();
         let mut global = [Quat::identity(); MAX_JOINTS];
         let mut local = [Quat::identity(); MAX_JOINTS];
         for k in 0..n {
             let parent = skeleton.parent(k).map_or(Quat::identity(), |p| global[p]);
-            global[k] = match self.tracks.get(usize::from(self.sensed[k])) {
-                Some(track) => {
-                    let q = track.snapshot.unwrap_or_else(|| track.filter.orientation());
-                    track.left * q * track.right
-                }
+            global[k] = match sensed(k) {
+                Some(q) => q,
                 None if self.planted & (1 << k) != 0 => Quat::identity(),
                 None => parent,
             };
             local[k] = parent.inverse() * global[k];
         }
-        let mut positions = [Vec3::zeros(); MAX_JOINTS];
-        if forward(skeleton, &local[..n], self.root, &mut positions[..n]).is_ok() {
-            emit(&positions[..n], self.activity);
-        }
-        self.activity = 0.0;
+        forward(skeleton, &local[..n], self.root, out).is_ok()
     }
 }
 

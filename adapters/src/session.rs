@@ -12,9 +12,15 @@
 //! swing in progress. Every buffer belongs to the caller ([`Buffers`], sized by
 //! [`BufferLens::new`]); nothing allocates and nothing panics.
 //!
+//! With a `SensorLayout` the session takes IMU samples instead: the [`ImuAdapter`] fuses them
+//! into frames on the student's skeleton (after a still T-pose for calibration), and the
+//! detector is driven by the wrist sensors' angular speed.
+//!
 //! Only full swings are detected (the detector wants the hands fast and high); putts are scored
 //! from files on the host.
 
+use crate::fusion::FusionError;
+use crate::imu::{ImuAdapter, ImuError};
 use crate::pose_stream::{PoseStream, StreamConfig, StreamCounters, StreamError, StreamEvent};
 use core::ops::Range;
 use posecoach_core::config::MAX_SWING_FRAMES;
@@ -24,7 +30,7 @@ use posecoach_core::format::Format;
 use posecoach_core::retarget::Analytic;
 use posecoach_core::score::{self, Report, ScoreError};
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
-use posecoach_core::wire::{Config, Message, PoseFrame, StudentProfile};
+use posecoach_core::wire::{Config, ImuSample, Message, PoseFrame, SensorLayout, StudentProfile};
 use posecoach_core::{config::MAX_JOINTS, Vec3};
 
 /// Settings until a `Config` message arrives.
@@ -137,7 +143,7 @@ pub enum Outcome<'r> {
 }
 
 /// Why a message was refused.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Refusal {
     /// Pose frames before any `StudentProfile`.
@@ -160,6 +166,10 @@ pub enum Refusal {
     Retarget,
     /// No swing found in the coach reference on the student's body.
     CoachSwing(EventError),
+    /// IMU samples before a `SensorLayout`, or pose frames after one.
+    Input,
+    /// The layout does not fit the student, or a sample is degenerate.
+    Imu(ImuError),
 }
 
 impl core::fmt::Display for Refusal {
@@ -183,6 +193,10 @@ impl core::fmt::Display for Refusal {
             Refusal::Stream(e) => write!(f, "pose stream: {e}"),
             Refusal::Retarget => f.write_str("the coach cannot be retargeted onto the student"),
             Refusal::CoachSwing(e) => write!(f, "the coach reference on this student: {e}"),
+            Refusal::Input => f.write_str(
+                "IMU samples before a sensor layout, or pose frames in a session with IMUs",
+            ),
+            Refusal::Imu(e) => write!(f, "IMU: {e}"),
         }
     }
 }
@@ -199,6 +213,8 @@ struct Student<'b> {
     t0_us: Option<u64>,
     /// The virtual coach's swing: frames from its set-up to its finish.
     coach_swing: Range<usize>,
+    /// The IMUs' fusion, in a session with a sensor layout.
+    imu: Option<ImuAdapter>,
 }
 
 /// One session; see the [module documentation](self).
@@ -208,6 +224,7 @@ pub struct Session<'b> {
     config: Config,
     coach: u16,
     profile: Option<Skeleton>,
+    layout: Option<SensorLayout>,
     student: Option<Student<'b>>,
     /// The ring while no detector holds it.
     spare: &'b mut [Vec3],
@@ -219,6 +236,8 @@ pub struct Session<'b> {
     report: Option<Report>,
     /// Counters of the pose streams before the current one.
     counted: StreamCounters,
+    /// IMU samples not newer than their sensor's last one.
+    stale: u32,
 }
 
 impl<'b> Session<'b> {
@@ -229,6 +248,7 @@ impl<'b> Session<'b> {
             config: DEFAULT_CONFIG,
             coach: 0,
             profile: None,
+            layout: None,
             student: None,
             spare: buffers.ring,
             window: buffers.window,
@@ -238,6 +258,7 @@ impl<'b> Session<'b> {
             swings: 0,
             report: None,
             counted: StreamCounters::default(),
+            stale: 0,
         }
     }
 
@@ -253,6 +274,12 @@ impl<'b> Session<'b> {
             total.add(&s.stream.counters());
         }
         total
+    }
+
+    /// IMU samples dropped for not being newer than their sensor's last one (repeated or late
+    /// on the link); they are not refusals.
+    pub fn stale_samples(&self) -> u32 {
+        self.stale
     }
 
     /// The student's skeleton, once a profile has been taken.
@@ -280,7 +307,11 @@ impl<'b> Session<'b> {
                     self.reconfigure(|s| &mut s.coach, *coach).err()
                 }
             }
+            Message::SensorLayout(layout) => self
+                .reconfigure(|s| &mut s.layout, Some(layout.clone()))
+                .err(),
             Message::PoseFrame(frame) => self.pose(frame, &mut on).err(),
+            Message::ImuSample(sample) => self.imu(sample, &mut on).err(),
             _ => None,
         };
         if let Some(r) = refusal {
@@ -337,7 +368,10 @@ impl<'b> Session<'b> {
             .ok_or(Refusal::UnknownCoach(self.coach))?;
         let rate = self.config.model_rate_hz;
         let joints = skeleton.len();
-        let detector = DetectorConfig::full_swing(f32::from(rate));
+        let detector = match self.layout {
+            Some(_) => DetectorConfig::gyro_swing(f32::from(rate)),
+            None => DetectorConfig::full_swing(f32::from(rate)),
+        };
         let ring = match self.student.take() {
             Some(s) => {
                 self.counted.add(&s.stream.counters());
@@ -369,13 +403,32 @@ impl<'b> Session<'b> {
                 Ok(())
             })
             .and_then(|()| {
+                let imu = self
+                    .layout
+                    .as_ref()
+                    .map(|layout| ImuAdapter::new(layout, &skeleton, f32::from(rate)))
+                    .transpose()
+                    .map_err(Refusal::Imu)?;
+                if let Some(imu) = &imu {
+                    // The coach as the student's IMUs would see them.
+                    for frame in self
+                        .virtual_coach
+                        .chunks_exact_mut(joints)
+                        .take(coach.frames())
+                    {
+                        let mut seen = [Vec3::zeros(); MAX_JOINTS];
+                        imu.view(&skeleton, frame, &mut seen)
+                            .map_err(Refusal::Imu)?;
+                        frame.copy_from_slice(&seen[..joints]);
+                    }
+                }
                 let frames = &self.virtual_coach[..coach.frames() * joints];
                 let swing =
                     swing_span(&skeleton, frames, coach.rate_hz).map_err(Refusal::CoachSwing)?;
                 let stream = PoseStream::new(StreamConfig::new(rate)).map_err(Refusal::Stream)?;
-                Ok((stream, swing))
+                Ok((stream, swing, imu))
             });
-        let (stream, coach_swing) = match checked {
+        let (stream, coach_swing, imu) = match checked {
             Ok(done) => done,
             Err(e) => {
                 self.spare = ring;
@@ -390,12 +443,16 @@ impl<'b> Session<'b> {
             detector,
             t0_us: None,
             coach_swing,
+            imu,
         });
         Ok(())
     }
 
     fn pose(&mut self, frame: &PoseFrame, on: &mut impl FnMut(Outcome<'_>)) -> Result<(), Refusal> {
         let student = self.student.as_mut().ok_or(Refusal::NoProfile)?;
+        if student.imu.is_some() {
+            return Err(Refusal::Input);
+        }
         if student.source.is_none() {
             student.source = Some(stream_skeleton(&student.skeleton, frame.format)?);
         }
@@ -434,6 +491,40 @@ impl<'b> Session<'b> {
             self.score(window, t0, rate, on);
         }
         Ok(())
+    }
+
+    fn imu(&mut self, sample: &ImuSample, on: &mut impl FnMut(Outcome<'_>)) -> Result<(), Refusal> {
+        let student = self.student.as_mut().ok_or(Refusal::NoProfile)?;
+        let Student {
+            skeleton,
+            detector,
+            t0_us,
+            imu,
+            ..
+        } = student;
+        let adapter = imu.as_mut().ok_or(Refusal::Input)?;
+        let mut closed: Option<(SwingWindow, u64)> = None;
+        let pushed = adapter
+            .push(skeleton, sample, |positions, activity| {
+                let t0 = *t0_us.get_or_insert(sample.t_us);
+                if let Ok(Some(window)) = detector.push_with_activity(positions, activity) {
+                    closed = Some((window, t0));
+                }
+            })
+            .or_else(|e| match e {
+                ImuError::Sample {
+                    error: FusionError::TimeNotIncreasing { .. },
+                    ..
+                } => {
+                    self.stale += 1;
+                    Ok(())
+                }
+                e => Err(Refusal::Imu(e)),
+            });
+        if let Some((window, t0)) = closed {
+            self.score(window, t0, f32::from(self.config.model_rate_hz), on);
+        }
+        pushed
     }
 
     /// Scores a closed window.
