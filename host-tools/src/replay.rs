@@ -119,6 +119,7 @@ pub fn replay(log: &[u8]) -> Result<Replay> {
         "pose_accepted": stream.accepted, "pose_duplicates": stream.duplicates,
         "pose_out_of_order": stream.out_of_order, "pose_gaps": stream.gaps,
         "pose_masked": stream.masked, "frames_at_model_rate": stream.emitted,
+        "imu_stale": session.stale_samples(),
     });
     if swings.is_empty() {
         text.push_str("no swing found\n");

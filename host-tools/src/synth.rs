@@ -4,11 +4,14 @@
 //! (IMU calibration), optional walking up to the ball, then per swing a set-up, a waggle, the
 //! swing, a return to the set-up and, between swings, a practice half swing. It is then
 //! recorded the way a phone's pose estimator sends it (pose frames at `--rate` with capture
-//! jitter, keypoint noise, unsure keypoints and lost frames), behind the `StudentProfile`,
-//! `Config` and `CoachSelect` messages, as a `.pclog`. A sidecar `NAME.swings.json` lists the
+//! jitter, keypoint noise, unsure keypoints and lost frames) or, with `--imu-rate`, as body-worn
+//! IMUs send it (a `SensorLayout`, then samples from the segments' motion with bias, noise and
+//! misplaced straps), behind the `StudentProfile`, `Config` and `CoachSelect` messages, as a
+//! `.pclog`. A sidecar `NAME.swings.json` lists the
 //! swings and their events (from the clean motion) in seconds of the recording; as the golfer
 //! stands still at address from `still_from_s`, an address found anywhere after that is right.
 
+use crate::synth_imu::{self, ImuNoise};
 use anyhow::{bail, Context, Result};
 use posecoach_adapters::io::{self, csv, Motion};
 use posecoach_adapters::log;
@@ -55,7 +58,14 @@ pub struct Args {
     /// Capture-time jitter, ms (uniform, plus or minus).
     #[arg(long, default_value_t = 4.0)]
     jitter_ms: f32,
-    /// Share of frames lost before they reach the device.
+    /// Record IMUs at this rate (200 to 1000 Hz) instead of pose frames: sensors on the
+    /// pelvis, chest, upper arms and wrists, with bias, noise and misplaced straps.
+    #[arg(long)]
+    imu_rate: Option<f32>,
+    /// IMUs without magnetometers.
+    #[arg(long)]
+    no_mag: bool,
+    /// Share of frames (or IMU samples) lost before they reach the device.
     #[arg(long, default_value_t = 0.03)]
     drop: f64,
     /// Model rate the recording asks the device for (its `Config`).
@@ -134,6 +144,12 @@ impl Timeline {
 }
 
 pub fn run(args: &Args) -> Result<String> {
+    if args
+        .imu_rate
+        .is_some_and(|r| !(200.0..=1000.0).contains(&r))
+    {
+        bail!("--imu-rate must be between 200 and 1000 Hz");
+    }
     if !(10.0..=120.0).contains(&args.rate) {
         bail!(
             "--rate {} must be between 10 and 120 frames per second",
@@ -193,19 +209,23 @@ pub fn run(args: &Args) -> Result<String> {
     ] {
         push_frame(&mut bytes, &m)?;
     }
-    let sent = record_pose(
-        &timeline,
-        format,
-        &keypoint_joints,
-        args,
-        &mut rng,
-        &mut bytes,
-    )?;
+    let sent = match args.imu_rate {
+        Some(rate) => record_imu(&timeline, &body, rate, args, &mut rng, &mut bytes)?,
+        None => record_pose(
+            &timeline,
+            format,
+            &keypoint_joints,
+            args,
+            &mut rng,
+            &mut bytes,
+        )?,
+    };
     std::fs::write(&args.out, &bytes).with_context(|| format!("writing {}", args.out.display()))?;
     let sidecar = sidecar_path(&args.out);
     let doc = json!({
         "log": args.out.file_name().map(|n| n.to_string_lossy().into_owned()),
-        "kind": "pose", "rate_hz": args.rate, "seed": args.seed, "noise_mm": args.noise_mm,
+        "kind": if args.imu_rate.is_some() { "imu" } else { "pose" },
+        "rate_hz": args.imu_rate.unwrap_or(args.rate), "magnetometers": args.imu_rate.map(|_| !args.no_mag), "seed": args.seed, "noise_mm": args.noise_mm,
         "jitter_ms": args.jitter_ms, "drop": args.drop,
         "duration_s": timeline.frames() as f32 / TIMELINE_HZ,
         "swings": expected,
@@ -213,9 +233,14 @@ pub fn run(args: &Args) -> Result<String> {
     std::fs::write(&sidecar, format!("{doc:#}\n"))
         .with_context(|| format!("writing {}", sidecar.display()))?;
     Ok(format!(
-        "wrote {} ({} bytes, {sent} pose frames over {:.1} s, {} swings) and {}\n",
+        "wrote {} ({} bytes, {sent} {} over {:.1} s, {} swings) and {}\n",
         args.out.display(),
         bytes.len(),
+        if args.imu_rate.is_some() {
+            "IMU samples"
+        } else {
+            "pose frames"
+        },
         timeline.frames() as f32 / TIMELINE_HZ,
         swings.len(),
         sidecar.display()
@@ -392,6 +417,38 @@ fn record_pose(
             confidence,
         };
         push_frame(bytes, &Message::PoseFrame(frame))?;
+        sent += 1;
+    }
+    Ok(sent)
+}
+
+/// Appends the sensor layout and the IMU samples of `timeline` at `rate_hz`; returns how many
+/// samples were sent.
+fn record_imu(
+    timeline: &Timeline,
+    body: &Motion,
+    rate_hz: f32,
+    args: &Args,
+    rng: &mut ChaCha8Rng,
+    bytes: &mut Vec<u8>,
+) -> Result<usize> {
+    let motion = Motion {
+        skeleton: body.skeleton.clone(),
+        names: body.names.clone(),
+        rate_hz: TIMELINE_HZ,
+        missing: vec![false; timeline.positions.len()],
+        positions: timeline.positions.clone(),
+    };
+    let layout = synth_imu::default_layout(&body.skeleton);
+    push_frame(bytes, &Message::SensorLayout(layout.clone()))?;
+    let field = (!args.no_mag).then_some(synth_imu::EARTH_FIELD_UT);
+    let samples = synth_imu::imu_samples(&motion, &layout, rate_hz, &ImuNoise::MEMS, field, rng);
+    let mut sent = 0;
+    for sample in samples {
+        if rng.random_bool(args.drop) {
+            continue;
+        }
+        push_frame(bytes, &Message::ImuSample(sample))?;
         sent += 1;
     }
     Ok(sent)

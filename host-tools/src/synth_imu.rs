@@ -17,11 +17,17 @@
 use posecoach_adapters::fusion::G;
 use posecoach_adapters::io::Motion;
 use posecoach_core::joint::Joint;
-use posecoach_core::kinematics::{forward, inverse};
+use posecoach_core::kinematics::{forward, inverse, swing};
 use posecoach_core::wire::{ImuSample, SensorLayout, SensorPlacement, MAX_SENSORS};
 use posecoach_core::{Quat, Vec3};
 use rand::Rng;
 use rand_distr::{Distribution, Normal, UnitSphere};
+use std::f32::consts::{PI, TAU};
+
+/// Fastest twist of a bone about itself, rad/s. A forearm pronates at up to about 15 rad/s;
+/// the inverse kinematics of a nearly straight arm can flip a twist by half a turn between two
+/// frames, which no arm does and which would saturate a gyro.
+const MAX_TWIST_RAD_S: f32 = 15.0;
 
 /// An earth field of 48 µT dipping 60° below the horizon, its horizontal part 40° from +Z
 /// toward +X (the student need not face magnetic north).
@@ -177,12 +183,32 @@ impl Track {
         let n = skeleton.len();
         let mut global = vec![Quat::identity(); motion.frames() * n];
         let mut local = vec![Quat::identity(); n];
-        for (f, out) in global.chunks_exact_mut(n).enumerate() {
+        let max_twist = MAX_TWIST_RAD_S / motion.rate_hz.max(1.0);
+        for f in 0..motion.frames() {
             inverse(skeleton, motion.frame(f), &mut local)
                 .unwrap_or_else(|e| unreachable!("a motion's frames fit its skeleton: {e}"));
+            let (done, rest) = global.split_at_mut(f * n);
+            let out = &mut rest[..n];
             for k in 0..n {
                 let parent = skeleton.parent(k).map_or(Quat::identity(), |p| out[p]);
                 out[k] = parent * local[k];
+            }
+            // Each bone's twist about itself turns at most `MAX_TWIST_RAD_S` from the last
+            // frame; its direction is untouched, so positions stay as they are.
+            let Some(previous) = done.get(done.len().saturating_sub(n)..).filter(|_| f > 0) else {
+                continue;
+            };
+            for k in 1..n {
+                let Some(axis) = skeleton.offset(k).try_normalize(1e-9) else {
+                    continue;
+                };
+                let moved = swing(previous[k] * axis, out[k] * axis) * previous[k];
+                let r = moved.inverse() * out[k];
+                let twist = 2.0 * r.imag().dot(&axis).atan2(r.w);
+                let twist = (twist + PI).rem_euclid(TAU) - PI;
+                let limited = twist.clamp(-max_twist, max_twist);
+                out[k] =
+                    moved * Quat::from_axis_angle(&nalgebra::Unit::new_unchecked(axis), limited);
             }
         }
         Track {
