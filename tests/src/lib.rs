@@ -190,3 +190,38 @@ pub fn synthetic_putt(
     };
     (motion, events)
 }
+
+/// Where two JSON documents differ, numbers compared to a relative `tolerance` (the last bits
+/// of f32 arithmetic differ between builds whose math comes from `std` or from `libm`);
+/// `None` if they agree.
+pub fn json_difference(
+    a: &serde_json::Value,
+    b: &serde_json::Value,
+    tolerance: f64,
+) -> Option<String> {
+    use serde_json::Value;
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => {
+            let (x, y) = (x.as_f64()?, y.as_f64()?);
+            let close = (x - y).abs() <= tolerance * x.abs().max(y.abs()).max(1.0);
+            (!close).then(|| format!("{x} vs {y}"))
+        }
+        (Value::Array(x), Value::Array(y)) => {
+            if x.len() != y.len() {
+                return Some(format!("{} vs {} items", x.len(), y.len()));
+            }
+            x.iter().zip(y).enumerate().find_map(|(i, (x, y))| {
+                json_difference(x, y, tolerance).map(|d| format!("[{i}]: {d}"))
+            })
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            if x.keys().ne(y.keys()) {
+                return Some("different keys".to_string());
+            }
+            x.iter().zip(y.values()).find_map(|((k, x), y)| {
+                json_difference(x, y, tolerance).map(|d| format!(".{k}: {d}"))
+            })
+        }
+        _ => (a != b).then(|| format!("{a} vs {b}")),
+    }
+}
