@@ -548,8 +548,17 @@ impl CellCost<'_> {
 fn add_distances(out: &mut [f32], at: [f32; 3], bs: [&[f32]; 3], weigh: impl Fn(f32) -> f32) {
     let [x, y, z] = at;
     let [bx, by, bz] = bs;
+    // Either difference squares to the same number: with AVX's three-operand subtraction
+    // `a - b` takes `b` straight from memory, with SSE `b - a` saves copying `a`.
+    let diff = |a: f32, b: f32| {
+        if cfg!(target_feature = "avx") {
+            a - b
+        } else {
+            b - a
+        }
+    };
     for (((o, &u), &v), &t) in out.iter_mut().zip(bx).zip(by).zip(bz) {
-        let (dx, dy, dz) = (u - x, v - y, t - z);
+        let (dx, dy, dz) = (diff(x, u), diff(y, v), diff(z, t));
         *o += weigh(sqrt(dx * dx + dy * dy + dz * dz));
     }
 }
