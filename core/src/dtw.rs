@@ -242,8 +242,24 @@ impl Guide {
     /// one column past the previous row's end: a path always exists. The first row starts at
     /// column 0 and the last row ends at column `m-1`.
     fn row(&self, i: usize) -> (usize, usize) {
+        self.bounds(i, self.center(i), self.center(i + 1))
+    }
+
+    /// [`Guide::row`] of every row in turn, each guide column computed once.
+    fn rows(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        let mut c = self.center(0);
+        (0..self.n).map(move |i| {
+            let next = self.center(i + 1);
+            let row = self.bounds(i, c, next);
+            c = next;
+            row
+        })
+    }
+
+    /// [`Guide::row`] of row `i`, where the guide is at column `c` and at `next` on the next
+    /// row.
+    fn bounds(&self, i: usize, c: f32, next: f32) -> (usize, usize) {
         let last = self.m - 1;
-        let c = self.center(i);
         let lo = if i == 0 {
             0
         } else {
@@ -252,8 +268,7 @@ impl Guide {
         let hi = if i + 1 >= self.n {
             last
         } else {
-            let next = self.center(i + 1) - 1.0;
-            (ceil(c.max(next)) + self.radius).min(last)
+            (ceil(c.max(next - 1.0)) + self.radius).min(last)
         };
         (lo.min(last), hi)
     }
@@ -296,8 +311,7 @@ fn layout(n: usize, m: usize, band: &Band) -> Result<(ScratchLen, usize), DtwErr
     // Accumulated-cost rows must reach from one column before the previous row's start to
     // one column after this row's end.
     let (mut cells, mut span, mut prev_lo) = (0, 0, 0);
-    for i in 0..n {
-        let (lo, hi) = guide.row(i);
+    for (lo, hi) in guide.rows() {
         cells += hi - lo + 1;
         span = span.max(hi + 1 - prev_lo.min(lo));
         prev_lo = lo;
@@ -400,8 +414,7 @@ pub fn align(
         acc: 0,
         count: 0,
     };
-    for i in 0..n {
-        let (lo, hi) = guide.row(i);
+    for (i, (lo, hi)) in guide.rows().enumerate() {
         let w = hi - lo + 1;
         // Costs are computed for whole vectors of columns, shifted left at the matrix's end.
         let padded = w.next_multiple_of(VECTOR).min(m);
@@ -437,6 +450,7 @@ pub fn align(
     // Walk back from (n-1, m-1), recomputing each row's range and its offset in `steps`.
     let (mut i, mut j) = (n - 1, m - 1);
     let (mut lo, mut hi) = guide.row(i);
+    let mut center = guide.center(i);
     let mut row_start = len.cells - (m - lo);
     let mut written = 0;
     let bit = |at: usize| steps[at / 8] >> (at % 8) & 1 == 1;
@@ -458,7 +472,9 @@ pub fn align(
         };
         if step != ADVANCE_B {
             i -= 1;
-            (lo, hi) = guide.row(i);
+            let next = center;
+            center = guide.center(i);
+            (lo, hi) = guide.bounds(i, center, next);
             row_start -= hi - lo + 1;
         }
         if step != ADVANCE_A {
