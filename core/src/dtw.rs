@@ -389,15 +389,14 @@ pub fn align(
     if path.len() < n + m - 1 {
         return Err(short(2, n + m - 1));
     }
-    let cell = match weights {
-        [] => CellCost {
-            weights: &ONES[..joints],
-            scale: 1.0 / joints as f32,
-        },
-        w => CellCost {
-            weights: w,
-            scale: 1.0 / weight_sum,
-        },
+    let (weights, scale) = match weights {
+        [] => (&ONES[..joints], 1.0 / joints as f32),
+        w => (w, 1.0 / weight_sum),
+    };
+    let cell = CellCost {
+        weights,
+        unit: weights.iter().all(|&w| w == 1.0),
+        scale,
     };
 
     // Accumulated-cost rows are stored from one column left of the row's first column, with
@@ -525,15 +524,35 @@ const VECTOR: usize = if cfg!(target_feature = "avx") {
 struct CellCost<'w> {
     /// One weight per joint.
     weights: &'w [f32],
+    /// Whether every weight is 1 (the unweighted mean), so that none needs multiplying.
+    unit: bool,
     /// One over the sum of the weights.
     scale: f32,
 }
 
 impl CellCost<'_> {
-    /// Costs of frame `i` of `a` against frames `first..first + out.len()` of `b`, into `out`:
+    /// Costs of frame `i` of `a` against frames `first..first + out.len()` of `b`, into `out`.
+    fn row(&self, a: &Sequence<'_>, i: usize, b: &Sequence<'_>, first: usize, out: &mut [f32]) {
+        if self.unit {
+            self.sum(a, i, b, first, out, |_, d| d);
+        } else {
+            self.sum(a, i, b, first, out, |w, d| w * d);
+        }
+    }
+
+    /// [`CellCost::row`] with `weigh(w, d)` the part of a joint of weight `w` at distance `d`:
     /// joint by joint, each a loop across the columns (vectorized), summed in joint order in a
     /// block on the stack (where the compiler knows that nothing else aliases it).
-    fn row(&self, a: &Sequence<'_>, i: usize, b: &Sequence<'_>, first: usize, out: &mut [f32]) {
+    #[inline(always)]
+    fn sum(
+        &self,
+        a: &Sequence<'_>,
+        i: usize,
+        b: &Sequence<'_>,
+        first: usize,
+        out: &mut [f32],
+        weigh: impl Fn(f32, f32) -> f32,
+    ) {
         for (q, out) in out.chunks_mut(BLOCK).enumerate() {
             let columns = first + q * BLOCK..first + q * BLOCK + out.len();
             let mut sums = [0.0; BLOCK];
@@ -546,12 +565,7 @@ impl CellCost<'_> {
                     &by[columns.clone()],
                     &bz[columns.clone()],
                 ];
-                // A unit weight (the unweighted mean) needs no multiplication.
-                if w == 1.0 {
-                    add_distances(sums, at, bs, |d| d);
-                } else {
-                    add_distances(sums, at, bs, |d| w * d);
-                }
+                add_distances(sums, at, bs, |d| weigh(w, d));
             }
             for (o, &sum) in out.iter_mut().zip(&*sums) {
                 *o = sum * self.scale;
