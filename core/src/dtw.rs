@@ -3,7 +3,8 @@
 //! A sequence is `3 · joints` channels of `frames` floats each, channel-major: the x of joint
 //! 0 in every frame, then the x of joint 1, ..., then all y, then all z. A band row's costs are
 //! then computed one joint at a time across the row's contiguous frames, a loop the compiler
-//! vectorizes, before a branch-free pass of the recurrence over the row.
+//! vectorizes. The recurrence then takes the better of each cell's diagonal and upper
+//! neighbours for the whole row at once, leaving a short serial pass for the left neighbour.
 //! The cost of cell `(i, j)` is the weighted mean over joints of the Euclidean distance
 //! between joint positions in frame `i` of `a` and frame `j` of `b` (callers put the root at
 //! the origin). The accumulated distance is classic DTW: `D(i, j) = cost(i, j) +
@@ -129,13 +130,15 @@ impl<'a> Sequence<'a> {
         self.joints
     }
 
-    /// Channel `c` (`axis · joints + joint`) over frames `range`.
-    fn channel(&self, c: usize, range: core::ops::Range<usize>) -> &'a [f32] {
-        let frames = self.frames();
-        &self.data[c * frames..][range]
+    /// Each joint's x, y and z channels.
+    fn joint_channels(&self) -> impl Iterator<Item = [&'a [f32]; 3]> {
+        let c = self.data.chunks_exact(self.frames());
+        let (y, z) = (c.clone().skip(self.joints), c.clone().skip(2 * self.joints));
+        c.zip(y).zip(z).map(|((x, y), z)| [x, y, z])
     }
 
     /// Value of channel `c` in frame `i`.
+    #[cfg(test)]
     fn at(&self, c: usize, i: usize) -> f32 {
         self.data[c * self.frames() + i]
     }
@@ -239,28 +242,50 @@ impl Guide {
     /// one column past the previous row's end: a path always exists. The first row starts at
     /// column 0 and the last row ends at column `m-1`.
     fn row(&self, i: usize) -> (usize, usize) {
+        self.bounds(i, self.center(i), self.center(i + 1))
+    }
+
+    /// [`Guide::row`] of every row in turn, each guide column computed once.
+    fn rows(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        let mut c = self.center(0);
+        (0..self.n).map(move |i| {
+            let next = self.center(i + 1);
+            let row = self.bounds(i, c, next);
+            c = next;
+            row
+        })
+    }
+
+    /// [`Guide::row`] of row `i`, where the guide is at column `c` and at `next` on the next
+    /// row.
+    fn bounds(&self, i: usize, c: f32, next: f32) -> (usize, usize) {
         let last = self.m - 1;
-        let c = self.center(i);
         let lo = if i == 0 {
             0
         } else {
-            (libm::floorf(c) as usize).saturating_sub(self.radius)
+            (c as usize).saturating_sub(self.radius)
         };
         let hi = if i + 1 >= self.n {
             last
         } else {
-            let next = self.center(i + 1) - 1.0;
-            (libm::ceilf(c.max(next)) as usize + self.radius).min(last)
+            (ceil(c.max(next - 1.0)) + self.radius).min(last)
         };
         (lo.min(last), hi)
     }
 }
 
+/// The ceiling of `x >= 0` (the guide's columns are never negative; truncation is the floor).
+fn ceil(x: f32) -> usize {
+    let floor = x as usize;
+    floor + usize::from((floor as f32) < x)
+}
+
 /// Scratch sizes for [`align`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ScratchLen {
-    /// Floats of cost scratch: two padded rows of accumulated cost and one row of cell costs,
-    /// each as wide as the band's widest step from one row to the next.
+    /// Floats of cost scratch: two padded rows of accumulated cost, as wide as the band's
+    /// widest step from one row to the next, and one row of cell costs, rounded up to whole
+    /// SIMD vectors of columns.
     pub cost: usize,
     /// Bytes of path scratch (2 bits per banded cell).
     pub path_bytes: usize,
@@ -274,6 +299,11 @@ pub struct ScratchLen {
 /// [`DtwError::SequenceShape`] for an empty sequence, [`DtwError::Anchors`] for anchors
 /// outside the matrix.
 pub fn scratch_len(n: usize, m: usize, band: &Band) -> Result<ScratchLen, DtwError> {
+    Ok(layout(n, m, band)?.0)
+}
+
+/// [`scratch_len`] and the width of an accumulated-cost row in the cost scratch.
+fn layout(n: usize, m: usize, band: &Band) -> Result<(ScratchLen, usize), DtwError> {
     if n == 0 || m == 0 {
         return Err(DtwError::SequenceShape);
     }
@@ -281,17 +311,18 @@ pub fn scratch_len(n: usize, m: usize, band: &Band) -> Result<ScratchLen, DtwErr
     // Accumulated-cost rows must reach from one column before the previous row's start to
     // one column after this row's end.
     let (mut cells, mut span, mut prev_lo) = (0, 0, 0);
-    for i in 0..n {
-        let (lo, hi) = guide.row(i);
+    for (lo, hi) in guide.rows() {
         cells += hi - lo + 1;
         span = span.max(hi + 1 - prev_lo.min(lo));
         prev_lo = lo;
     }
-    Ok(ScratchLen {
-        cost: 3 * (span + 2),
+    let width = span + 2;
+    let len = ScratchLen {
+        cost: 2 * width + span.next_multiple_of(VECTOR).min(m),
         path_bytes: cells.div_ceil(4),
         cells,
-    })
+    };
+    Ok((len, width))
 }
 
 /// The result of [`align`].
@@ -304,6 +335,10 @@ pub struct Alignment {
     /// Number of path cells written to the path output.
     pub path_len: usize,
 }
+
+/// Cells whose path steps are packed together: a group of `c` cells takes `2c` bits, the
+/// first `c` saying "from the left" and the next `c` "from above", last cell lowest.
+const GROUP: usize = 16;
 
 const DIAGONAL: u8 = 0;
 const ADVANCE_A: u8 = 1;
@@ -343,7 +378,7 @@ pub fn align(
     }
     let (n, m) = (a.frames(), b.frames());
     let guide = band.guide(n, m).ok_or(DtwError::Anchors)?;
-    let len = scratch_len(n, m, band)?;
+    let (len, width) = layout(n, m, band)?;
     let short = |which: u8, needed: usize| DtwError::Scratch { which, needed };
     if cost.len() < len.cost {
         return Err(short(0, len.cost));
@@ -354,60 +389,57 @@ pub fn align(
     if path.len() < n + m - 1 {
         return Err(short(2, n + m - 1));
     }
-    let cell = match weights {
-        [] => CellCost {
-            weights: &ONES[..joints],
-            scale: 1.0 / joints as f32,
-        },
-        w => CellCost {
-            weights: w,
-            scale: 1.0 / weight_sum,
-        },
+    let (weights, scale) = match weights {
+        [] => (&ONES[..joints], 1.0 / joints as f32),
+        w => (w, 1.0 / weight_sum),
+    };
+    let cell = CellCost {
+        weights,
+        unit: weights.iter().all(|&w| w == 1.0),
+        scale,
     };
 
     // Accumulated-cost rows are stored from one column left of the row's first column, with
     // infinity there and after the row's end, so neighbours need no range checks.
-    let width = len.cost / 3;
-    let (rows, here) = cost[..3 * width].split_at_mut(2 * width);
+    let (rows, here) = cost[..len.cost].split_at_mut(2 * width);
     let (mut prev, mut curr) = rows.split_at_mut(width);
     prev.fill(f32::INFINITY);
     // A virtual diagonal predecessor of cell (0, 0) with distance 0 starts the path.
     prev[0] = 0.0;
     let mut prev_lo = 0usize;
     let mut bits = StepWriter {
-        steps,
+        steps: &mut *steps,
         offset: 0,
         acc: 0,
         count: 0,
     };
-    for i in 0..n {
-        let (lo, hi) = guide.row(i);
+    for (i, (lo, hi)) in guide.rows().enumerate() {
         let w = hi - lo + 1;
-        let cells = &mut here[..w];
-        cell.row(a, i, b, lo..hi + 1, cells);
+        // Costs are computed for whole vectors of columns, shifted left at the matrix's end.
+        let padded = w.next_multiple_of(VECTOR).min(m);
+        let first = lo.min(m - padded);
+        cell.row(a, i, b, first, &mut here[..padded]);
+        let cells = &here[lo - first..][..w];
         // prev[k] holds column prev_lo + k - 1, so the cells above this row's columns
         // lo - 1 ..= hi start at prev[lo - prev_lo].
-        let above = &prev[lo - prev_lo..lo - prev_lo + w + 1];
+        let above = &prev[lo - prev_lo..][..w + 1];
         curr[0] = f32::INFINITY;
-        let mut left = f32::INFINITY;
-        for ((d, pair), &c) in curr[1..=w]
-            .iter_mut()
-            .zip(above.windows(2))
-            .zip(cells.iter())
-        {
-            let (diagonal, up) = (pair[0], pair[1]);
-            let (mut best, mut step) = (diagonal, DIAGONAL);
-            if up < best {
-                (best, step) = (up, ADVANCE_A);
-            }
-            if left < best {
-                (best, step) = (left, ADVANCE_B);
-            }
-            left = c + best;
-            *d = left;
-            bits.push(step);
+        let (row, after) = curr[1..].split_at_mut(w);
+        after.fill(f32::INFINITY);
+        // The better of the diagonal and upper neighbours, for all cells at once.
+        for ((t, &diagonal), &up) in row.iter_mut().zip(above).zip(&above[1..]) {
+            *t = if up < diagonal { up } else { diagonal };
         }
-        curr[w + 1..].fill(f32::INFINITY);
+        // Then the left neighbour, cell after cell, a group of cells to a word of path bits.
+        let mut left = f32::INFINITY;
+        let (rows, row_rest) = row.as_chunks_mut::<GROUP>();
+        let (cell_groups, cell_rest) = cells.as_chunks::<GROUP>();
+        let (above_groups, above_rest) = above[..w].as_chunks::<GROUP>();
+        for ((row, cells), above) in rows.iter_mut().zip(cell_groups).zip(above_groups) {
+            bits.push(from_left(row, cells, above, &mut left), 2 * GROUP as u32);
+        }
+        let rest = from_left(row_rest, cell_rest, above_rest, &mut left);
+        bits.push(rest, 2 * row_rest.len() as u32);
         core::mem::swap(&mut prev, &mut curr);
         prev_lo = lo;
     }
@@ -416,22 +448,33 @@ pub fn align(
 
     // Walk back from (n-1, m-1), recomputing each row's range and its offset in `steps`.
     let (mut i, mut j) = (n - 1, m - 1);
-    let (mut lo, _) = guide.row(i);
+    let (mut lo, mut hi) = guide.row(i);
+    let mut center = guide.center(i);
     let mut row_start = len.cells - (m - lo);
     let mut written = 0;
+    let bit = |at: usize| steps[at / 8] >> (at % 8) & 1 == 1;
     loop {
         path[written] = (i as u16, j as u16);
         written += 1;
         if i == 0 && j == 0 {
             break;
         }
-        let at = row_start + (j - lo);
-        let step = (steps[at / 4] >> (2 * (at % 4))) & 0b11;
+        let (group, k) = ((j - lo) / GROUP, (j - lo) % GROUP);
+        let count = (hi + 1 - lo - group * GROUP).min(GROUP);
+        let at = 2 * (row_start + group * GROUP) + count - 1 - k;
+        let step = if bit(at) {
+            ADVANCE_B
+        } else if bit(at + count) {
+            ADVANCE_A
+        } else {
+            DIAGONAL
+        };
         if step != ADVANCE_B {
             i -= 1;
-            let (new_lo, new_hi) = guide.row(i);
-            row_start -= new_hi - new_lo + 1;
-            lo = new_lo;
+            let next = center;
+            center = guide.center(i);
+            (lo, hi) = guide.bounds(i, center, next);
+            row_start -= hi - lo + 1;
         }
         if step != ADVANCE_A {
             j -= 1;
@@ -445,47 +488,112 @@ pub fn align(
     })
 }
 
+/// The serial part of the recurrence over a group of cells: `row` holds the better of each
+/// cell's diagonal and upper neighbours and gets the accumulated costs, `left` is the
+/// accumulated cost left of the group and then of its last cell. Returns the group's path bits.
+#[inline(always)]
+fn from_left(row: &mut [f32], cells: &[f32], above: &[f32], left: &mut f32) -> u32 {
+    let (mut ups, mut lefts) = (0u32, 0u32);
+    for ((d, &c), &diagonal) in row.iter_mut().zip(cells).zip(above) {
+        let t = *d;
+        let from_left = *left < t;
+        ups = ups << 1 | u32::from(t < diagonal);
+        lefts = lefts << 1 | u32::from(from_left);
+        *left = c + if from_left { *left } else { t };
+        *d = *left;
+    }
+    ups << row.len() | lefts
+}
+
 /// Weights used when the caller gives none.
 const ONES: [f32; MAX_JOINTS] = [1.0; MAX_JOINTS];
+
+/// Columns whose costs [`CellCost::row`] sums at a time.
+const BLOCK: usize = 64;
+
+/// Floats in a SIMD vector of the target: costs are computed for whole vectors of columns.
+const VECTOR: usize = if cfg!(target_feature = "avx") {
+    8
+} else if cfg!(any(target_feature = "sse", target_feature = "neon")) {
+    4
+} else {
+    1
+};
 
 /// The per-cell cost: weighted mean joint distance.
 struct CellCost<'w> {
     /// One weight per joint.
     weights: &'w [f32],
+    /// Whether every weight is 1 (the unweighted mean), so that none needs multiplying.
+    unit: bool,
     /// One over the sum of the weights.
     scale: f32,
 }
 
 impl CellCost<'_> {
-    /// Costs of frame `i` of `a` against frames `columns` of `b`, into `out`: joint by joint,
-    /// each a loop across the columns (vectorized), summed in joint order.
-    fn row(
+    /// Costs of frame `i` of `a` against frames `first..first + out.len()` of `b`, into `out`.
+    fn row(&self, a: &Sequence<'_>, i: usize, b: &Sequence<'_>, first: usize, out: &mut [f32]) {
+        if self.unit {
+            self.sum(a, i, b, first, out, |_, d| d);
+        } else {
+            self.sum(a, i, b, first, out, |w, d| w * d);
+        }
+    }
+
+    /// [`CellCost::row`] with `weigh(w, d)` the part of a joint of weight `w` at distance `d`:
+    /// joint by joint, each a loop across the columns (vectorized), summed in joint order in a
+    /// block on the stack (where the compiler knows that nothing else aliases it).
+    #[inline(always)]
+    fn sum(
         &self,
         a: &Sequence<'_>,
         i: usize,
         b: &Sequence<'_>,
-        columns: core::ops::Range<usize>,
+        first: usize,
         out: &mut [f32],
+        weigh: impl Fn(f32, f32) -> f32,
     ) {
-        out.fill(0.0);
-        let joints = a.joints();
-        for (k, &w) in self.weights.iter().enumerate() {
-            let (x, y, z) = (a.at(k, i), a.at(joints + k, i), a.at(2 * joints + k, i));
-            let bx = b.channel(k, columns.clone());
-            let by = b.channel(joints + k, columns.clone());
-            let bz = b.channel(2 * joints + k, columns.clone());
-            for (((o, &u), &v), &t) in out.iter_mut().zip(bx).zip(by).zip(bz) {
-                let (dx, dy, dz) = (x - u, y - v, z - t);
-                *o += w * sqrt(dx * dx + dy * dy + dz * dz);
+        for (q, out) in out.chunks_mut(BLOCK).enumerate() {
+            let columns = first + q * BLOCK..first + q * BLOCK + out.len();
+            let mut sums = [0.0; BLOCK];
+            let sums = &mut sums[..out.len()];
+            let joints = a.joint_channels().zip(b.joint_channels());
+            for (&w, ([ax, ay, az], [bx, by, bz])) in self.weights.iter().zip(joints) {
+                let at = [ax[i], ay[i], az[i]];
+                let bs = [
+                    &bx[columns.clone()],
+                    &by[columns.clone()],
+                    &bz[columns.clone()],
+                ];
+                add_distances(sums, at, bs, |d| weigh(w, d));
             }
-        }
-        for o in out.iter_mut() {
-            *o *= self.scale;
+            for (o, &sum) in out.iter_mut().zip(&*sums) {
+                *o = sum * self.scale;
+            }
         }
     }
 }
 
-/// Packs path steps, 2 bits each, 32 to a word before they are stored.
+/// Adds `weigh` of the distance from `at` to each point of `bs` (x, y, z channels) to `out`.
+fn add_distances(out: &mut [f32], at: [f32; 3], bs: [&[f32]; 3], weigh: impl Fn(f32) -> f32) {
+    let [x, y, z] = at;
+    let [bx, by, bz] = bs;
+    // Either difference squares to the same number: with AVX's three-operand subtraction
+    // `a - b` takes `b` straight from memory, with SSE `b - a` saves copying `a`.
+    let diff = |a: f32, b: f32| {
+        if cfg!(target_feature = "avx") {
+            a - b
+        } else {
+            b - a
+        }
+    };
+    for (((o, &u), &v), &t) in out.iter_mut().zip(bx).zip(by).zip(bz) {
+        let (dx, dy, dz) = (diff(x, u), diff(y, v), diff(z, t));
+        *o += weigh(sqrt(dx * dx + dy * dy + dz * dz));
+    }
+}
+
+/// Packs path steps into `steps`, 2 bits per cell, densely across rows.
 struct StepWriter<'s> {
     steps: &'s mut [u8],
     offset: usize,
@@ -494,17 +602,23 @@ struct StepWriter<'s> {
 }
 
 impl StepWriter<'_> {
-    fn push(&mut self, step: u8) {
-        self.acc |= u64::from(step) << (2 * self.count);
-        self.count += 1;
-        if self.count == 32 {
-            self.flush();
+    /// Appends the low `count` bits of `bits` (at most 32).
+    fn push(&mut self, bits: u32, count: u32) {
+        self.acc |= u64::from(bits) << self.count;
+        self.count += count;
+        if self.count >= 32 {
+            if let Some(word) = self.steps.get_mut(self.offset..self.offset + 4) {
+                word.copy_from_slice(&(self.acc as u32).to_le_bytes());
+            }
+            self.offset += 4;
+            self.acc >>= 32;
+            self.count -= 32;
         }
     }
 
-    /// Stores the pending steps (bytes are whole: a partial last byte is padded with zeros).
+    /// Stores the bits still pending at the end (a partial last byte is padded with zeros).
     fn flush(&mut self) {
-        let bytes = (self.count as usize).div_ceil(4);
+        let bytes = (self.count as usize).div_ceil(8);
         let end = (self.offset + bytes).min(self.steps.len());
         for (byte, value) in self.steps[self.offset..end]
             .iter_mut()
@@ -512,8 +626,6 @@ impl StepWriter<'_> {
         {
             *byte = value;
         }
-        self.offset = end;
-        (self.acc, self.count) = (0, 0);
     }
 }
 
@@ -665,6 +777,27 @@ mod tests {
             }
             let (classic, _) = naive(&a, &b, &[]);
             prop_assert!(banded.distance >= classic);
+        }
+    }
+
+    #[test]
+    fn rows_wider_than_a_block_are_classic_dtw() {
+        const JOINTS: usize = 2;
+        let walk = |frames: usize, seed: usize| -> Vec<f32> {
+            (0..3 * JOINTS * frames)
+                .map(|k| ((k * 7919 + seed) % 1013) as f32 / 506.5 - 1.0)
+                .collect()
+        };
+        let (a, b) = (walk(70, 1), walk(3 * BLOCK + 5, 2));
+        let (a, b) = (
+            Sequence::new(&a, JOINTS).unwrap(),
+            Sequence::new(&b, JOINTS).unwrap(),
+        );
+        for weights in [&[][..], &[0.5, 2.0]] {
+            let (expected, expected_path) = naive(&a, &b, weights);
+            let (got, path) = run(&a, &b, weights, &Band::global(u16::MAX));
+            assert_eq!(got.distance, expected);
+            assert_eq!(path, expected_path);
         }
     }
 
