@@ -19,6 +19,9 @@ cargo clippy --workspace --all-targets -- -D warnings
 step "tests"
 cargo test --workspace
 
+step "banded DTW also on baseline x86-64 (4 SSE2 lanes; host builds use x86-64-v3, see .cargo/config.toml)"
+RUSTFLAGS="-C target-cpu=x86-64" CARGO_TARGET_DIR=target/baseline cargo test -p posecoach-core dtw
+
 step "thumbv7em-none-eabihf: core and adapters without std, with and without defmt"
 cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabihf
 cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabihf --features posecoach-core/defmt,posecoach-adapters/defmt

@@ -1,7 +1,7 @@
 //! posecoach-adapters: turning files, byte streams and sensor samples into core frames.
 //!
 //! Without features the crate is `no_std` and allocation-free. The `std` feature adds host
-//! file import and export in [`io`].
+//! file import and export in the `io` module.
 //!
 //! ```text
 //!  ImuSample ──fusion (wire units → SI, still-period bias, Mahony filter)──▶ orientations
