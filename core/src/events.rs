@@ -44,6 +44,9 @@ pub const STILL_S: f32 = 0.2;
 /// fraction of its fastest speed in the backswing, so a slow amateur takeaway is judged like a
 /// tour player's.
 pub const STILL_FRACTION: f32 = 0.1;
+/// Still hands may seem to move up to this many times as fast as in the quietest stretch of
+/// the set-up (pose noise).
+pub const NOISE_MARGIN: f32 = 1.2;
 /// Lead-arm elevation at toe-up when no club is tracked (the shaft is horizontal there in the
 /// two tour swings of the test data: -54° and -50°).
 pub const TOE_UP_ARM_DEG: f32 = -52.0;
@@ -358,12 +361,21 @@ pub fn detect(
         None => &hands,
     };
     let peak = (0..top).map(|t| track.speed(probe, t)).fold(0.0, f32::max);
-    let still = STILL_FRACTION * peak;
     let window = (libm::roundf(STILL_S * rate_hz) as usize).max(1);
+    // The fastest the hands go in a stretch of `window` frames ending at `t`.
+    let stir = |t: usize| {
+        (t.saturating_sub(window)..=t)
+            .map(|s| track.speed(probe, s))
+            .fold(0.0, f32::max)
+    };
+    // Pose noise makes still hands seem to move: the threshold is at least NOISE_MARGIN times
+    // the quietest stretch before the top.
+    let quietest = (0..top).map(stir).fold(f32::INFINITY, f32::min);
+    let still = (STILL_FRACTION * peak).max(NOISE_MARGIN * quietest);
     // A still stretch that runs into the start of the recording counts as long enough.
     let address = (0..top)
         .rev()
-        .find(|&t| (t.saturating_sub(window)..=t).all(|s| track.speed(probe, s) < still))
+        .find(|&t| stir(t) < still)
         .ok_or(EventError::NoSwing)?;
 
     // The backswing takes the hands toward the trail foot.
