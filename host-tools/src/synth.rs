@@ -46,9 +46,13 @@ pub struct Args {
     /// (h36m17, cmu31, bandai22, smpl24).
     #[arg(long, default_value = "h36m17")]
     format: String,
-    /// Walking to insert before the first set-up (.bvh, .c3d or .csv).
+    /// Walking to insert before the first set-up and between swings (.bvh, .c3d or .csv).
     #[arg(long)]
     walk: Option<PathBuf>,
+    /// Stretch every swing's backswing by this factor (an amateur's takes 1.3 to 3 times as
+    /// long as a pro's; under 1 speeds it up).
+    #[arg(long, default_value_t = 1.0)]
+    backswing_tempo: f32,
     /// Pose frames per second.
     #[arg(long, default_value_t = 30.0)]
     rate: f32,
@@ -156,6 +160,12 @@ pub fn run(args: &Args) -> Result<String> {
             args.rate
         );
     }
+    if !(0.5..=3.0).contains(&args.backswing_tempo) {
+        bail!(
+            "--backswing-tempo {} must be between 0.5 and 3",
+            args.backswing_tempo
+        );
+    }
     if !(0.0..=0.5).contains(&args.drop) {
         bail!("--drop {} must be between 0 and 0.5", args.drop);
     }
@@ -182,7 +192,13 @@ pub fn run(args: &Args) -> Result<String> {
     let swings: Vec<(PathBuf, Motion)> = args
         .swings
         .iter()
-        .map(|p| Ok((p.clone(), onto_body(p)?)))
+        .map(|p| {
+            let swing = onto_body(p)?;
+            let top = events::detect(&swing.skeleton, &swing.positions, TIMELINE_HZ)
+                .with_context(|| format!("events of {}", p.display()))?
+                .top();
+            Ok((p.clone(), stretch(&swing, top, args.backswing_tempo)))
+        })
         .collect::<Result<_>>()?;
     let (timeline, expected) = lay_out(
         &body,
@@ -288,6 +304,25 @@ fn push_frame(bytes: &mut Vec<u8>, message: &Message) -> Result<()> {
 }
 
 /// Lays the session out; returns it and the sidecar's swing entries.
+/// `swing` with frames `0..=top` stretched in time by `factor` (linear interpolation).
+fn stretch(swing: &Motion, top: usize, factor: f32) -> Motion {
+    let joints = swing.skeleton.len();
+    let frames = ((top as f32 * factor).round() as usize).max(1);
+    let mut positions = Vec::with_capacity((swing.frames() + frames) * joints);
+    for i in 0..frames {
+        let x = i as f32 * top as f32 / frames as f32;
+        let (a, w) = (x.floor() as usize, x.fract());
+        let (p, q) = (swing.frame(a), swing.frame((a + 1).min(top)));
+        positions.extend(p.iter().zip(q).map(|(p, q)| p + (q - p) * w));
+    }
+    positions.extend_from_slice(&swing.positions[top * joints..]);
+    Motion {
+        missing: vec![false; positions.len()],
+        positions,
+        ..swing.clone()
+    }
+}
+
 fn lay_out(
     body: &Motion,
     swings: &[(PathBuf, Motion)],
@@ -307,16 +342,20 @@ fn lay_out(
         positions: Vec::new(),
     };
     t.hold(&place(&rest, first[0]), 1.5);
-    if let Some(walk) = walk {
-        let end = walk.frame(walk.frames() - 1)[0];
-        let shift = Vec3::new(first[0].x - end.x, 0.0, first[0].z - end.z);
-        let walk: Vec<Vec3> = walk.positions.iter().map(|p| p + shift).collect();
-        t.blend(&walk[..joints], 1.0);
-        t.positions.extend_from_slice(&walk);
-    }
+    // Walking up to where the next swing's set-up stands.
+    let walk_to = |t: &mut Timeline, at: Vec3| {
+        if let Some(walk) = &walk {
+            let end = walk.frame(walk.frames() - 1)[0];
+            let shift = Vec3::new(at.x - end.x, 0.0, at.z - end.z);
+            let walk: Vec<Vec3> = walk.positions.iter().map(|p| p + shift).collect();
+            t.blend(&walk[..joints], 1.0);
+            t.positions.extend_from_slice(&walk);
+        }
+    };
     let mut expected = Vec::new();
     for (n, (path, swing)) in swings.iter().enumerate() {
         let address = swing.frame(0).to_vec();
+        walk_to(&mut t, address[0]);
         let truth = events::detect(skeleton, &swing.positions, TIMELINE_HZ)
             .with_context(|| format!("events of {}", path.display()))?;
         if truth.kind != SwingKind::Full {

@@ -9,16 +9,17 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
 # A 1.75 m golfer (H3.6M keypoints at 30 Hz, 7 mm noise, 4 ms jitter, 3 % lost): walks up,
-# waggles, hits the driver, a practice half swing, the iron.
+# waggles, hits the driver, a practice half swing, walks, the iron.
 pc synth-log --swing $fx/golf_driver_60hz.csv --swing $fx/golf_iron_60hz.csv \
     --walk $fx/bandai_walk_excerpt.bvh --seed 1 --out tests/logs/range_h36m_30hz.pclog
 
-# A 1.60 m golfer (CMU-31 keypoints at 30 Hz, 10 mm noise, 6 ms jitter, 5 % lost): the iron,
-# a practice half swing, the driver.
+# A 1.60 m amateur (CMU-31 keypoints at 30 Hz, 10 mm noise, 6 ms jitter, 5 % lost) whose
+# backswings take 1.5 times as long as the tour player's: the iron, a practice half swing, the
+# driver.
 pc tpose --format cmu31 --height 1.6 --out "$tmp/cmu_160.bvh"
 pc synth-log --swing $fx/golf_iron_60hz.csv --swing $fx/golf_driver_60hz.csv \
     --student-tpose "$tmp/cmu_160.bvh" --format cmu31 --noise-mm 10 --jitter-ms 6 --drop 0.05 \
-    --seed 2 --out tests/logs/short_cmu_30hz.pclog
+    --backswing-tempo 1.5 --seed 2 --out tests/logs/short_cmu_30hz.pclog
 
 # The 1.75 m golfer with six IMUs (pelvis, chest, upper arms, wrists; magnetometers) at 200 Hz,
 # 3 % of samples lost: a still T-pose to calibrate, then the driver and the iron.

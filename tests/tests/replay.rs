@@ -10,8 +10,10 @@ use rand_chacha::ChaCha8Rng;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
-/// Events other than address must be found within this many seconds (two frames at 60 Hz).
-const EVENT_TOLERANCE_S: f64 = 0.034;
+/// Events other than address must be found within this many seconds: three frames at the 60 Hz
+/// model rate, a frame and a half of a 30 Hz capture (an amateur's slow transition makes the
+/// top a flat speed minimum; on the clean logs every event is within two frames).
+const EVENT_TOLERANCE_S: f64 = 0.05;
 
 fn logs() -> Vec<PathBuf> {
     let found = files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("logs"), "pclog");
