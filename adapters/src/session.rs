@@ -109,6 +109,42 @@ pub struct Buffers<'b> {
     pub bytes: &'b mut [u8],
 }
 
+/// [`Buffers`] of the given lengths on the heap, for host tools and tests.
+#[cfg(feature = "std")]
+#[derive(Clone, Debug)]
+pub struct OwnedBuffers {
+    ring: std::vec::Vec<Vec3>,
+    window: std::vec::Vec<Vec3>,
+    coach: std::vec::Vec<Vec3>,
+    floats: std::vec::Vec<f32>,
+    bytes: std::vec::Vec<u8>,
+}
+
+#[cfg(feature = "std")]
+impl OwnedBuffers {
+    /// Zeroed buffers of `lens`.
+    pub fn new(lens: BufferLens) -> OwnedBuffers {
+        OwnedBuffers {
+            ring: std::vec![Vec3::zeros(); lens.ring],
+            window: std::vec![Vec3::zeros(); lens.window],
+            coach: std::vec![Vec3::zeros(); lens.coach],
+            floats: std::vec![0.0; lens.floats],
+            bytes: std::vec![0; lens.bytes],
+        }
+    }
+
+    /// The buffers, for [`Session::new`].
+    pub fn buffers(&mut self) -> Buffers<'_> {
+        Buffers {
+            ring: &mut self.ring,
+            window: &mut self.window,
+            coach: &mut self.coach,
+            floats: &mut self.floats,
+            bytes: &mut self.bytes,
+        }
+    }
+}
+
 /// Where a swing sits in the stream.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

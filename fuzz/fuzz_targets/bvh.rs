@@ -5,7 +5,9 @@ use libfuzzer_sys::fuzz_target;
 use posecoach_adapters::io::{bvh::Bvh, Motion};
 
 fuzz_target!(|data: &[u8]| {
-    let Ok(text) = std::str::from_utf8(data) else { return };
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
     if let Ok(bvh) = Bvh::parse(text) {
         let _ = Motion::from_bvh(bvh, None);
     }

@@ -5,9 +5,8 @@
 use libfuzzer_sys::fuzz_target;
 use posecoach_adapters::io::{csv, Motion};
 use posecoach_adapters::log::{header, LogReader};
-use posecoach_adapters::session::{BufferLens, Buffers, Coach, Session};
+use posecoach_adapters::session::{BufferLens, Coach, OwnedBuffers, Session};
 use posecoach_core::config::MAX_JOINTS;
-use posecoach_core::Vec3;
 use std::sync::OnceLock;
 
 fn coach() -> &'static Motion {
@@ -36,23 +35,8 @@ fuzz_target!(|data: &[u8]| {
         positions: &coach.positions,
         rate_hz: coach.rate_hz,
     }];
-    let lens = BufferLens::new(MAX_JOINTS, coach.frames(), 120);
-    let (mut ring, mut window, mut virtual_coach) = (
-        vec![Vec3::zeros(); lens.ring],
-        vec![Vec3::zeros(); lens.window],
-        vec![Vec3::zeros(); lens.coach],
-    );
-    let (mut floats, mut bytes) = (vec![0.0; lens.floats], vec![0u8; lens.bytes]);
-    let mut session = Session::new(
-        &coaches,
-        Buffers {
-            ring: &mut ring,
-            window: &mut window,
-            coach: &mut virtual_coach,
-            floats: &mut floats,
-            bytes: &mut bytes,
-        },
-    );
+    let mut buffers = OwnedBuffers::new(BufferLens::new(MAX_JOINTS, coach.frames(), 120));
+    let mut session = Session::new(&coaches, buffers.buffers());
     for message in reader {
         session.handle(&message, |_| {});
     }

@@ -3,9 +3,8 @@
 use crate::{coaches, score};
 use anyhow::{Context, Result};
 use posecoach_adapters::log::LogReader;
-use posecoach_adapters::session::{BufferLens, Buffers, Coach, Outcome, Session, RATES_HZ};
+use posecoach_adapters::session::{BufferLens, Coach, Outcome, OwnedBuffers, Session, RATES_HZ};
 use posecoach_core::config::MAX_JOINTS;
-use posecoach_core::Vec3;
 use serde_json::{json, Value};
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -62,23 +61,8 @@ pub fn replay(log: &[u8]) -> Result<Replay> {
         })
         .collect();
     let longest = coaches.iter().map(|(_, m)| m.frames()).max().unwrap_or(0);
-    let lens = BufferLens::new(MAX_JOINTS, longest, RATES_HZ.1);
-    let (mut ring, mut window, mut coach) = (
-        vec![Vec3::zeros(); lens.ring],
-        vec![Vec3::zeros(); lens.window],
-        vec![Vec3::zeros(); lens.coach],
-    );
-    let (mut floats, mut bytes) = (vec![0.0; lens.floats], vec![0u8; lens.bytes]);
-    let mut session = Session::new(
-        &refs,
-        Buffers {
-            ring: &mut ring,
-            window: &mut window,
-            coach: &mut coach,
-            floats: &mut floats,
-            bytes: &mut bytes,
-        },
-    );
+    let mut buffers = OwnedBuffers::new(BufferLens::new(MAX_JOINTS, longest, RATES_HZ.1));
+    let mut session = Session::new(&refs, buffers.buffers());
     let mut reader = LogReader::new(log)?;
     let (mut swings, mut text, mut refused) = (Vec::new(), String::new(), Vec::new());
     for message in reader.by_ref() {

@@ -2,7 +2,7 @@
 //! as it was.
 
 use posecoach_adapters::io;
-use posecoach_adapters::session::{BufferLens, Buffers, Coach, Outcome, Refusal, Session};
+use posecoach_adapters::session::{BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session};
 use posecoach_core::format::Format;
 use posecoach_core::wire::{Config, Message, PoseFrame, StudentProfile};
 use posecoach_core::Vec3;
@@ -40,23 +40,8 @@ fn bad_messages_are_refused_and_change_nothing() {
         positions: &coach.positions,
         rate_hz: coach.rate_hz,
     }];
-    let lens = BufferLens::new(17, coach.frames(), 60);
-    let (mut ring, mut window, mut virtual_coach) = (
-        vec![Vec3::zeros(); lens.ring],
-        vec![Vec3::zeros(); lens.window],
-        vec![Vec3::zeros(); lens.coach],
-    );
-    let (mut floats, mut bytes) = (vec![0.0; lens.floats], vec![0u8; lens.bytes]);
-    let mut session = Session::new(
-        &coaches,
-        Buffers {
-            ring: &mut ring,
-            window: &mut window,
-            coach: &mut virtual_coach,
-            floats: &mut floats,
-            bytes: &mut bytes,
-        },
-    );
+    let mut buffers = OwnedBuffers::new(BufferLens::new(17, coach.frames(), 60));
+    let mut session = Session::new(&coaches, buffers.buffers());
     let pose = Message::PoseFrame(PoseFrame {
         seq: 0,
         t_us: 0,
@@ -138,23 +123,8 @@ fn scores(coach: &io::Motion, messages: &[Message]) -> Vec<(f32, Vec<usize>)> {
         positions: &coach.positions,
         rate_hz: coach.rate_hz,
     }];
-    let lens = BufferLens::new(31, coach.frames(), 60);
-    let (mut ring, mut window, mut virtual_coach) = (
-        vec![Vec3::zeros(); lens.ring],
-        vec![Vec3::zeros(); lens.window],
-        vec![Vec3::zeros(); lens.coach],
-    );
-    let (mut floats, mut bytes) = (vec![0.0; lens.floats], vec![0u8; lens.bytes]);
-    let mut session = Session::new(
-        &coaches,
-        Buffers {
-            ring: &mut ring,
-            window: &mut window,
-            coach: &mut virtual_coach,
-            floats: &mut floats,
-            bytes: &mut bytes,
-        },
-    );
+    let mut buffers = OwnedBuffers::new(BufferLens::new(31, coach.frames(), 60));
+    let mut session = Session::new(&coaches, buffers.buffers());
     let mut found = Vec::new();
     for m in messages {
         session.handle(m, |o| match o {
