@@ -1,0 +1,1 @@
+//! posecoach-train: the learned retargeter's training data and training, host side only.
