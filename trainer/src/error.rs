@@ -1,0 +1,60 @@
+//! The one error type of the training data pipeline, wrapping the core's and the adapters'.
+
+use posecoach_adapters::io::FileError;
+use posecoach_core::events::EventError;
+use posecoach_core::kinematics::LengthError;
+use posecoach_core::retarget::RetargetError;
+use posecoach_core::skeleton::SkeletonError;
+use std::fmt;
+
+/// Why a character, clip, pair or metric could not be made.
+#[derive(Debug)]
+pub enum Error {
+    /// A motion file could not be read.
+    File(FileError),
+    /// A skeleton could not be built (a format without a joint table, a malformed tree).
+    Skeleton(SkeletonError),
+    /// A frame does not fit its skeleton.
+    Length(LengthError),
+    /// The analytic retargeter refused a skeleton or frame.
+    Retarget(RetargetError),
+    /// Swing events could not be found in a ground truth.
+    Events(EventError),
+    /// Two motions compared frame by frame differ in frames or joints.
+    #[allow(missing_docs)]
+    Mismatch { expected: usize, actual: usize },
+    /// A split has no clips to sample from.
+    NoClips,
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::File(e) => e.fmt(f),
+            Error::Skeleton(e) => write!(f, "skeleton: {e}"),
+            Error::Length(e) => write!(f, "frame: {e}"),
+            Error::Retarget(e) => write!(f, "analytic retargeter: {e}"),
+            Error::Events(e) => write!(f, "swing events: {e}"),
+            Error::Mismatch { expected, actual } => write!(
+                f,
+                "motions differ in size: expected {expected} samples, got {actual}"
+            ),
+            Error::NoClips => f.write_str("no clips in this split: is the data folder complete?"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+macro_rules! from {
+    ($($source:ty => $variant:ident),*) => {$(
+        impl From<$source> for Error {
+            fn from(e: $source) -> Self {
+                Error::$variant(e)
+            }
+        }
+    )*};
+}
+
+from!(FileError => File, SkeletonError => Skeleton, LengthError => Length,
+      RetargetError => Retarget, EventError => Events);
