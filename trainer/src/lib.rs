@@ -2,6 +2,7 @@
 //!
 //! ```text
 //!  motion files ──dataset (split by file)──▶ clips (rotations, clip)
+//!  golfgen ──▶ synthetic swings and putts (motions)
 //!  seeds ──dataset (split by stream)──▶ characters (bodies)
 //!  clip on character A = source, clip on character B = ground truth ──▶ pairs
 //!  retargeted vs ground truth ──metrics──▶ eq. 16 errors, hand gap, foot slide
@@ -9,6 +10,7 @@
 //!
 //! - [`bodies`]: random anthropometric characters in every keypoint format.
 //! - [`clip`]: motions as rotations, put on any character; the ground truth.
+//! - [`golfgen`]: parametric synthetic golf swings and putts, both hands on one grip.
 //! - [`dataset`]: train/eval splits of files and characters, retargeting pairs.
 //! - [`metrics`]: evaluation against the ground truth, and the baselines' table.
 #![forbid(unsafe_code)]
@@ -17,6 +19,7 @@
 pub mod bodies;
 pub mod clip;
 pub mod dataset;
+pub mod golfgen;
 mod error;
 pub mod metrics;
 
