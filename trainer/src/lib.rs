@@ -19,8 +19,8 @@
 pub mod bodies;
 pub mod clip;
 pub mod dataset;
-pub mod golfgen;
 mod error;
+pub mod golfgen;
 pub mod metrics;
 
 pub use error::Error;
