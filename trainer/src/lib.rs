@@ -5,12 +5,14 @@
 //!  seeds ──dataset (split by stream)──▶ characters (bodies)
 //!  clip on character A = source, clip on character B = ground truth ──▶ pairs
 //!  retargeted vs ground truth ──metrics──▶ eq. 16 errors, hand gap, foot slide
+//!  windows ──features──▶ tensors
 //! ```
 //!
 //! - [`bodies`]: random anthropometric characters in every keypoint format.
 //! - [`clip`]: motions as rotations, put on any character; the ground truth.
 //! - [`dataset`]: train/eval splits of files and characters, retargeting pairs.
 //! - [`metrics`]: evaluation against the ground truth, and the baselines' table.
+//! - [`features`]: motion windows and target T-poses as padded, batched tensors.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -18,6 +20,7 @@ pub mod bodies;
 pub mod clip;
 pub mod dataset;
 mod error;
+pub mod features;
 pub mod metrics;
 
 pub use error::Error;
