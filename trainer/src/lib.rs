@@ -5,7 +5,7 @@
 //!  seeds ──dataset (split by stream)──▶ characters (bodies)
 //!  clip on character A = source, clip on character B = ground truth ──▶ pairs
 //!  retargeted vs ground truth ──metrics──▶ eq. 16 errors, hand gap, foot slide
-//!  windows ──features──▶ tensors
+//!  windows ──features──▶ tensors; rotations ──fk──▶ positions
 //! ```
 //!
 //! - [`bodies`]: random anthropometric characters in every keypoint format.
@@ -13,6 +13,7 @@
 //! - [`dataset`]: train/eval splits of files and characters, retargeting pairs.
 //! - [`metrics`]: evaluation against the ground truth, and the baselines' table.
 //! - [`features`]: motion windows and target T-poses as padded, batched tensors.
+//! - [`fk`]: differentiable forward kinematics.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -21,6 +22,7 @@ pub mod clip;
 pub mod dataset;
 mod error;
 pub mod features;
+pub mod fk;
 pub mod metrics;
 
 pub use error::Error;
