@@ -260,8 +260,13 @@ pub(crate) mod testing {
 
     /// Every bone waving about its own axes with its own phase, the root drifting.
     pub fn wave(skeleton: &Skeleton) -> Motion {
+        wave_frames(skeleton, FRAMES)
+    }
+
+    /// [`wave`] lasting `frames` frames at [`RATE_HZ`].
+    pub fn wave_frames(skeleton: &Skeleton, frames: usize) -> Motion {
         let n = skeleton.len();
-        let mut positions = vec![Vec3::zeros(); FRAMES * n];
+        let mut positions = vec![Vec3::zeros(); frames * n];
         let mut local = vec![Quat::identity(); n];
         for (f, out) in positions.chunks_exact_mut(n).enumerate() {
             let t = f as f32 / RATE_HZ;

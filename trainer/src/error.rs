@@ -25,6 +25,12 @@ pub enum Error {
     Mismatch { expected: usize, actual: usize },
     /// A split has no clips to sample from.
     NoClips,
+    /// A motion is too short for a window: `expected` frames from the window's start, `actual`
+    /// there.
+    #[allow(missing_docs)]
+    TooShort { expected: usize, actual: usize },
+    /// A batch needs at least one window.
+    EmptyBatch,
 }
 
 impl fmt::Display for Error {
@@ -40,6 +46,11 @@ impl fmt::Display for Error {
                 "motions differ in size: expected {expected} samples, got {actual}"
             ),
             Error::NoClips => f.write_str("no clips in this split: is the data folder complete?"),
+            Error::TooShort { expected, actual } => write!(
+                f,
+                "a window needs {expected} frames from its start, the motion has {actual}: start earlier"
+            ),
+            Error::EmptyBatch => f.write_str("a batch needs at least one window"),
         }
     }
 }

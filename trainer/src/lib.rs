@@ -6,6 +6,7 @@
 //!  seeds ──dataset (split by stream)──▶ characters (bodies)
 //!  clip on character A = source, clip on character B = ground truth ──▶ pairs
 //!  retargeted vs ground truth ──metrics──▶ eq. 16 errors, hand gap, foot slide
+//!  windows ──features──▶ tensors ──model (teacher, fk)──▶ positions ──train──▶ Adam steps
 //! ```
 //!
 //! - [`bodies`]: random anthropometric characters in every keypoint format.
@@ -13,6 +14,10 @@
 //! - [`golfgen`]: parametric synthetic golf swings and putts, both hands on one grip.
 //! - [`dataset`]: train/eval splits of files and characters, retargeting pairs.
 //! - [`metrics`]: evaluation against the ground truth, and the baselines' table.
+//! - [`features`]: motion windows and target T-poses as padded, batched tensors.
+//! - [`fk`]: differentiable forward kinematics.
+//! - [`model`]: the teacher network.
+//! - [`train`]: the reconstruction loss and a training step.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -20,7 +25,11 @@ pub mod bodies;
 pub mod clip;
 pub mod dataset;
 mod error;
+pub mod features;
+pub mod fk;
 pub mod golfgen;
 pub mod metrics;
+pub mod model;
+pub mod train;
 
 pub use error::Error;

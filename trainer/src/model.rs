@@ -1,0 +1,364 @@
+//! The teacher retargeter of ARCHITECTURE.md ("The retargeter"), in burn.
+//!
+//! ```text
+//! target T-pose [B,J,6] ──SE──▶ [B,S,d] ───────────────┐ (added at every time step)
+//! source motion [B,T,J,6] ──ME──▶ [B,S·d,T/4] ──────(+)──▶ MD ──▶ q [B,T,J,4], root [B,T,3]
+//!                                                                   └─FK(target)─▶ [B,T,J,3]
+//! ```
+//!
+//! Temporal features are `[B, S·d, time]` with channels segment-major (`s·d + c`), so a
+//! *masked* convolution, one that mixes only a segment's own channels, is a grouped
+//! convolution with one group per segment. Layouts of the inputs: [`crate::features`].
+
+use crate::features::{Batch, Target, MOTION_CHANNELS, SEGMENTS, WINDOW};
+use crate::fk;
+use burn::module::Param;
+use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig};
+use burn::nn::conv::{Conv1d, Conv1dConfig};
+use burn::nn::interpolate::{Interpolate1d, Interpolate1dConfig, InterpolateMode};
+use burn::nn::{
+    Linear, LinearConfig, PaddingConfig1d, PositionalEncoding, PositionalEncodingConfig,
+};
+use burn::prelude::{Bool, Device, Module, Tensor};
+use burn::tensor::activation::leaky_relu;
+use burn::tensor::Distribution;
+
+/// Negative slope of every activation.
+const LEAKY_SLOPE: f64 = 0.2;
+/// Standard deviation of the segment tokens' initial values (N(0, 1) · 0.1).
+const TOKEN_INIT_STD: f64 = 0.1;
+/// Time steps per motion feature: two stride-2 convolutions.
+pub const DOWNSAMPLING: usize = 4;
+/// Upsampling factor of each decoder stage.
+const UPSAMPLING: f32 = 2.0;
+/// Rest features per target joint: offset from the parent and position from the root.
+const REST_CHANNELS: usize = 6;
+/// Quaternion components.
+const QUATERNION: usize = 4;
+
+const _: () = assert!(
+    WINDOW.is_multiple_of(DOWNSAMPLING),
+    "a window must downsample evenly"
+);
+
+/// The teacher's sizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TeacherConfig {
+    /// Features per segment (`d`); a multiple of `heads` and even (sinusoidal encoding).
+    pub features: usize,
+    /// Attention heads.
+    pub heads: usize,
+    /// Kernel size of the temporal convolutions (odd, so that padding keeps lengths).
+    pub kernel: usize,
+}
+
+impl TeacherConfig {
+    /// The teacher as trained: `d` = 32 per segment, 2 heads, kernel 3.
+    pub const DEFAULT: TeacherConfig = TeacherConfig {
+        features: 32,
+        heads: 2,
+        kernel: 3,
+    };
+    /// A tiny teacher for tests.
+    pub const TINY: TeacherConfig = TeacherConfig {
+        features: 8,
+        heads: 2,
+        kernel: 3,
+    };
+
+    /// A randomly initialized teacher on `device` (seed it with `device.seed`).
+    pub fn init(&self, device: &Device) -> Teacher {
+        Teacher {
+            skeleton: SkeletonEncoder::new(self, device),
+            motion: MotionEncoder::new(self, device),
+            decoder: Decoder::new(self, device),
+        }
+    }
+
+    /// A temporal convolution within segments, `stride` 1 or 2, keeping `length / stride`.
+    fn conv(&self, stride: usize, device: &Device) -> Conv1d {
+        let channels = SEGMENTS * self.features;
+        let pad = self.kernel / 2;
+        Conv1dConfig::new(channels, channels, self.kernel)
+            .with_stride(stride)
+            .with_groups(SEGMENTS)
+            .with_padding(PaddingConfig1d::Explicit(pad, pad))
+            .init(device)
+    }
+}
+
+impl Default for TeacherConfig {
+    fn default() -> Self {
+        TeacherConfig::DEFAULT
+    }
+}
+
+/// What the teacher outputs for a batch.
+#[derive(Clone, Debug)]
+pub struct Retargeted {
+    /// `[B, T, J, 4]` unit quaternions: each bone's rotation relative to its parent bone (the
+    /// root's and padded joints' are not used).
+    pub rotations: Tensor<4>,
+    /// `[B, T, 3]` the root trajectory, in target heights.
+    pub root: Tensor<3>,
+    /// `[B, T, J, 3]` joint positions on the target skeletons, in target heights.
+    pub positions: Tensor<4>,
+}
+
+/// The teacher network.
+#[derive(Module, Debug)]
+pub struct Teacher {
+    skeleton: SkeletonEncoder,
+    motion: MotionEncoder,
+    decoder: Decoder,
+}
+
+impl Teacher {
+    /// The batch's motions retargeted onto its targets.
+    pub fn forward(&self, batch: &Batch) -> Retargeted {
+        let motion = self
+            .motion
+            .forward(batch.motion.clone(), batch.attention.clone());
+        let skeleton = self.skeleton.forward(&batch.target);
+        let [b, channels, _] = motion.dims();
+        let fused = motion + skeleton.reshape([b, channels, 1]);
+        let (raw, root) = self.decoder.forward(fused, &batch.target);
+        let rotations = fk::normalize(raw);
+        let positions = fk::forward(rotations.clone(), root.clone(), &batch.target);
+        Retargeted {
+            rotations,
+            root,
+            positions,
+        }
+    }
+}
+
+fn act<const D: usize>(x: Tensor<D>) -> Tensor<D> {
+    leaky_relu(x, LEAKY_SLOPE)
+}
+
+/// Two linear layers with an activation between.
+#[derive(Module, Debug)]
+struct Mlp {
+    hidden: Linear,
+    output: Linear,
+}
+
+impl Mlp {
+    fn new(input: usize, hidden: usize, output: usize, device: &Device) -> Mlp {
+        Mlp {
+            hidden: LinearConfig::new(input, hidden).init(device),
+            output: LinearConfig::new(hidden, output).init(device),
+        }
+    }
+
+    fn forward<const D: usize>(&self, x: Tensor<D>) -> Tensor<D> {
+        self.output.forward(act(self.hidden.forward(x)))
+    }
+}
+
+/// SE: a per-joint MLP over the target's rest offsets and positions, mean-pooled over each
+/// segment's joints, then a linear layer: `[B, S, d]`.
+#[derive(Module, Debug)]
+struct SkeletonEncoder {
+    joint: Mlp,
+    segment: Linear,
+}
+
+impl SkeletonEncoder {
+    fn new(config: &TeacherConfig, device: &Device) -> SkeletonEncoder {
+        let d = config.features;
+        SkeletonEncoder {
+            joint: Mlp::new(REST_CHANNELS, d, d, device),
+            segment: LinearConfig::new(d, d).init(device),
+        }
+    }
+
+    fn forward(&self, target: &Target) -> Tensor<3> {
+        let rest = Tensor::cat(vec![target.offsets.clone(), target.rest.clone()], 2);
+        let joints = act(self.joint.forward(rest));
+        self.segment.forward(target.pool.clone().matmul(joints))
+    }
+}
+
+/// ME: per-joint embedding plus a sinusoidal encoding of time; segment tokens and joints in
+/// masked self-attention per frame, of which the segment tokens are kept (with a residual);
+/// two stride-2 convolutions within segments plus an average-pooled residual:
+/// `[B, S·d, T/4]`.
+#[derive(Module, Debug)]
+struct MotionEncoder {
+    joint: Mlp,
+    time: PositionalEncoding,
+    tokens: Param<Tensor<2>>,
+    attention: MultiHeadAttention,
+    down_1: Conv1d,
+    down_2: Conv1d,
+}
+
+impl MotionEncoder {
+    fn new(config: &TeacherConfig, device: &Device) -> MotionEncoder {
+        let d = config.features;
+        let tokens = Tensor::random(
+            [SEGMENTS, d],
+            Distribution::Normal(0.0, TOKEN_INIT_STD),
+            device,
+        );
+        MotionEncoder {
+            joint: Mlp::new(MOTION_CHANNELS, d, d, device),
+            time: PositionalEncodingConfig::new(d)
+                .with_max_sequence_size(WINDOW)
+                .init(device),
+            tokens: Param::from_tensor(tokens),
+            attention: MultiHeadAttentionConfig::new(d, config.heads)
+                .with_dropout(0.0)
+                .init(device),
+            down_1: config.conv(2, device),
+            down_2: config.conv(2, device),
+        }
+    }
+
+    fn forward(&self, motion: Tensor<4>, mask: Tensor<3, Bool>) -> Tensor<3> {
+        let [b, t, j, _] = motion.dims();
+        let [_, d] = self.tokens.dims();
+        let tokens = SEGMENTS + j;
+        let time = self
+            .time
+            .sinusoids
+            .clone()
+            .narrow(1, 0, t)
+            .reshape([1, t, 1, d]);
+        let joints = (self.joint.forward(motion) + time).reshape([b * t, j, d]);
+        let segments = self
+            .tokens
+            .val()
+            .reshape([1, SEGMENTS, d])
+            .expand([b * t, SEGMENTS, d]);
+        let x = Tensor::cat(vec![segments, joints], 1);
+        let mask = mask
+            .reshape([b, 1, tokens, tokens])
+            .expand([b, t, tokens, tokens])
+            .reshape([b * t, tokens, tokens]);
+        let context = self
+            .attention
+            .forward(MhaInput::self_attn(x.clone()).mask_attn(mask))
+            .context;
+        let segments = (x + context).narrow(1, 0, SEGMENTS);
+        let x = segments.reshape([b, t, SEGMENTS * d]).swap_dims(1, 2);
+        let y = self.down_2.forward(act(self.down_1.forward(x.clone())));
+        let skip = x
+            .reshape([b, SEGMENTS * d, t / DOWNSAMPLING, DOWNSAMPLING])
+            .mean_dim(3)
+            .reshape([b, SEGMENTS * d, t / DOWNSAMPLING]);
+        act(y + skip)
+    }
+}
+
+/// MD: two stages of linear ×2 upsampling and a convolution within segments; then, per
+/// target joint, an MLP from its segment's feature and its rest offset and position to a raw
+/// quaternion (biased towards the identity, so an untrained teacher keeps the T-pose), and a
+/// linear layer from all segments to the root position.
+#[derive(Module, Debug)]
+struct Decoder {
+    upsample: Interpolate1d,
+    up_1: Conv1d,
+    up_2: Conv1d,
+    joint: Mlp,
+    root: Linear,
+}
+
+impl Decoder {
+    fn new(config: &TeacherConfig, device: &Device) -> Decoder {
+        let d = config.features;
+        Decoder {
+            upsample: Interpolate1dConfig::new()
+                .with_scale_factor(Some(UPSAMPLING))
+                .with_mode(InterpolateMode::Linear)
+                .with_align_corners(false)
+                .init(),
+            up_1: config.conv(1, device),
+            up_2: config.conv(1, device),
+            joint: Mlp::new(d + REST_CHANNELS, d, QUATERNION, device),
+            root: LinearConfig::new(SEGMENTS * d, 3).init(device),
+        }
+    }
+
+    /// Raw quaternions `[B, T, J, 4]` and the root `[B, T, 3]`.
+    fn forward(&self, x: Tensor<3>, target: &Target) -> (Tensor<4>, Tensor<3>) {
+        let x = act(self.up_1.forward(self.upsample.forward(x)));
+        let x = act(self.up_2.forward(self.upsample.forward(x)));
+        let [b, channels, t] = x.dims();
+        let d = channels / SEGMENTS;
+        let x = x.swap_dims(1, 2);
+        let root = self.root.forward(x.clone());
+        let [_, j] = target.segment.dims();
+        let index = target
+            .segment
+            .clone()
+            .reshape([b, 1, j, 1])
+            .expand([b, t, j, d]);
+        let joints = x.reshape([b, t, SEGMENTS, d]).gather(2, index);
+        let rest = Tensor::cat(vec![target.offsets.clone(), target.rest.clone()], 2)
+            .reshape([b, 1, j, REST_CHANNELS])
+            .expand([b, t, j, REST_CHANNELS]);
+        let identity =
+            Tensor::<1>::from_floats(fk::IDENTITY, &root.device()).reshape([1, 1, 1, QUATERNION]);
+        let raw = self.joint.forward(Tensor::cat(vec![joints, rest], 3)) + identity;
+        (raw, root)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::features::testing::{character, window};
+    use crate::features::MAX_JOINTS;
+    use posecoach_core::format::Format;
+
+    const SEED: u64 = 3;
+    const TOLERANCE: f32 = 1e-5;
+
+    fn values<const D: usize>(t: Tensor<D>) -> Vec<f32> {
+        t.to_data().try_to_vec::<f32>().unwrap()
+    }
+
+    /// Positions `[T, n, 3]` of window `i` of a batch padded to `joints`.
+    fn real_positions(out: &Retargeted, i: usize, n: usize) -> Vec<f32> {
+        values(out.positions.clone().narrow(0, i, 1).narrow(2, 0, n))
+    }
+
+    #[test]
+    fn outputs_have_their_shapes_and_unit_rotations() {
+        let device = Device::flex();
+        device.seed(SEED);
+        let model = TeacherConfig::TINY.init(&device);
+        let windows = [Format::H36m17, Format::Cmu31].map(|f| window(&character(f, 1).skeleton));
+        let batch = Batch::reconstruction(&windows, MAX_JOINTS, &device).unwrap();
+        let out = model.forward(&batch);
+        assert_eq!(out.rotations.dims(), [2, WINDOW, MAX_JOINTS, 4]);
+        assert_eq!(out.root.dims(), [2, WINDOW, 3]);
+        assert_eq!(out.positions.dims(), [2, WINDOW, MAX_JOINTS, 3]);
+        let norms = values(out.rotations.square().sum_dim(3));
+        assert!(norms.iter().all(|n| (n - 1.0).abs() < TOLERANCE));
+    }
+
+    #[test]
+    fn padding_and_batch_mates_do_not_change_outputs() {
+        let device = Device::flex();
+        device.seed(SEED);
+        let model = TeacherConfig::TINY.init(&device);
+        let skeleton = character(Format::Coco17, 2).skeleton;
+        let n = skeleton.len();
+        let alone = Batch::reconstruction(&[window(&skeleton)], n, &device).unwrap();
+        let mate = window(&character(Format::Cmu31, 3).skeleton);
+        let padded =
+            Batch::reconstruction(&[mate, window(&skeleton)], MAX_JOINTS, &device).unwrap();
+        let a = real_positions(&model.forward(&alone), 0, n);
+        let b = real_positions(&model.forward(&padded), 1, n);
+        let gap = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f32::max);
+        assert!(gap < TOLERANCE, "{gap}");
+    }
+}
