@@ -66,33 +66,32 @@ pub fn replay(log: &[u8]) -> Result<Replay> {
     let mut reader = LogReader::new(log)?;
     let (mut swings, mut text, mut refused) = (Vec::new(), String::new(), Vec::new());
     for message in reader.by_ref() {
-        session.handle(&message, |outcome| match outcome {
-            Outcome::Scored { swing, report } => {
-                let start_s = swing.start_us as f64 * 1e-6;
-                let _ = writeln!(
-                    text,
-                    "swing {} at {start_s:.2} s ({} frames):",
-                    swing.number, swing.frames
-                );
-                text.push_str(&score::to_text(report));
-                swings.push(
-                    json!({"swing": swing.number, "start_s": start_s, "frames": swing.frames,
-                                   "report": score::to_json(report)}),
-                );
+        session.handle(&message, |outcome| {
+            let (swing, result) = match outcome {
+                Outcome::Scored { swing, report } => (swing, Ok(report)),
+                Outcome::Unscored { swing, error } => (swing, Err(error)),
+                Outcome::Refused(r) => return refused.push(r.to_string()),
+            };
+            let start_s = swing.start_us as f64 * 1e-6;
+            let _ = write!(
+                text,
+                "swing {} at {start_s:.2} s ({} frames):",
+                swing.number, swing.frames
+            );
+            let mut entry =
+                json!({"swing": swing.number, "start_s": start_s, "frames": swing.frames});
+            match result {
+                Ok(report) => {
+                    text.push('\n');
+                    text.push_str(&score::to_text(report));
+                    entry["report"] = score::to_json(report);
+                }
+                Err(error) => {
+                    let _ = writeln!(text, " not scored: {error}");
+                    entry["error"] = json!(error.to_string());
+                }
             }
-            Outcome::Unscored { swing, error } => {
-                let start_s = swing.start_us as f64 * 1e-6;
-                let _ = writeln!(
-                    text,
-                    "swing {} at {start_s:.2} s ({} frames): not scored: {error}",
-                    swing.number, swing.frames
-                );
-                swings.push(
-                    json!({"swing": swing.number, "start_s": start_s, "frames": swing.frames,
-                                   "error": error.to_string()}),
-                );
-            }
-            Outcome::Refused(r) => refused.push(r.to_string()),
+            swings.push(entry);
         });
     }
     let wire = reader.counters();
