@@ -317,18 +317,10 @@ pub fn sample_character_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dataset::FORMATS;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
-    /// Formats characters are built in.
-    const FORMATS: [Format; 6] = [
-        Format::H36m17,
-        Format::Coco17,
-        Format::Cmu31,
-        Format::Bandai22,
-        Format::GolfMarkers,
-        Format::Canonical,
-    ];
     const SAMPLES: u64 = 300;
     const LENGTH_TOLERANCE_M: f32 = 1e-5;
 

@@ -287,19 +287,12 @@ mod tests {
     use super::testing::wave;
     use super::*;
     use crate::bodies::{sample_character_with, Body, Variation};
+    use crate::dataset::FORMATS;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
     const SAME_M: f32 = 1e-4;
     const ANALYTIC_M: f32 = 1e-3;
-    const FORMATS: [Format; 6] = [
-        Format::H36m17,
-        Format::Coco17,
-        Format::Cmu31,
-        Format::Bandai22,
-        Format::GolfMarkers,
-        Format::Canonical,
-    ];
 
     fn largest_gap(a: &Motion, b: &Motion) -> f32 {
         assert_eq!(a.positions.len(), b.positions.len());
