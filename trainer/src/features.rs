@@ -9,12 +9,12 @@
 //! | tensor | shape | holds |
 //! | --- | --- | --- |
 //! | [`Batch::motion`] | `[B, T, J, 6]` | per joint `p ⊕ v`: its position relative to its parent and that position's velocity (heights per second); the root's slot holds the root trajectory |
-//! | [`Batch::attention`] | `[B, S + J, S + J]` bool | `true` where a query (row) must not see a key (column); segment tokens first, then joints |
+//! | [`Batch::attention`] | `[B, S, S + J]` bool | `true` where a segment token (row) must not see a key (column): segment tokens first, then joints |
 //! | [`Target::offsets`] | `[B, J, 3]` | rest offsets from the parent (the root's: zero) |
 //! | [`Target::rest`] | `[B, J, 3]` | rest positions relative to the root |
 //! | [`Target::pool`] | `[B, S, J]` | `1 / n_s` for the `n_s` joints of segment `s`: masked mean pooling as a product |
-//! | [`Target::segment`] | `[B, J]` int | the segment whose feature decodes the bone into each joint |
-//! | [`Target::parents`] | `[B, J]` int | parent indices (the root's and padding's: 0) |
+//! | [`Target::segment`] | `[B, J, S]` | one-hot: the segment whose feature decodes the bone into each joint |
+//! | [`Target::ancestors`] | `[B, J, J]` each | one-hot: pass `i` selects each joint's `2^i`-th ancestor (the root's, padding's and any beyond the root: the root) |
 //! | [`Target::chains`] | `[B, J, J]` | 1 where the column is the row's joint or one of its non-root ancestors |
 //! | [`Target::bones`] | `[B, J]` | 1 for every real joint but the root |
 //! | [`Batch::truth`] | `[B, T, J, 3]` | the positions to reproduce, as the root trajectory |
@@ -23,7 +23,7 @@
 //! first frame, horizontally (X and Z); its height (Y) is kept, so a crouch is not a drift.
 
 use crate::error::Error;
-use burn::prelude::{Bool, Device, Int, Tensor, TensorData};
+use burn::prelude::{Bool, Device, Tensor, TensorData};
 use posecoach_adapters::io::Motion;
 use posecoach_core::skeleton::{Segment, Skeleton, SkeletonError};
 use posecoach_core::Vec3;
@@ -100,16 +100,16 @@ pub struct Target {
     pub rest: Tensor<3>,
     /// `[B, S, J]` masked mean pooling over each segment's joints.
     pub pool: Tensor<3>,
-    /// `[B, J]` the segment decoding each joint's bone.
-    pub segment: Tensor<2, Int>,
-    /// `[B, J]` parent indices.
-    pub parents: Tensor<2, Int>,
+    /// `[B, J, S]` the segment decoding each joint's bone, one-hot.
+    pub segment: Tensor<3>,
+    /// `[B, J, J]` per doubling pass `i`, one-hot rows selecting the `2^i`-th ancestor; as
+    /// many passes as it takes `2^i` to reach the deepest joint's bone count. The first
+    /// selects the parents (even without bones deeper than one).
+    pub ancestors: Vec<Tensor<3>>,
     /// `[B, J, J]` each joint's chain from the root (the root excluded).
     pub chains: Tensor<3>,
     /// `[B, J]` 1 for real non-root joints.
     pub bones: Tensor<2>,
-    /// The deepest joint's number of bones from the root.
-    pub depth: usize,
     /// Each target's height, metres: multiply positions by it to get metres.
     pub heights: Vec<f32>,
 }
@@ -144,7 +144,7 @@ impl Target {
 pub struct Batch {
     /// `[B, T, J, 6]` source motion features.
     pub motion: Tensor<4>,
-    /// `[B, S + J, S + J]` the motion encoder's attention mask on the source skeleton.
+    /// `[B, S, S + J]` the motion encoder's attention mask on the source skeleton.
     pub attention: Tensor<3, Bool>,
     /// The target skeletons.
     pub target: Target,
@@ -168,7 +168,7 @@ impl Batch {
         let b = windows.len();
         let mut motion = Vec::with_capacity(b * WINDOW * joints * MOTION_CHANNELS);
         let mut truth = Vec::with_capacity(b * WINDOW * joints * 3);
-        let mut attention = Vec::with_capacity(b * (SEGMENTS + joints).pow(2));
+        let mut attention = Vec::with_capacity(b * SEGMENTS * (SEGMENTS + joints));
         for window in windows {
             push_motion(window, joints, &mut motion, &mut truth);
             push_attention(window.skeleton(), joints, &mut attention);
@@ -179,7 +179,7 @@ impl Batch {
                 TensorData::new(motion, [b, WINDOW, joints, MOTION_CHANNELS]),
                 device,
             ),
-            attention: Tensor::from_data(TensorData::new(attention, [b, tokens, tokens]), device),
+            attention: Tensor::from_data(TensorData::new(attention, [b, SEGMENTS, tokens]), device),
             target,
             truth: Tensor::from_data(TensorData::new(truth, [b, WINDOW, joints, 3]), device),
         })
@@ -229,20 +229,16 @@ fn push_motion(window: &Window, joints: usize, motion: &mut Vec<f32>, truth: &mu
     }
 }
 
-/// Appends a skeleton's `[S + J, S + J]` attention mask (`true` = blocked): a joint sees the
-/// joints it shares a segment with, a segment token itself, its joints and the root, and a
-/// padded joint only itself (so that no row is empty).
+/// Appends a skeleton's `[S, S + J]` attention mask (`true` = blocked): a segment token sees
+/// itself, its joints and the root. Only the segment tokens' outputs are kept, so they are
+/// the only queries.
 fn push_attention(skeleton: &Skeleton, joints: usize, out: &mut Vec<bool>) {
-    let member = |s: usize, k: usize| skeleton.segment_contains(Segment::ALL[s], k);
-    let shares = |a: usize, b: usize| (0..SEGMENTS).any(|s| member(s, a) && member(s, b));
     let real = |k: usize| k < skeleton.len();
-    for query in 0..SEGMENTS + joints {
+    for query in 0..SEGMENTS {
         for key in 0..SEGMENTS + joints {
-            let sees = match (query.checked_sub(SEGMENTS), key.checked_sub(SEGMENTS)) {
-                (None, None) => query == key,
-                (None, Some(k)) => real(k) && (k == 0 || member(query, k)),
-                (Some(_), None) => false,
-                (Some(a), Some(b)) => a == b || (real(a) && real(b) && shares(a, b)),
+            let sees = match key.checked_sub(SEGMENTS) {
+                None => query == key,
+                Some(k) => real(k) && (k == 0 || skeleton.segment_contains(Segment::ALL[query], k)),
             };
             out.push(!sees);
         }
@@ -267,8 +263,8 @@ struct SkeletonRows {
     offsets: Vec<f32>,
     rest: Vec<f32>,
     pool: Vec<f32>,
-    segment: Vec<i64>,
-    parents: Vec<i64>,
+    segment: Vec<f32>,
+    parents: Vec<Vec<usize>>,
     chains: Vec<f32>,
     bones: Vec<f32>,
     depth: usize,
@@ -282,6 +278,7 @@ impl SkeletonRows {
         let mut rest = vec![Vec3::zeros(); n];
         skeleton.rest_positions(&mut rest);
         let mut depth = vec![0usize; joints];
+        let mut parents = vec![0; joints];
         for k in 0..joints {
             let parent = (k > 0 && k < n).then(|| skeleton.parent(k)).flatten();
             let (offset, from_root) = match parent {
@@ -290,12 +287,13 @@ impl SkeletonRows {
             };
             self.offsets.extend(offset.iter());
             self.rest.extend(from_root.iter());
-            self.parents.push(parent.unwrap_or(0) as i64);
+            parents[k] = parent.unwrap_or(0);
             let segment = match k < n {
                 true => bone_segment(skeleton, k),
                 false => Segment::Spine as usize,
             };
-            self.segment.push(segment as i64);
+            self.segment
+                .extend((0..SEGMENTS).map(|s| if s == segment { 1.0 } else { 0.0 }));
             self.bones.push(if parent.is_some() { 1.0 } else { 0.0 });
             if let Some(p) = parent {
                 depth[k] = depth[p] + 1;
@@ -319,20 +317,48 @@ impl SkeletonRows {
             );
         }
         self.depth = self.depth.max(depth.into_iter().max().unwrap_or(0));
+        self.parents.push(parents);
         self.heights.push(h);
+    }
+
+    /// `[B, J, J]` one-hot selections of each joint's `2^i`-th ancestor, `i` = 0, 1, …
+    fn ancestors(&self, joints: usize) -> Vec<Vec<f32>> {
+        let mut jumps = self.parents.clone();
+        let mut out = Vec::new();
+        loop {
+            out.push(
+                jumps
+                    .iter()
+                    .flat_map(|up| {
+                        up.iter()
+                            .flat_map(|&a| (0..joints).map(move |c| f32::from(u8::from(c == a))))
+                    })
+                    .collect(),
+            );
+            if 1 << out.len() >= self.depth {
+                return out;
+            }
+            for up in &mut jumps {
+                *up = up.iter().map(|&a| up[a]).collect();
+            }
+        }
     }
 
     fn into_target(self, b: usize, joints: usize, device: &Device) -> Target {
         let floats = |data: Vec<f32>, shape: Vec<usize>| TensorData::new(data, shape);
+        let ancestors = self
+            .ancestors(joints)
+            .into_iter()
+            .map(|a| Tensor::from_data(floats(a, vec![b, joints, joints]), device))
+            .collect();
         Target {
             offsets: Tensor::from_data(floats(self.offsets, vec![b, joints, 3]), device),
             rest: Tensor::from_data(floats(self.rest, vec![b, joints, 3]), device),
             pool: Tensor::from_data(floats(self.pool, vec![b, SEGMENTS, joints]), device),
-            segment: Tensor::from_data(TensorData::new(self.segment, [b, joints]), device),
-            parents: Tensor::from_data(TensorData::new(self.parents, [b, joints]), device),
+            segment: Tensor::from_data(floats(self.segment, vec![b, joints, SEGMENTS]), device),
+            ancestors,
             chains: Tensor::from_data(floats(self.chains, vec![b, joints, joints]), device),
             bones: Tensor::from_data(floats(self.bones, vec![b, joints]), device),
-            depth: self.depth,
             heights: self.heights,
         }
     }
@@ -428,9 +454,9 @@ mod tests {
         assert!(sees(left_arm, SEGMENTS + wrist));
         assert!(sees(left_arm, SEGMENTS));
         assert!(!sees(Segment::RightLeg as usize, SEGMENTS + wrist));
-        assert!(!sees(SEGMENTS + wrist, left_arm));
+        assert!(sees(left_arm, left_arm) && !sees(left_arm, Segment::RightArm as usize));
         let padded = SEGMENTS + skeleton.len();
-        assert!((0..tokens).all(|k| sees(padded, k) == (k == padded)));
+        assert!((0..SEGMENTS).all(|s| !sees(s, padded)));
     }
 
     #[test]

@@ -1,22 +1,27 @@
 //! Differentiable forward kinematics: [`posecoach_core::kinematics::forward`] on batched,
 //! padded tensors.
 //!
-//! Quaternions are `(w, x, y, z)` in the last dimension. The root carries no rotation (every
-//! bone out of it has its own, which positions cannot tell apart from a root orientation), so
-//! `G_0 = I`, `G_k = G_parent(k) · q_k` and `p_k = p_0 + Σ_a G_a · s_a` over the joints `a`
-//! of `k`'s chain from the root ([`Target::chains`]). Global rotations are found in
-//! [`Target::depth`] passes of `G ← G[parent] · q` over all joints at once: after pass `d`,
-//! every joint at most `d` bones from the root is exact, whatever its tree.
+//! Quaternions are `(w, x, y, z)` in the last dimension, joint-major: `[B, J, T, 4]`, so that
+//! picking every joint's ancestor is one product with a `[B, J, J]` one-hot matrix. The root
+//! carries no rotation (every bone out of it has its own, which positions cannot tell apart
+//! from a root orientation), so `G_0 = I`, `G_k = G_parent(k) · q_k` and
+//! `p_k = p_0 + Σ_a G_a · s_a` over the joints `a` of `k`'s chain from the root
+//! ([`Target::chains`]). Global rotations come from pointer doubling
+//! ([`Target::ancestors`]): after pass `i`, `P_k` is the product of the `2^i` bones ending at
+//! `k`, and `P_k ← P_{2^i-th ancestor} · P_k` doubles that, so a skeleton `D` bones deep
+//! takes `⌈log2 D⌉` passes. Products of quaternions and rotations of vectors are each a
+//! single product with a constant table, over the outer product of their operands: few,
+//! large tensor operations rather than many narrow ones.
 
 use crate::features::Target;
-use burn::prelude::Tensor;
+use burn::prelude::{Device, Tensor, TensorData};
 
 /// The identity rotation.
 pub const IDENTITY: [f32; 4] = [1.0, 0.0, 0.0, 0.0];
 /// Added to a squared norm before its square root, so that a zero quaternion stays finite.
 const NORM_EPSILON: f32 = 1e-12;
 
-/// Unit quaternions `[B, T, J, 4]` from raw ones.
+/// Unit quaternions from raw ones (last dimension).
 pub fn normalize(raw: Tensor<4>) -> Tensor<4> {
     let norm = raw
         .clone()
@@ -27,78 +32,87 @@ pub fn normalize(raw: Tensor<4>) -> Tensor<4> {
     raw / norm
 }
 
-/// Joint positions `[B, T, J, 3]` from unit rotations `[B, T, J, 4]` of the bones into each
+/// Joint positions `[B, T, J, 3]` from unit rotations `[B, J, T, 4]` of the bones into each
 /// joint and root positions `[B, T, 3]`, on `target`'s skeletons (in its units: heights).
 /// The root's rotation and padded joints' are ignored; padded joints sit at the root.
 pub fn forward(rotations: Tensor<4>, root: Tensor<3>, target: &Target) -> Tensor<4> {
-    let [b, t, j, _] = rotations.dims();
+    let [b, j, t, _] = rotations.dims();
     let device = rotations.device();
-    let bones = target.bones.clone().reshape([b, 1, j, 1]);
+    let bones = target.bones.clone().reshape([b, j, 1, 1]);
     let identity = Tensor::<1>::from_floats(IDENTITY, &device).reshape([1, 1, 1, 4]);
-    let local = rotations * bones.clone() + identity.clone() * bones.neg().add_scalar(1.0);
-    let parents = target
-        .parents
-        .clone()
-        .reshape([b, 1, j, 1])
-        .expand([b, t, j, 4]);
-    let mut global = identity.expand([b, t, j, 4]);
-    for _ in 0..target.depth {
-        global = multiply(global.gather(2, parents.clone()), local.clone());
+    let mut global = rotations * bones.clone() + identity * bones.neg().add_scalar(1.0);
+    for up in &target.ancestors {
+        let above = up
+            .clone()
+            .matmul(global.clone().reshape([b, j, t * 4]))
+            .reshape([b, j, t, 4]);
+        global = multiply(above, global);
     }
-    let offsets = target
-        .offsets
-        .clone()
-        .reshape([b, 1, j, 3])
-        .expand([b, t, j, 3]);
-    let chains = target
-        .chains
-        .clone()
-        .reshape([b, 1, j, j])
-        .expand([b, t, j, j]);
-    chains.matmul(rotate(global, offsets)) + root.reshape([b, t, 1, 3])
+    let offsets = target.offsets.clone().reshape([b, j, 1, 3]);
+    let rotated = rotate(global, offsets).reshape([b, j, t * 3]);
+    let positions = target.chains.clone().matmul(rotated).reshape([b, j, t, 3]);
+    positions.swap_dims(1, 2) + root.reshape([b, t, 1, 3])
 }
 
-/// The `n` components of the last dimension.
-fn parts<const N: usize>(q: Tensor<4>) -> [Tensor<4>; N] {
-    core::array::from_fn(|i| q.clone().narrow(3, i, 1))
+/// `[N, 16]` outer products `a_i · b_j` (at `4i + j`) of quaternions `[B, J, T, 4]`.
+fn outer(a: Tensor<4>, b: Tensor<4>) -> Tensor<2> {
+    let [n, j, t, _] = a.dims();
+    let product = a.reshape([n, j, t, 4, 1]) * b.reshape([n, j, t, 1, 4]);
+    product.reshape([n * j * t, 16])
 }
 
 /// Hamilton product `a · b`.
 fn multiply(a: Tensor<4>, b: Tensor<4>) -> Tensor<4> {
-    let [aw, ax, ay, az] = parts(a);
-    let [bw, bx, by, bz] = parts(b);
-    let m = |x: &Tensor<4>, y: &Tensor<4>| x.clone() * y.clone();
-    Tensor::cat(
-        vec![
-            m(&aw, &bw) - m(&ax, &bx) - m(&ay, &by) - m(&az, &bz),
-            m(&aw, &bx) + m(&ax, &bw) + m(&ay, &bz) - m(&az, &by),
-            m(&aw, &by) - m(&ax, &bz) + m(&ay, &bw) + m(&az, &bx),
-            m(&aw, &bz) + m(&ax, &by) - m(&ay, &bx) + m(&az, &bw),
-        ],
-        3,
-    )
+    let dims = a.dims();
+    let table = table(&a.device(), 4, |i, j| hamilton(basis(i), basis(j)).to_vec());
+    outer(a, b).matmul(table).reshape(dims)
 }
 
-/// `a × b` of 3-vectors given as components.
-fn cross(a: &[Tensor<4>; 3], b: &[Tensor<4>; 3]) -> [Tensor<4>; 3] {
-    let m = |x: &Tensor<4>, y: &Tensor<4>| x.clone() * y.clone();
-    [
-        m(&a[1], &b[2]) - m(&a[2], &b[1]),
-        m(&a[2], &b[0]) - m(&a[0], &b[2]),
-        m(&a[0], &b[1]) - m(&a[1], &b[0]),
-    ]
-}
-
-/// Vectors `[.., 3]` rotated by unit quaternions `[.., 4]`: `v + w·t + u × t` with
-/// `t = 2 u × v`.
+/// Vectors `v` (`[B, J, 1, 3]`, or `[B, J, T, 3]`) rotated by unit quaternions
+/// `q` (`[B, J, T, 4]`): `q · v · q̄` as the matrix `R(q) = Σ q_i q_j M_ij`.
 fn rotate(q: Tensor<4>, v: Tensor<4>) -> Tensor<4> {
-    let [w, x, y, z] = parts(q);
-    let u = [x, y, z];
-    let v: [Tensor<4>; 3] = parts(v);
-    let t = cross(&u, &v).map(|c| c.mul_scalar(2.0));
-    let ut = cross(&u, &t);
-    let [v, t, ut] = [v, t, ut].map(|c| Tensor::cat(c.to_vec(), 3));
-    v + w * t + ut
+    let [b, j, t, _] = q.dims();
+    let [_, _, tv, _] = v.dims();
+    let table = table(&q.device(), 9, |i, k| {
+        let sandwich = |c: usize| {
+            let mut axis = [0.0; 4];
+            axis[c + 1] = 1.0;
+            hamilton(hamilton(basis(i), axis), conjugate(basis(k)))
+        };
+        let columns = [0, 1, 2].map(sandwich);
+        (0..9).map(|rc| columns[rc % 3][rc / 3 + 1]).collect()
+    });
+    let matrices = outer(q.clone(), q).matmul(table).reshape([b, j, t, 3, 3]);
+    (matrices * v.reshape([b, j, tv, 1, 3]))
+        .sum_dim(4)
+        .reshape([b, j, t, 3])
+}
+
+/// The `[16, width]` table whose row `4i + j` is `entry(i, j)`.
+fn table(device: &Device, width: usize, entry: impl Fn(usize, usize) -> Vec<f32>) -> Tensor<2> {
+    let rows: Vec<f32> = (0..16).flat_map(|r| entry(r / 4, r % 4)).collect();
+    Tensor::from_data(TensorData::new(rows, [16, width]), device)
+}
+
+/// Unit quaternion `i` of the basis `(1, i, j, k)`.
+fn basis(i: usize) -> [f32; 4] {
+    let mut e = [0.0; 4];
+    e[i] = 1.0;
+    e
+}
+
+fn conjugate([w, x, y, z]: [f32; 4]) -> [f32; 4] {
+    [w, -x, -y, -z]
+}
+
+/// Hamilton product of two quaternions.
+fn hamilton([aw, ax, ay, az]: [f32; 4], [bw, bx, by, bz]: [f32; 4]) -> [f32; 4] {
+    [
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+    ]
 }
 
 #[cfg(test)]
@@ -129,14 +143,14 @@ mod tests {
         let skeletons: Vec<_> = characters.iter().map(|c| &c.skeleton).collect();
         let target = Target::new(&skeletons, MAX_JOINTS, &device).unwrap();
         let b = skeletons.len();
-        let mut raw = vec![0.0f32; b * FRAMES * MAX_JOINTS * 4];
+        let mut raw = vec![0.0f32; b * MAX_JOINTS * FRAMES * 4];
         rng.fill(&mut raw[..]);
         let raw: Vec<f32> = raw.iter().map(|v| 2.0 * v - 1.0).collect();
         let roots: Vec<f32> = (0..b * FRAMES * 3)
             .map(|_| rng.random_range(-1.0..1.0))
             .collect();
         let rotations = normalize(Tensor::from_data(
-            TensorData::new(raw.clone(), [b, FRAMES, MAX_JOINTS, 4]),
+            TensorData::new(raw.clone(), [b, MAX_JOINTS, FRAMES, 4]),
             &device,
         ));
         let root = Tensor::from_data(TensorData::new(roots.clone(), [b, FRAMES, 3]), &device);
@@ -152,7 +166,8 @@ mod tests {
                     .map(|k| match k {
                         0 => Quat::identity(),
                         k => {
-                            let r = &raw[at(k) * 4..at(k) * 4 + 4];
+                            let q = ((i * MAX_JOINTS + k) * FRAMES + f) * 4;
+                            let r = &raw[q..q + 4];
                             Quat::new_normalize(nalgebra::Quaternion::new(r[0], r[1], r[2], r[3]))
                         }
                     })

@@ -33,3 +33,7 @@ pub mod model;
 pub mod train;
 
 pub use error::Error;
+
+#[cfg(test)]
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;

@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! target T-pose [B,J,6] ──SE──▶ [B,S,d] ───────────────┐ (added at every time step)
-//! source motion [B,T,J,6] ──ME──▶ [B,S·d,T/4] ──────(+)──▶ MD ──▶ q [B,T,J,4], root [B,T,3]
+//! source motion [B,T,J,6] ──ME──▶ [B,S·d,T/4] ──────(+)──▶ MD ──▶ q [B,J,T,4], root [B,T,3]
 //!                                                                   └─FK(target)─▶ [B,T,J,3]
 //! ```
 //!
@@ -35,6 +35,9 @@ const UPSAMPLING: f32 = 2.0;
 const REST_CHANNELS: usize = 6;
 /// Quaternion components.
 const QUATERNION: usize = 4;
+/// Attention logit of a masked key: its weight is below `e^-60` of a visible key's, and
+/// unlike a larger negative number its exponential stays out of the slow underflow path.
+const MASKED_LOGIT: f64 = -60.0;
 
 const _: () = assert!(
     WINDOW.is_multiple_of(DOWNSAMPLING),
@@ -96,8 +99,8 @@ impl Default for TeacherConfig {
 /// What the teacher outputs for a batch.
 #[derive(Clone, Debug)]
 pub struct Retargeted {
-    /// `[B, T, J, 4]` unit quaternions: each bone's rotation relative to its parent bone (the
-    /// root's and padded joints' are not used).
+    /// `[B, J, T, 4]` (joint-major, as [`fk`] takes them) unit quaternions: each bone's
+    /// rotation relative to its parent bone (the root's and padded joints' are not used).
     pub rotations: Tensor<4>,
     /// `[B, T, 3]` the root trajectory, in target heights.
     pub root: Tensor<3>,
@@ -181,10 +184,10 @@ impl SkeletonEncoder {
     }
 }
 
-/// ME: per-joint embedding plus a sinusoidal encoding of time; segment tokens and joints in
-/// masked self-attention per frame, of which the segment tokens are kept (with a residual);
-/// two stride-2 convolutions within segments plus an average-pooled residual:
-/// `[B, S·d, T/4]`.
+/// ME: per-joint embedding plus a sinusoidal encoding of time; masked self-attention per
+/// frame over segment tokens and joints, of which only the segment tokens' outputs are kept
+/// (with a residual), so only they are computed as queries; two stride-2 convolutions within
+/// segments plus an average-pooled residual: `[B, S·d, T/4]`.
 #[derive(Module, Debug)]
 struct MotionEncoder {
     joint: Mlp,
@@ -211,6 +214,7 @@ impl MotionEncoder {
             tokens: Param::from_tensor(tokens),
             attention: MultiHeadAttentionConfig::new(d, config.heads)
                 .with_dropout(0.0)
+                .with_min_float(MASKED_LOGIT)
                 .init(device),
             down_1: config.conv(2, device),
             down_2: config.conv(2, device),
@@ -220,7 +224,7 @@ impl MotionEncoder {
     fn forward(&self, motion: Tensor<4>, mask: Tensor<3, Bool>) -> Tensor<3> {
         let [b, t, j, _] = motion.dims();
         let [_, d] = self.tokens.dims();
-        let tokens = SEGMENTS + j;
+        let keys = SEGMENTS + j;
         let time = self
             .time
             .sinusoids
@@ -233,16 +237,16 @@ impl MotionEncoder {
             .val()
             .reshape([1, SEGMENTS, d])
             .expand([b * t, SEGMENTS, d]);
-        let x = Tensor::cat(vec![segments, joints], 1);
+        let x = Tensor::cat(vec![segments.clone(), joints], 1);
         let mask = mask
-            .reshape([b, 1, tokens, tokens])
-            .expand([b, t, tokens, tokens])
-            .reshape([b * t, tokens, tokens]);
+            .reshape([b, 1, SEGMENTS, keys])
+            .expand([b, t, SEGMENTS, keys])
+            .reshape([b * t, SEGMENTS, keys]);
         let context = self
             .attention
-            .forward(MhaInput::self_attn(x.clone()).mask_attn(mask))
+            .forward(MhaInput::new(segments.clone(), x.clone(), x).mask_attn(mask))
             .context;
-        let segments = (x + context).narrow(1, 0, SEGMENTS);
+        let segments = segments + context;
         let x = segments.reshape([b, t, SEGMENTS * d]).swap_dims(1, 2);
         let y = self.down_2.forward(act(self.down_1.forward(x.clone())));
         let skip = x
@@ -282,24 +286,23 @@ impl Decoder {
         }
     }
 
-    /// Raw quaternions `[B, T, J, 4]` and the root `[B, T, 3]`.
+    /// Raw quaternions `[B, J, T, 4]` and the root `[B, T, 3]`.
     fn forward(&self, x: Tensor<3>, target: &Target) -> (Tensor<4>, Tensor<3>) {
         let x = act(self.up_1.forward(self.upsample.forward(x)));
         let x = act(self.up_2.forward(self.upsample.forward(x)));
         let [b, channels, t] = x.dims();
         let d = channels / SEGMENTS;
-        let x = x.swap_dims(1, 2);
-        let root = self.root.forward(x.clone());
-        let [_, j] = target.segment.dims();
-        let index = target
+        let root = self.root.forward(x.clone().swap_dims(1, 2));
+        let [_, j, _] = target.segment.dims();
+        let joints = target
             .segment
             .clone()
-            .reshape([b, 1, j, 1])
-            .expand([b, t, j, d]);
-        let joints = x.reshape([b, t, SEGMENTS, d]).gather(2, index);
+            .matmul(x.reshape([b, SEGMENTS, d * t]))
+            .reshape([b, j, d, t])
+            .swap_dims(2, 3);
         let rest = Tensor::cat(vec![target.offsets.clone(), target.rest.clone()], 2)
-            .reshape([b, 1, j, REST_CHANNELS])
-            .expand([b, t, j, REST_CHANNELS]);
+            .reshape([b, j, 1, REST_CHANNELS])
+            .expand([b, j, t, REST_CHANNELS]);
         let identity =
             Tensor::<1>::from_floats(fk::IDENTITY, &root.device()).reshape([1, 1, 1, QUATERNION]);
         let raw = self.joint.forward(Tensor::cat(vec![joints, rest], 3)) + identity;
@@ -334,7 +337,7 @@ mod tests {
         let windows = [Format::H36m17, Format::Cmu31].map(|f| window(&character(f, 1).skeleton));
         let batch = Batch::reconstruction(&windows, MAX_JOINTS, &device).unwrap();
         let out = model.forward(&batch);
-        assert_eq!(out.rotations.dims(), [2, WINDOW, MAX_JOINTS, 4]);
+        assert_eq!(out.rotations.dims(), [2, MAX_JOINTS, WINDOW, 4]);
         assert_eq!(out.root.dims(), [2, WINDOW, 3]);
         assert_eq!(out.positions.dims(), [2, WINDOW, MAX_JOINTS, 3]);
         let norms = values(out.rotations.square().sum_dim(3));

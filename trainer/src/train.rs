@@ -54,17 +54,16 @@ impl Reconstruction {
     pub fn new(output: &Retargeted, batch: &Batch) -> Reconstruction {
         let (predicted, truth) = (output.positions.clone(), batch.truth.clone());
         let [b, t, j, _] = predicted.dims();
-        let parents = batch
-            .target
-            .parents
-            .clone()
-            .reshape([b, 1, j, 1])
-            .expand([b, t, j, 3]);
+        let parents = batch.target.ancestors[0].clone();
         let bones = batch.target.bones.clone().reshape([b, 1, j, 1]);
         let samples = bones.clone().sum().mul_scalar(t as f32);
         let over_bones =
             |p: Tensor<4>, q: Tensor<4>| ((p - q).square() * bones.clone()).sum() / samples.clone();
-        let from_parent = |p: Tensor<4>| p.clone() - p.gather(2, parents.clone());
+        let from_parent = |p: Tensor<4>| {
+            let joint_major = p.clone().swap_dims(1, 2).reshape([b, j, t * 3]);
+            let above = parents.clone().matmul(joint_major).reshape([b, j, t, 3]);
+            p - above.swap_dims(1, 2)
+        };
         let from_root = |p: Tensor<4>| p.clone() - p.narrow(2, 0, 1);
         let root = |p: Tensor<4>| p.narrow(2, 0, 1);
         Reconstruction {
@@ -184,9 +183,9 @@ mod tests {
     fn step_time() {
         let device = Device::flex().autodiff();
         device.seed(SEED);
-        let formats = crate::dataset::FORMATS;
-        let batch = Batch::reconstruction(&windows(&formats, TIMED_BATCH), MAX_JOINTS, &device);
-        let batch = batch.unwrap();
+        let windows = windows(&crate::dataset::FORMATS, TIMED_BATCH);
+        let joints = windows.iter().map(|w| w.skeleton().len()).max().unwrap();
+        let batch = Batch::reconstruction(&windows, joints, &device).unwrap();
         let mut model = TeacherConfig::DEFAULT.init(&device);
         let mut optimizer = Optimizer::adam();
         (model, _) = train_step(model, &mut optimizer, &batch);
