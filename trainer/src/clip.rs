@@ -82,6 +82,28 @@ impl Clip {
         self.root.len()
     }
 
+    /// Frames `start..start + frames`.
+    ///
+    /// # Errors
+    /// [`Error::TooShort`] if the clip ends before.
+    pub fn slice(&self, start: usize, frames: usize) -> Result<Clip, Error> {
+        let available = self.frames().saturating_sub(start);
+        if available < frames {
+            return Err(Error::TooShort {
+                expected: frames,
+                actual: available,
+            });
+        }
+        let n = self.skeleton.len();
+        Ok(Clip {
+            name: self.name.clone(),
+            skeleton: self.skeleton.clone(),
+            rate_hz: self.rate_hz,
+            local: self.local[start * n..(start + frames) * n].to_vec(),
+            root: self.root[start..start + frames].to_vec(),
+        })
+    }
+
     /// Whether the source tracks a club.
     pub fn has_club(&self) -> bool {
         self.skeleton.index_of(Joint::ClubGrip).is_some()

@@ -14,8 +14,13 @@
 use crate::bodies::{Body, Character, Variation};
 use crate::clip::{standard_rest, Clip};
 use crate::error::Error;
+use crate::features::{Window, RATE_HZ, WINDOW};
+use crate::golfgen::{self, SwingParams};
 use posecoach_adapters::io::{self, Motion};
-use posecoach_core::format::Format;
+use posecoach_core::format::{t_pose, Format};
+use posecoach_core::joint::Joint;
+use posecoach_core::skeleton::Skeleton;
+use posecoach_core::Vec3;
 use rand::seq::IndexedRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -59,6 +64,14 @@ impl Split {
         match self {
             Split::Train => 0,
             Split::Eval => 1,
+        }
+    }
+
+    /// `train` or `eval`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Split::Train => "train",
+            Split::Eval => "eval",
         }
     }
 }
@@ -202,6 +215,21 @@ pub struct Pair {
     pub ground_truth: Motion,
 }
 
+/// What training sees: a window of a clip on a character, and a target skeleton (no ground
+/// truth: training is unsupervised).
+#[derive(Clone, Debug)]
+pub struct Example {
+    /// The source motion.
+    pub window: Window,
+    /// The skeleton to retarget it onto.
+    pub target: Skeleton,
+}
+
+/// Clip frames at [`CLIP_RATE_HZ`] that resample to one [`WINDOW`].
+pub fn window_frames() -> usize {
+    ((WINDOW - 1) as f32 * CLIP_RATE_HZ / RATE_HZ).ceil() as usize + 1
+}
+
 /// The clips of both splits.
 #[derive(Clone, Debug, Default)]
 pub struct Pool {
@@ -253,6 +281,62 @@ impl Pool {
             .choose(rng.rng())
             .ok_or(Error::NoClips)?;
         pair_on(clip, rng, structure, variation)
+    }
+
+    /// A random [`Example`] of `rng`'s split: a window of a clip long enough, on a character
+    /// `A`, and a character `B` as [`Pool::sample_pair`] draws them.
+    ///
+    /// # Errors
+    /// [`Error::NoClips`] if no clip of the split holds a window, else as [`Character::new`]
+    /// and [`Clip::on`].
+    pub fn sample_example(
+        &self,
+        rng: &mut SplitRng,
+        structure: Structure,
+        variation: &Variation,
+    ) -> Result<Example, Error> {
+        let frames = window_frames();
+        let long: Vec<&Clip> = self
+            .clips(rng.split())
+            .iter()
+            .filter(|c| c.frames() >= frames)
+            .collect();
+        let clip = long.choose(rng.rng()).ok_or(Error::NoClips)?;
+        let start = rng.rng().random_range(0..=clip.frames() - frames);
+        let (from, onto) = formats(structure, rng.rng());
+        let club = clip.has_club();
+        let source = Character::new(Body::sample(variation, rng.rng()), from, club)?;
+        let target = Character::new(Body::sample(variation, rng.rng()), onto, club)?;
+        let motion = clip.slice(start, frames)?.on(&source)?;
+        Ok(Example {
+            window: Window::new(&motion, 0)?,
+            target: target.skeleton,
+        })
+    }
+
+    /// Adds `count` synthetic swings and putts ([`crate::golfgen`]) to each split, drawn from
+    /// the split's stream of `seed`.
+    ///
+    /// # Errors
+    /// As [`golfgen::generate`] and [`Clip::from_motion`].
+    pub fn add_synthetic_golf(&mut self, count: usize, seed: u64) -> Result<(), Error> {
+        let rest: Vec<Vec3> = Joint::ALL.iter().map(|&j| t_pose(j)).collect();
+        let skeleton = Skeleton::canonical(&Joint::ALL, &rest)?;
+        for split in [Split::Train, Split::Eval] {
+            let mut rng = SplitRng::new(split, seed);
+            for i in 0..count {
+                let params = SwingParams::sample(rng.rng());
+                let swing = golfgen::generate(&skeleton, &params, rng.rng())?;
+                let motion = swing.motion.resampled(CLIP_RATE_HZ);
+                let name = format!("synthetic_{}_{i}", split.name());
+                let clip = Clip::from_motion(&name, &standard_rest(&motion)?)?;
+                match split {
+                    Split::Train => self.train.push(clip),
+                    Split::Eval => self.eval.push(clip),
+                }
+            }
+        }
+        Ok(())
     }
 }
 

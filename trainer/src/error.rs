@@ -1,5 +1,6 @@
 //! The one error type of the training data pipeline, wrapping the core's and the adapters'.
 
+use crate::golfgen::GenError;
 use posecoach_adapters::io::FileError;
 use posecoach_core::events::EventError;
 use posecoach_core::kinematics::LengthError;
@@ -31,6 +32,10 @@ pub enum Error {
     TooShort { expected: usize, actual: usize },
     /// A batch needs at least one window.
     EmptyBatch,
+    /// A synthetic swing could not be generated.
+    Golf(GenError),
+    /// A checkpoint could not be written or read.
+    Checkpoint(String),
 }
 
 impl fmt::Display for Error {
@@ -51,6 +56,8 @@ impl fmt::Display for Error {
                 "a window needs {expected} frames from its start, the motion has {actual}: start earlier"
             ),
             Error::EmptyBatch => f.write_str("a batch needs at least one window"),
+            Error::Golf(e) => write!(f, "synthetic swing: {e}"),
+            Error::Checkpoint(why) => write!(f, "checkpoint: {why}"),
         }
     }
 }
@@ -68,4 +75,4 @@ macro_rules! from {
 }
 
 from!(FileError => File, SkeletonError => Skeleton, LengthError => Length,
-      RetargetError => Retarget, EventError => Events);
+      RetargetError => Retarget, EventError => Events, GenError => Golf);

@@ -1,23 +1,27 @@
-//! Network inputs: motion windows and target T-poses as padded, batched tensors.
+//! Network inputs: motion windows and T-poses as padded, batched tensors.
 //!
 //! Every length is divided by its character's height (no per-character mean or variance), so
 //! the features of one motion are the same whoever performs it, and a loss on them carries
-//! the papers' `/h²` implicitly. Joints are padded to a fixed count `J` (at most
-//! [`MAX_JOINTS`]); padded joints are zero in every tensor, belong to no segment and have no
-//! bone. With `B` windows, `T` = [`WINDOW`] frames and `S` = [`SEGMENTS`]:
+//! the papers' `/h²` implicitly. Each side of a batch pads its joints to its largest skeleton
+//! (`J`, at most [`MAX_JOINTS`]); padded joints are zero in every tensor, belong to no
+//! segment, have no bone and no canonical name. With `B` windows, `T` = [`WINDOW`] frames,
+//! `S` = [`SEGMENTS`], `C` = [`JOINT_COUNT`] canonical joints and `E` = [`EFFECTORS`]:
 //!
 //! | tensor | shape | holds |
 //! | --- | --- | --- |
-//! | [`Batch::motion`] | `[B, T, J, 6]` | per joint `p ⊕ v`: its position relative to its parent and that position's velocity (heights per second); the root's slot holds the root trajectory |
-//! | [`Batch::attention`] | `[B, S, S + J]` bool | `true` where a segment token (row) must not see a key (column): segment tokens first, then joints |
-//! | [`Target::offsets`] | `[B, J, 3]` | rest offsets from the parent (the root's: zero) |
-//! | [`Target::rest`] | `[B, J, 3]` | rest positions relative to the root |
-//! | [`Target::pool`] | `[B, S, J]` | `1 / n_s` for the `n_s` joints of segment `s`: masked mean pooling as a product |
-//! | [`Target::segment`] | `[B, J, S]` | one-hot: the segment whose feature decodes the bone into each joint |
-//! | [`Target::ancestors`] | `[B, J, J]` each | one-hot: pass `i` selects each joint's `2^i`-th ancestor (the root's, padding's and any beyond the root: the root) |
-//! | [`Target::chains`] | `[B, J, J]` | 1 where the column is the row's joint or one of its non-root ancestors |
-//! | [`Target::bones`] | `[B, J]` | 1 for every real joint but the root |
-//! | [`Batch::truth`] | `[B, T, J, 3]` | the positions to reproduce, as the root trajectory |
+//! | [`Batch::positions`] | `[B, T, J, 3]` | the source motion, the root as the root trajectory |
+//! | [`Batch::motion`] | `[B, T, J, 6]` | per joint `p ⊕ v` ([`motion_features`]): its position relative to its parent and that position's velocity (heights per second); the root's slot holds the root trajectory |
+//! | [`Skeletons::attention`] | `[B, S, S + J]` bool | `true` where a segment token (row) must not see a key (column): segment tokens first, then joints |
+//! | [`Skeletons::offsets`] | `[B, J, 3]` | rest offsets from the parent (the root's: zero) |
+//! | [`Skeletons::rest`] | `[B, J, 3]` | rest positions relative to the root |
+//! | [`Skeletons::pool`] | `[B, S, J]` | `1 / n_s` for the `n_s` joints of segment `s`: masked mean pooling as a product |
+//! | [`Skeletons::segment`] | `[B, J, S]` | one-hot: the segment whose feature decodes the bone into each joint |
+//! | [`Skeletons::ancestors`] | `[B, J, J]` each | one-hot: pass `i` selects each joint's `2^i`-th ancestor (the root's, padding's and any beyond the root: the root) |
+//! | [`Skeletons::chains`] | `[B, J, J]` | 1 where the column is the row's joint or one of its non-root ancestors |
+//! | [`Skeletons::bones`] | `[B, J]` | 1 for every real joint but the root |
+//! | [`Skeletons::canonical`] | `[B, C, J]` | one-hot: the joint with each canonical name (a zero row where there is none) |
+//! | [`Skeletons::present`] | `[B, C]` | 1 where the skeleton has the canonical joint |
+//! | [`Skeletons::effectors`] | `[B, E, J]` | one-hot: the end effectors, in [`EndEffector::ALL`] order |
 //!
 //! The **root trajectory** is the root's position relative to where it stands at the window's
 //! first frame, horizontally (X and Z); its height (Y) is kept, so a crouch is not a drift.
@@ -25,7 +29,8 @@
 use crate::error::Error;
 use burn::prelude::{Bool, Device, Tensor, TensorData};
 use posecoach_adapters::io::Motion;
-use posecoach_core::skeleton::{Segment, Skeleton, SkeletonError};
+use posecoach_core::joint::{Joint, JOINT_COUNT};
+use posecoach_core::skeleton::{EndEffector, Segment, Skeleton, SkeletonError};
 use posecoach_core::Vec3;
 
 /// Frames in a window.
@@ -38,6 +43,10 @@ pub const MAX_JOINTS: usize = posecoach_core::config::MAX_JOINTS;
 pub const SEGMENTS: usize = Segment::ALL.len();
 /// Motion features per joint and frame: position and velocity.
 pub const MOTION_CHANNELS: usize = 6;
+/// Rest features per joint: offset from the parent and position from the root.
+pub const REST_CHANNELS: usize = 6;
+/// End effectors per skeleton.
+pub const EFFECTORS: usize = EndEffector::ALL.len();
 
 /// [`WINDOW`] frames of a motion at [`RATE_HZ`], on its skeleton.
 #[derive(Clone, Debug, PartialEq)]
@@ -91,9 +100,9 @@ impl Window {
     }
 }
 
-/// The target skeletons of a batch (see the module for the layouts).
+/// The skeletons of one side of a batch (see the module for the layouts).
 #[derive(Clone, Debug)]
-pub struct Target {
+pub struct Skeletons {
     /// `[B, J, 3]` rest offsets from the parent.
     pub offsets: Tensor<3>,
     /// `[B, J, 3]` rest positions relative to the root.
@@ -110,84 +119,180 @@ pub struct Target {
     pub chains: Tensor<3>,
     /// `[B, J]` 1 for real non-root joints.
     pub bones: Tensor<2>,
-    /// Each target's height, metres: multiply positions by it to get metres.
+    /// `[B, C, J]` the joint with each canonical name.
+    pub canonical: Tensor<3>,
+    /// `[B, C]` 1 where the canonical joint exists.
+    pub present: Tensor<2>,
+    /// `[B, E, J]` the end effectors.
+    pub effectors: Tensor<3>,
+    /// `[B, S, S + J]` the motion encoder's attention mask.
+    pub attention: Tensor<3, Bool>,
+    /// Each skeleton's height, metres: multiply positions by it to get metres.
     pub heights: Vec<f32>,
+    /// The skeletons themselves.
+    pub skeletons: Vec<Skeleton>,
 }
 
-impl Target {
+impl Skeletons {
+    /// The tensors of `skeletons`, padded to the largest.
+    ///
+    /// # Errors
+    /// [`Error::EmptyBatch`] without skeletons, [`SkeletonError::JointCount`] if one has more
+    /// than [`MAX_JOINTS`] joints.
+    pub fn new(skeletons: &[&Skeleton], device: &Device) -> Result<Skeletons, Error> {
+        let joints = skeletons.iter().map(|s| s.len()).max();
+        Skeletons::padded(skeletons, joints.ok_or(Error::EmptyBatch)?, device)
+    }
+
     /// The tensors of `skeletons`, padded to `joints` joints.
     ///
     /// # Errors
     /// [`Error::EmptyBatch`] without skeletons, [`SkeletonError::JointCount`] if one has more
-    /// than `joints` joints.
-    pub fn new(skeletons: &[&Skeleton], joints: usize, device: &Device) -> Result<Target, Error> {
+    /// than `joints` (or [`MAX_JOINTS`]) joints.
+    pub fn padded(
+        skeletons: &[&Skeleton],
+        joints: usize,
+        device: &Device,
+    ) -> Result<Skeletons, Error> {
         if skeletons.is_empty() {
             return Err(Error::EmptyBatch);
         }
         let mut rows = SkeletonRows::default();
         for skeleton in skeletons {
-            if skeleton.len() > joints {
+            if skeleton.len() > joints.min(MAX_JOINTS) {
                 return Err(SkeletonError::JointCount {
-                    max: joints,
+                    max: joints.min(MAX_JOINTS),
                     actual: skeleton.len(),
                 }
                 .into());
             }
             rows.push(skeleton, joints);
         }
-        Ok(rows.into_target(skeletons.len(), joints, device))
+        Ok(rows.into_skeletons(skeletons, joints, device))
     }
+
+    /// Skeletons in the batch.
+    pub fn len(&self) -> usize {
+        self.heights.len()
+    }
+
+    /// Always false: a batch has at least one skeleton.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Joints per skeleton, padding included.
+    pub fn joints(&self) -> usize {
+        self.bones.dims()[1]
+    }
+
+    /// `[B, J, 6]` rest offsets and positions side by side.
+    pub fn rest_features(&self) -> Tensor<3> {
+        Tensor::cat(vec![self.offsets.clone(), self.rest.clone()], 2)
+    }
+
+    /// `[B, T, J, 3]` the positions of `x` (`[B, T, J, 3]`) relative to their parents.
+    pub fn from_parent(&self, x: Tensor<4>) -> Tensor<4> {
+        let [b, t, j, c] = x.dims();
+        let joint_major = x.clone().swap_dims(1, 2).reshape([b, j, t * c]);
+        let above = self.ancestors[0]
+            .clone()
+            .matmul(joint_major)
+            .reshape([b, j, t, c]);
+        x - above.swap_dims(1, 2)
+    }
+
+    /// `[B, T, K, 3]` the rows of `x` (`[B, T, J, 3]`) that `selection` (`[B, K, J]`) picks.
+    pub fn select(selection: &Tensor<3>, x: Tensor<4>) -> Tensor<4> {
+        let [b, t, j, c] = x.dims();
+        let [_, k, _] = selection.dims();
+        let joint_major = x.swap_dims(1, 2).reshape([b, j, t * c]);
+        selection
+            .clone()
+            .matmul(joint_major)
+            .reshape([b, k, t, c])
+            .swap_dims(1, 2)
+    }
+}
+
+/// `[B, T, J, 6]` motion features of positions `[B, T, J, 3]` on `skeletons`: each joint
+/// relative to its parent (the root: itself; padding: zero) and the velocity of that, by backward
+/// differences at [`RATE_HZ`] (the first frame takes the second's). Differentiable, so that
+/// a retargeted motion can be fed back (the cycle).
+pub fn motion_features(positions: Tensor<4>, skeletons: &Skeletons) -> Tensor<4> {
+    let [b, t, j, _] = positions.dims();
+    let bones = skeletons.bones.clone().reshape([b, 1, j, 1]);
+    let relative = skeletons.from_parent(positions.clone()) * bones;
+    let root = positions.narrow(2, 0, 1);
+    let relative = Tensor::cat(vec![root, relative.narrow(2, 1, j - 1)], 2);
+    let steps = (relative.clone().narrow(1, 1, t - 1) - relative.clone().narrow(1, 0, t - 1))
+        .mul_scalar(RATE_HZ);
+    let velocity = Tensor::cat(vec![steps.clone().narrow(1, 0, 1), steps], 1);
+    Tensor::cat(vec![relative, velocity], 3).reshape([b, t, j, MOTION_CHANNELS])
 }
 
 /// A batch of windows to retarget, each onto its target.
 #[derive(Clone, Debug)]
 pub struct Batch {
-    /// `[B, T, J, 6]` source motion features.
+    /// The source skeletons.
+    pub source: Skeletons,
+    /// `[B, T, J, 3]` the source motions.
+    pub positions: Tensor<4>,
+    /// `[B, T, J, 6]` their features.
     pub motion: Tensor<4>,
-    /// `[B, S, S + J]` the motion encoder's attention mask on the source skeleton.
-    pub attention: Tensor<3, Bool>,
     /// The target skeletons.
-    pub target: Target,
-    /// `[B, T, J, 3]` the target positions to reproduce.
-    pub truth: Tensor<4>,
+    pub target: Skeletons,
 }
 
 impl Batch {
-    /// Each window retargeted onto its own skeleton, padded to `joints` joints: the
-    /// reconstruction task.
+    /// Each window to be retargeted onto the skeleton at the same place in `targets`.
     ///
     /// # Errors
-    /// As [`Target::new`].
-    pub fn reconstruction(
-        windows: &[Window],
-        joints: usize,
-        device: &Device,
-    ) -> Result<Batch, Error> {
-        let skeletons: Vec<&Skeleton> = windows.iter().map(Window::skeleton).collect();
-        let target = Target::new(&skeletons, joints, device)?;
-        let b = windows.len();
-        let mut motion = Vec::with_capacity(b * WINDOW * joints * MOTION_CHANNELS);
-        let mut truth = Vec::with_capacity(b * WINDOW * joints * 3);
-        let mut attention = Vec::with_capacity(b * SEGMENTS * (SEGMENTS + joints));
-        for window in windows {
-            push_motion(window, joints, &mut motion, &mut truth);
-            push_attention(window.skeleton(), joints, &mut attention);
+    /// [`Error::Mismatch`] if the counts differ, else as [`Skeletons::new`].
+    pub fn new(windows: &[Window], targets: &[&Skeleton], device: &Device) -> Result<Batch, Error> {
+        if windows.len() != targets.len() {
+            return Err(Error::Mismatch {
+                expected: windows.len(),
+                actual: targets.len(),
+            });
         }
-        let tokens = SEGMENTS + joints;
-        Ok(Batch {
-            motion: Tensor::from_data(
-                TensorData::new(motion, [b, WINDOW, joints, MOTION_CHANNELS]),
-                device,
-            ),
-            attention: Tensor::from_data(TensorData::new(attention, [b, SEGMENTS, tokens]), device),
+        let target = Skeletons::new(targets, device)?;
+        let sources: Vec<&Skeleton> = windows.iter().map(Window::skeleton).collect();
+        let source = Skeletons::new(&sources, device)?;
+        let joints = source.joints();
+        let mut positions = Vec::with_capacity(windows.len() * WINDOW * joints * 3);
+        for window in windows {
+            push_positions(window, joints, &mut positions);
+        }
+        let positions = Tensor::from_data(
+            TensorData::new(positions, [windows.len(), WINDOW, joints, 3]),
+            device,
+        );
+        Ok(Batch::on(source, positions, target))
+    }
+
+    /// Each window retargeted onto its own skeleton: the reconstruction task.
+    ///
+    /// # Errors
+    /// As [`Skeletons::new`].
+    pub fn reconstruction(windows: &[Window], device: &Device) -> Result<Batch, Error> {
+        let skeletons: Vec<&Skeleton> = windows.iter().map(Window::skeleton).collect();
+        Batch::new(windows, &skeletons, device)
+    }
+
+    /// Motions `[B, T, J, 3]` on `source` to retarget onto `target`.
+    pub fn on(source: Skeletons, positions: Tensor<4>, target: Skeletons) -> Batch {
+        Batch {
+            motion: motion_features(positions.clone(), &source),
+            positions,
+            source,
             target,
-            truth: Tensor::from_data(TensorData::new(truth, [b, WINDOW, joints, 3]), device),
-        })
+        }
     }
 
     /// Windows in the batch.
     pub fn len(&self) -> usize {
-        self.target.heights.len()
+        self.source.len()
     }
 
     /// Always false: a batch has at least one window.
@@ -196,36 +301,12 @@ impl Batch {
     }
 }
 
-/// Appends a window's `[T, J, 6]` motion features and `[T, J, 3]` truth, padded.
-fn push_motion(window: &Window, joints: usize, motion: &mut Vec<f32>, truth: &mut Vec<f32>) {
-    let skeleton = window.skeleton();
-    let n = skeleton.len();
-    let positions = window.normalized();
-    let relative: Vec<Vec3> = positions
-        .chunks_exact(n)
-        .flat_map(|frame| {
-            (0..n).map(move |k| match skeleton.parent(k) {
-                Some(p) => frame[k] - frame[p],
-                None => frame[k],
-            })
-        })
-        .collect();
-    for t in 0..WINDOW {
-        // Backward differences; the first frame takes the second's.
-        let before = t.max(1) - 1;
-        let now = before + 1;
-        for k in 0..joints {
-            if k >= n {
-                motion.extend([0.0; MOTION_CHANNELS]);
-                truth.extend([0.0; 3]);
-                continue;
-            }
-            let p = relative[t * n + k];
-            let v = (relative[now * n + k] - relative[before * n + k]) * RATE_HZ;
-            motion.extend([p.x, p.y, p.z, v.x, v.y, v.z]);
-            let q = positions[t * n + k];
-            truth.extend([q.x, q.y, q.z]);
-        }
+/// Appends a window's `[T, J, 3]` positions in heights, padded with zeros.
+fn push_positions(window: &Window, joints: usize, out: &mut Vec<f32>) {
+    let n = window.skeleton().len();
+    for frame in window.normalized().chunks_exact(n) {
+        out.extend(frame.iter().flat_map(|p| [p.x, p.y, p.z]));
+        out.extend((n..joints).flat_map(|_| [0.0; 3]));
     }
 }
 
@@ -267,8 +348,22 @@ struct SkeletonRows {
     parents: Vec<Vec<usize>>,
     chains: Vec<f32>,
     bones: Vec<f32>,
+    canonical: Vec<f32>,
+    present: Vec<f32>,
+    effectors: Vec<f32>,
+    attention: Vec<bool>,
     depth: usize,
     heights: Vec<f32>,
+}
+
+/// A tensor of `shape` on `device` holding `data`.
+fn floats<const D: usize>(data: Vec<f32>, shape: [usize; D], device: &Device) -> Tensor<D> {
+    Tensor::from_data(TensorData::new(data, shape), device)
+}
+
+/// A one-hot row of `len` with a 1 at `at`, if any.
+fn one_hot(at: Option<usize>, len: usize) -> impl Iterator<Item = f32> {
+    (0..len).map(move |c| f32::from(u8::from(Some(c) == at)))
 }
 
 impl SkeletonRows {
@@ -316,6 +411,16 @@ impl SkeletonRows {
                 }),
             );
         }
+        for joint in Joint::ALL {
+            let at = skeleton.index_of(joint);
+            self.canonical.extend(one_hot(at, joints));
+            self.present.push(f32::from(u8::from(at.is_some())));
+        }
+        for effector in EndEffector::ALL {
+            self.effectors
+                .extend(one_hot(Some(skeleton.end_effector(effector)), joints));
+        }
+        push_attention(skeleton, joints, &mut self.attention);
         self.depth = self.depth.max(depth.into_iter().max().unwrap_or(0));
         self.parents.push(parents);
         self.heights.push(h);
@@ -329,10 +434,7 @@ impl SkeletonRows {
             out.push(
                 jumps
                     .iter()
-                    .flat_map(|up| {
-                        up.iter()
-                            .flat_map(|&a| (0..joints).map(move |c| f32::from(u8::from(c == a))))
-                    })
+                    .flat_map(|up| up.iter().flat_map(|&a| one_hot(Some(a), joints)))
                     .collect(),
             );
             if 1 << out.len() >= self.depth {
@@ -344,22 +446,30 @@ impl SkeletonRows {
         }
     }
 
-    fn into_target(self, b: usize, joints: usize, device: &Device) -> Target {
-        let floats = |data: Vec<f32>, shape: Vec<usize>| TensorData::new(data, shape);
+    fn into_skeletons(self, skeletons: &[&Skeleton], joints: usize, device: &Device) -> Skeletons {
+        let b = skeletons.len();
         let ancestors = self
             .ancestors(joints)
             .into_iter()
-            .map(|a| Tensor::from_data(floats(a, vec![b, joints, joints]), device))
+            .map(|a| floats(a, [b, joints, joints], device))
             .collect();
-        Target {
-            offsets: Tensor::from_data(floats(self.offsets, vec![b, joints, 3]), device),
-            rest: Tensor::from_data(floats(self.rest, vec![b, joints, 3]), device),
-            pool: Tensor::from_data(floats(self.pool, vec![b, SEGMENTS, joints]), device),
-            segment: Tensor::from_data(floats(self.segment, vec![b, joints, SEGMENTS]), device),
+        Skeletons {
+            offsets: floats(self.offsets, [b, joints, 3], device),
+            rest: floats(self.rest, [b, joints, 3], device),
+            pool: floats(self.pool, [b, SEGMENTS, joints], device),
+            segment: floats(self.segment, [b, joints, SEGMENTS], device),
             ancestors,
-            chains: Tensor::from_data(floats(self.chains, vec![b, joints, joints]), device),
-            bones: Tensor::from_data(floats(self.bones, vec![b, joints]), device),
+            chains: floats(self.chains, [b, joints, joints], device),
+            bones: floats(self.bones, [b, joints], device),
+            canonical: floats(self.canonical, [b, JOINT_COUNT, joints], device),
+            present: floats(self.present, [b, JOINT_COUNT], device),
+            effectors: floats(self.effectors, [b, EFFECTORS, joints], device),
+            attention: Tensor::from_data(
+                TensorData::new(self.attention, [b, SEGMENTS, SEGMENTS + joints]),
+                device,
+            ),
             heights: self.heights,
+            skeletons: skeletons.iter().map(|&s| s.clone()).collect(),
         }
     }
 }
@@ -391,35 +501,45 @@ mod tests {
     use super::testing::{character, window};
     use super::*;
     use crate::dataset::FORMATS;
+    use posecoach_core::format::Format;
 
-    const TOLERANCE: f32 = 1e-6;
+    const TOLERANCE: f32 = 1e-5;
 
     fn values<const D: usize>(t: &Tensor<D>) -> Vec<f32> {
         t.to_data().try_to_vec::<f32>().unwrap()
     }
 
     #[test]
-    fn features_rebuild_the_truth_and_padding_is_zero() {
-        let skeleton = character(posecoach_core::format::Format::H36m17, 1).skeleton;
-        let n = skeleton.len();
-        let batch = Batch::reconstruction(&[window(&skeleton)], MAX_JOINTS, &Device::flex());
-        let batch = batch.unwrap();
-        let (motion, truth) = (values(&batch.motion), values(&batch.truth));
-        for t in [0, WINDOW - 1] {
-            let at = |k: usize, c: usize| motion[(t * MAX_JOINTS + k) * MOTION_CHANNELS + c];
-            let truth = |k: usize, c: usize| truth[(t * MAX_JOINTS + k) * 3 + c];
+    fn features_rebuild_the_positions_and_padding_is_zero() {
+        let skeleton = character(Format::H36m17, 1).skeleton;
+        let mate = character(Format::Cmu31, 2).skeleton;
+        let (n, joints) = (skeleton.len(), mate.len());
+        let windows = [window(&skeleton), window(&mate)];
+        let batch = Batch::reconstruction(&windows, &Device::flex()).unwrap();
+        assert_eq!(batch.source.joints(), joints);
+        let (motion, positions) = (values(&batch.motion), values(&batch.positions));
+        let at = |t: usize, k: usize, c: usize| motion[(t * joints + k) * MOTION_CHANNELS + c];
+        let position = |t: usize, k: usize, c: usize| positions[(t * joints + k) * 3 + c];
+        for t in [0, 1, WINDOW - 1] {
             for k in 1..n {
                 let p = skeleton.parent(k).unwrap();
                 for c in 0..3 {
-                    let rebuilt = truth(p, c) + at(k, c);
-                    assert!((rebuilt - truth(k, c)).abs() < TOLERANCE, "{t} {k} {c}");
+                    let rebuilt = position(t, p, c) + at(t, k, c);
+                    assert!(
+                        (rebuilt - position(t, k, c)).abs() < TOLERANCE,
+                        "{t} {k} {c}"
+                    );
+                    let now = t.max(1);
+                    let step = at(now, k, c) - at(now - 1, k, c);
+                    let velocity = at(t, k, c + 3) / RATE_HZ;
+                    assert!((velocity - step).abs() < TOLERANCE, "{t} {k} {c}");
                 }
             }
-            assert_eq!(at(0, 1), truth(0, 1));
-            assert!((n..MAX_JOINTS).all(|k| (0..6).all(|c| at(k, c) == 0.0)));
+            assert_eq!(at(t, 0, 1), position(t, 0, 1));
+            assert!((n..joints).all(|k| (0..6).all(|c| at(t, k, c) == 0.0)));
         }
         assert_eq!(
-            (truth[0], truth[2]),
+            (positions[0], positions[2]),
             (0.0, 0.0),
             "root starts at the origin"
         );
@@ -442,7 +562,7 @@ mod tests {
 
     #[test]
     fn segment_tokens_see_their_joints_and_the_root() {
-        let skeleton = character(posecoach_core::format::Format::Coco17, 2).skeleton;
+        let skeleton = character(Format::Coco17, 2).skeleton;
         let mut mask = Vec::new();
         push_attention(&skeleton, MAX_JOINTS, &mut mask);
         let tokens = SEGMENTS + MAX_JOINTS;
@@ -460,11 +580,11 @@ mod tests {
     }
 
     #[test]
-    fn short_motions_and_small_paddings_are_errors() {
-        let skeleton = character(posecoach_core::format::Format::Cmu31, 3).skeleton;
-        let w = window(&skeleton);
+    fn short_motions_small_paddings_and_mismatches_are_errors() {
+        let skeleton = character(Format::Cmu31, 3).skeleton;
+        let device = Device::flex();
         assert!(matches!(
-            Batch::reconstruction(&[w], 17, &Device::flex()),
+            Skeletons::padded(&[&skeleton], 17, &device),
             Err(Error::Skeleton(SkeletonError::JointCount { max: 17, .. }))
         ));
         let short = crate::clip::testing::wave_frames(&skeleton, WINDOW);
@@ -476,8 +596,12 @@ mod tests {
             })
         ));
         assert!(matches!(
-            Batch::reconstruction(&[], MAX_JOINTS, &Device::flex()),
+            Batch::reconstruction(&[], &device),
             Err(Error::EmptyBatch)
+        ));
+        assert!(matches!(
+            Batch::new(&[window(&skeleton)], &[], &device),
+            Err(Error::Mismatch { .. })
         ));
     }
 }

@@ -6,14 +6,14 @@
 //! carries no rotation (every bone out of it has its own, which positions cannot tell apart
 //! from a root orientation), so `G_0 = I`, `G_k = G_parent(k) · q_k` and
 //! `p_k = p_0 + Σ_a G_a · s_a` over the joints `a` of `k`'s chain from the root
-//! ([`Target::chains`]). Global rotations come from pointer doubling
-//! ([`Target::ancestors`]): after pass `i`, `P_k` is the product of the `2^i` bones ending at
+//! ([`Skeletons::chains`]). Global rotations come from pointer doubling
+//! ([`Skeletons::ancestors`]): after pass `i`, `P_k` is the product of the `2^i` bones ending at
 //! `k`, and `P_k ← P_{2^i-th ancestor} · P_k` doubles that, so a skeleton `D` bones deep
 //! takes `⌈log2 D⌉` passes. Products of quaternions and rotations of vectors are each a
 //! single product with a constant table, over the outer product of their operands: few,
 //! large tensor operations rather than many narrow ones.
 
-use crate::features::Target;
+use crate::features::Skeletons;
 use burn::prelude::{Device, Tensor, TensorData};
 
 /// The identity rotation.
@@ -35,7 +35,7 @@ pub fn normalize(raw: Tensor<4>) -> Tensor<4> {
 /// Joint positions `[B, T, J, 3]` from unit rotations `[B, J, T, 4]` of the bones into each
 /// joint and root positions `[B, T, 3]`, on `target`'s skeletons (in its units: heights).
 /// The root's rotation and padded joints' are ignored; padded joints sit at the root.
-pub fn forward(rotations: Tensor<4>, root: Tensor<3>, target: &Target) -> Tensor<4> {
+pub fn forward(rotations: Tensor<4>, root: Tensor<3>, target: &Skeletons) -> Tensor<4> {
     let [b, j, t, _] = rotations.dims();
     let device = rotations.device();
     let bones = target.bones.clone().reshape([b, j, 1, 1]);
@@ -141,7 +141,7 @@ mod tests {
             .map(|(i, &f)| character(f, i as u64))
             .collect();
         let skeletons: Vec<_> = characters.iter().map(|c| &c.skeleton).collect();
-        let target = Target::new(&skeletons, MAX_JOINTS, &device).unwrap();
+        let target = Skeletons::padded(&skeletons, MAX_JOINTS, &device).unwrap();
         let b = skeletons.len();
         let mut raw = vec![0.0f32; b * MAX_JOINTS * FRAMES * 4];
         rng.fill(&mut raw[..]);

@@ -17,17 +17,21 @@
 //! - [`features`]: motion windows and target T-poses as padded, batched tensors.
 //! - [`fk`]: differentiable forward kinematics.
 //! - [`model`]: the teacher network.
-//! - [`train`]: the reconstruction loss and a training step.
+//! - [`losses`]: the training losses.
+//! - [`discriminator`]: the adversarial loss's discriminator.
+//! - [`train`]: training steps and checkpoints.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod bodies;
 pub mod clip;
 pub mod dataset;
+pub mod discriminator;
 mod error;
 pub mod features;
 pub mod fk;
 pub mod golfgen;
+pub mod losses;
 pub mod metrics;
 pub mod model;
 pub mod train;

@@ -1,16 +1,19 @@
 //! The teacher retargeter of ARCHITECTURE.md ("The retargeter"), in burn.
 //!
 //! ```text
-//! target T-pose [B,J,6] ──SE──▶ [B,S,d] ───────────────┐ (added at every time step)
-//! source motion [B,T,J,6] ──ME──▶ [B,S·d,T/4] ──────(+)──▶ MD ──▶ q [B,J,T,4], root [B,T,3]
+//! target T-pose [B,J,6] ──SE──▶ [B,S,d] ─────────────────┐ (added at every time step)
+//! source motion [B,T,J,6] ⊕ T-pose ──ME──▶ [B,S·d,T/4] ──(+)──▶ MD ──▶ q [B,J,T,4], root [B,T,3]
 //!                                                                   └─FK(target)─▶ [B,T,J,3]
 //! ```
+//!
+//! The motion encoder sees the source's rest features beside each joint's motion: a rotation
+//! copy is relative to the source's rest pose, which its positions alone do not tell.
 //!
 //! Temporal features are `[B, S·d, time]` with channels segment-major (`s·d + c`), so a
 //! *masked* convolution, one that mixes only a segment's own channels, is a grouped
 //! convolution with one group per segment. Layouts of the inputs: [`crate::features`].
 
-use crate::features::{Batch, Target, MOTION_CHANNELS, SEGMENTS, WINDOW};
+use crate::features::{Batch, Skeletons, MOTION_CHANNELS, REST_CHANNELS, SEGMENTS, WINDOW};
 use crate::fk;
 use burn::module::Param;
 use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig};
@@ -19,7 +22,7 @@ use burn::nn::interpolate::{Interpolate1d, Interpolate1dConfig, InterpolateMode}
 use burn::nn::{
     Linear, LinearConfig, PaddingConfig1d, PositionalEncoding, PositionalEncodingConfig,
 };
-use burn::prelude::{Bool, Device, Module, Tensor};
+use burn::prelude::{Device, Module, Tensor};
 use burn::tensor::activation::leaky_relu;
 use burn::tensor::Distribution;
 
@@ -31,8 +34,6 @@ const TOKEN_INIT_STD: f64 = 0.1;
 pub const DOWNSAMPLING: usize = 4;
 /// Upsampling factor of each decoder stage.
 const UPSAMPLING: f32 = 2.0;
-/// Rest features per target joint: offset from the parent and position from the root.
-const REST_CHANNELS: usize = 6;
 /// Quaternion components.
 const QUATERNION: usize = 4;
 /// Attention logit of a masked key: its weight is below `e^-60` of a visible key's, and
@@ -106,6 +107,8 @@ pub struct Retargeted {
     pub root: Tensor<3>,
     /// `[B, T, J, 3]` joint positions on the target skeletons, in target heights.
     pub positions: Tensor<4>,
+    /// `[B, S·d, T/4]` the motion encoder's features of the source (the cycle compares them).
+    pub features: Tensor<3>,
 }
 
 /// The teacher network.
@@ -119,12 +122,10 @@ pub struct Teacher {
 impl Teacher {
     /// The batch's motions retargeted onto its targets.
     pub fn forward(&self, batch: &Batch) -> Retargeted {
-        let motion = self
-            .motion
-            .forward(batch.motion.clone(), batch.attention.clone());
+        let features = self.motion.forward(batch.motion.clone(), &batch.source);
         let skeleton = self.skeleton.forward(&batch.target);
-        let [b, channels, _] = motion.dims();
-        let fused = motion + skeleton.reshape([b, channels, 1]);
+        let [b, channels, _] = features.dims();
+        let fused = features.clone() + skeleton.reshape([b, channels, 1]);
         let (raw, root) = self.decoder.forward(fused, &batch.target);
         let rotations = fk::normalize(raw);
         let positions = fk::forward(rotations.clone(), root.clone(), &batch.target);
@@ -132,6 +133,7 @@ impl Teacher {
             rotations,
             root,
             positions,
+            features,
         }
     }
 }
@@ -177,9 +179,8 @@ impl SkeletonEncoder {
         }
     }
 
-    fn forward(&self, target: &Target) -> Tensor<3> {
-        let rest = Tensor::cat(vec![target.offsets.clone(), target.rest.clone()], 2);
-        let joints = act(self.joint.forward(rest));
+    fn forward(&self, target: &Skeletons) -> Tensor<3> {
+        let joints = act(self.joint.forward(target.rest_features()));
         self.segment.forward(target.pool.clone().matmul(joints))
     }
 }
@@ -207,7 +208,7 @@ impl MotionEncoder {
             device,
         );
         MotionEncoder {
-            joint: Mlp::new(MOTION_CHANNELS, d, d, device),
+            joint: Mlp::new(MOTION_CHANNELS + REST_CHANNELS, d, d, device),
             time: PositionalEncodingConfig::new(d)
                 .with_max_sequence_size(WINDOW)
                 .init(device),
@@ -221,8 +222,13 @@ impl MotionEncoder {
         }
     }
 
-    fn forward(&self, motion: Tensor<4>, mask: Tensor<3, Bool>) -> Tensor<3> {
+    fn forward(&self, motion: Tensor<4>, source: &Skeletons) -> Tensor<3> {
         let [b, t, j, _] = motion.dims();
+        let rest = source
+            .rest_features()
+            .reshape([b, 1, j, REST_CHANNELS])
+            .expand([b, t, j, REST_CHANNELS]);
+        let motion = Tensor::cat(vec![motion, rest], 3);
         let [_, d] = self.tokens.dims();
         let keys = SEGMENTS + j;
         let time = self
@@ -238,7 +244,9 @@ impl MotionEncoder {
             .reshape([1, SEGMENTS, d])
             .expand([b * t, SEGMENTS, d]);
         let x = Tensor::cat(vec![segments.clone(), joints], 1);
-        let mask = mask
+        let mask = source
+            .attention
+            .clone()
             .reshape([b, 1, SEGMENTS, keys])
             .expand([b, t, SEGMENTS, keys])
             .reshape([b * t, SEGMENTS, keys]);
@@ -287,7 +295,7 @@ impl Decoder {
     }
 
     /// Raw quaternions `[B, J, T, 4]` and the root `[B, T, 3]`.
-    fn forward(&self, x: Tensor<3>, target: &Target) -> (Tensor<4>, Tensor<3>) {
+    fn forward(&self, x: Tensor<3>, target: &Skeletons) -> (Tensor<4>, Tensor<3>) {
         let x = act(self.up_1.forward(self.upsample.forward(x)));
         let x = act(self.up_2.forward(self.upsample.forward(x)));
         let [b, channels, t] = x.dims();
@@ -300,7 +308,8 @@ impl Decoder {
             .matmul(x.reshape([b, SEGMENTS, d * t]))
             .reshape([b, j, d, t])
             .swap_dims(2, 3);
-        let rest = Tensor::cat(vec![target.offsets.clone(), target.rest.clone()], 2)
+        let rest = target
+            .rest_features()
             .reshape([b, j, 1, REST_CHANNELS])
             .expand([b, j, t, REST_CHANNELS]);
         let identity =
@@ -314,7 +323,6 @@ impl Decoder {
 mod tests {
     use super::*;
     use crate::features::testing::{character, window};
-    use crate::features::MAX_JOINTS;
     use posecoach_core::format::Format;
 
     const SEED: u64 = 3;
@@ -335,11 +343,12 @@ mod tests {
         device.seed(SEED);
         let model = TeacherConfig::TINY.init(&device);
         let windows = [Format::H36m17, Format::Cmu31].map(|f| window(&character(f, 1).skeleton));
-        let batch = Batch::reconstruction(&windows, MAX_JOINTS, &device).unwrap();
+        let batch = Batch::reconstruction(&windows, &device).unwrap();
+        let j = batch.target.joints();
         let out = model.forward(&batch);
-        assert_eq!(out.rotations.dims(), [2, MAX_JOINTS, WINDOW, 4]);
+        assert_eq!(out.rotations.dims(), [2, j, WINDOW, 4]);
         assert_eq!(out.root.dims(), [2, WINDOW, 3]);
-        assert_eq!(out.positions.dims(), [2, WINDOW, MAX_JOINTS, 3]);
+        assert_eq!(out.positions.dims(), [2, WINDOW, j, 3]);
         let norms = values(out.rotations.square().sum_dim(3));
         assert!(norms.iter().all(|n| (n - 1.0).abs() < TOLERANCE));
     }
@@ -351,10 +360,9 @@ mod tests {
         let model = TeacherConfig::TINY.init(&device);
         let skeleton = character(Format::Coco17, 2).skeleton;
         let n = skeleton.len();
-        let alone = Batch::reconstruction(&[window(&skeleton)], n, &device).unwrap();
+        let alone = Batch::reconstruction(&[window(&skeleton)], &device).unwrap();
         let mate = window(&character(Format::Cmu31, 3).skeleton);
-        let padded =
-            Batch::reconstruction(&[mate, window(&skeleton)], MAX_JOINTS, &device).unwrap();
+        let padded = Batch::reconstruction(&[mate, window(&skeleton)], &device).unwrap();
         let a = real_positions(&model.forward(&alone), 0, n);
         let b = real_positions(&model.forward(&padded), 1, n);
         let gap = a
