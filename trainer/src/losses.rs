@@ -296,7 +296,7 @@ mod tests {
         let b = batch(Format::H36m17);
         let skeleton = &b.source.skeletons[0];
         let n = skeleton.len();
-        let rest: Vec<f32> = b.source.rest.clone().into_data().to_vec().unwrap();
+        let rest: Vec<f32> = b.source.rest.clone().into_data().try_to_vec().unwrap();
         let t_pose = Tensor::<1>::from_floats(rest.as_slice(), &Device::flex())
             .reshape([1, 1, n, 3])
             .expand([1, WINDOW, n, 3]);
