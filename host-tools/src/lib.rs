@@ -6,6 +6,7 @@
 pub mod bench;
 pub mod coaches;
 pub mod inspect;
+pub mod learn;
 pub mod replay;
 pub mod retarget;
 pub mod score;

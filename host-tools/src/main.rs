@@ -3,7 +3,7 @@
 //! Every command returns its output as text (a readable summary, or one JSON object with
 //! `--json`) and `main` prints it.
 
-use posecoach_cli::{bench, inspect, replay, retarget, score, synth, tpose};
+use posecoach_cli::{bench, inspect, learn, replay, retarget, score, synth, tpose};
 
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -36,7 +36,18 @@ enum Command {
     Replay(replay::Args),
     /// Make a realistic recorded session (.pclog and its expected swings) from swing files.
     SynthLog(synth::Args),
+    /// Train the learned retargeter (the teacher network) on motion data, unsupervised.
+    Train(learn::TrainArgs),
+    /// Fine-tune a trained teacher to one student's body.
+    Finetune(learn::FinetuneArgs),
+    /// Evaluate retargeters on held-out characters and motions against the ground truth.
+    Eval(learn::EvalArgs),
 }
+
+// glibc's malloc makes training steps several times slower (page faults on every large
+// tensor); mimalloc keeps freed pages.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -48,6 +59,9 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(&args),
         Command::Replay(args) => replay::run(&args),
         Command::SynthLog(args) => synth::run(&args),
+        Command::Train(args) => learn::train(&args),
+        Command::Finetune(args) => learn::finetune(&args),
+        Command::Eval(args) => learn::eval(&args),
     };
     match result {
         Ok(output) => {

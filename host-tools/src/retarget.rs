@@ -1,7 +1,8 @@
 //! `posecoach retarget`: the coach's motion on the student's skeleton.
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use posecoach_adapters::io;
+use posecoach_train::infer::Retargeter;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -16,9 +17,12 @@ pub struct Args {
     /// Where to write the retargeted motion (.bvh or .csv).
     #[arg(long)]
     out: PathBuf,
-    /// Use the analytic retargeter (bone-direction copy); the only method until weights exist.
-    #[arg(long)]
+    /// Use the analytic retargeter (bone-direction copy): the default without `--weights`.
+    #[arg(long, conflicts_with = "weights")]
     analytic: bool,
+    /// Use the learned retargeter in this teacher file or checkpoint (`posecoach train`).
+    #[arg(long)]
+    weights: Option<PathBuf>,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -27,12 +31,23 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<String> {
     let coach = io::load(&args.coach)?;
     let student = io::load(&args.student_tpose)?;
-    let virtual_swing = coach
-        .retarget_analytic(&student)
-        .map_err(|(frame, e)| anyhow::anyhow!("coach frame {frame}: {e}"))?;
+    let (virtual_swing, method) = match &args.weights {
+        Some(path) => {
+            let teacher =
+                Retargeter::load(path).with_context(|| format!("loading {}", path.display()))?;
+            (teacher.retarget(&coach, &student.skeleton)?, "teacher")
+        }
+        None => (
+            coach
+                .retarget_analytic(&student)
+                .map_err(|(frame, e)| anyhow::anyhow!("coach frame {frame}: {e}"))?,
+            "analytic",
+        ),
+    };
     io::save(&virtual_swing, &args.out)?;
     let summary = json!({
-        "method": "analytic",
+        "method": method,
+        "weights": args.weights.as_ref().map(|p| p.display().to_string()),
         "coach": {"file": args.coach.display().to_string(), "format": coach.skeleton.format().name(),
                   "joints": coach.skeleton.len(), "frames": coach.frames(), "height_m": coach.skeleton.height()},
         "student": {"file": args.student_tpose.display().to_string(), "format": student.skeleton.format().name(),
@@ -44,7 +59,7 @@ pub fn run(args: &Args) -> Result<String> {
         format!("{summary}\n")
     } else {
         format!(
-            "retargeted {} frames of {} ({} joints, {:.2} m) onto {} ({} joints, {:.2} m), root scale {:.3}\n",
+            "retargeted ({method}) {} frames of {} ({} joints, {:.2} m) onto {} ({} joints, {:.2} m), root scale {:.3}\n",
             coach.frames(),
             args.coach.display(),
             coach.skeleton.len(),

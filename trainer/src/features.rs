@@ -10,7 +10,7 @@
 //! | tensor | shape | holds |
 //! | --- | --- | --- |
 //! | [`Batch::positions`] | `[B, T, J, 3]` | the source motion, the root as the root trajectory |
-//! | [`Batch::motion`] | `[B, T, J, 6]` | per joint `p ⊕ v` ([`motion_features`]): its position relative to its parent and that position's velocity (heights per second); the root's slot holds the root trajectory |
+//! | [`Batch::motion`] | `[B, T, J, 6]` | per joint `p ⊕ v` ([`motion_features`]): its position relative to its parent and that position's change since the previous frame (heights per frame: golf's fastest joints stay near 1); the root's slot holds the root trajectory |
 //! | [`Skeletons::attention`] | `[B, S, S + J]` bool | `true` where a segment token (row) must not see a key (column): segment tokens first, then joints |
 //! | [`Skeletons::offsets`] | `[B, J, 3]` | rest offsets from the parent (the root's: zero) |
 //! | [`Skeletons::rest`] | `[B, J, 3]` | rest positions relative to the root |
@@ -216,8 +216,8 @@ impl Skeletons {
 }
 
 /// `[B, T, J, 6]` motion features of positions `[B, T, J, 3]` on `skeletons`: each joint
-/// relative to its parent (the root: itself; padding: zero) and the velocity of that, by backward
-/// differences at [`RATE_HZ`] (the first frame takes the second's). Differentiable, so that
+/// relative to its parent (the root: itself; padding: zero) and its change since the previous
+/// frame (the first frame takes the second's). Differentiable, so that
 /// a retargeted motion can be fed back (the cycle).
 pub fn motion_features(positions: Tensor<4>, skeletons: &Skeletons) -> Tensor<4> {
     let [b, t, j, _] = positions.dims();
@@ -225,8 +225,7 @@ pub fn motion_features(positions: Tensor<4>, skeletons: &Skeletons) -> Tensor<4>
     let relative = skeletons.from_parent(positions.clone()) * bones;
     let root = positions.narrow(2, 0, 1);
     let relative = Tensor::cat(vec![root, relative.narrow(2, 1, j - 1)], 2);
-    let steps = (relative.clone().narrow(1, 1, t - 1) - relative.clone().narrow(1, 0, t - 1))
-        .mul_scalar(RATE_HZ);
+    let steps = relative.clone().narrow(1, 1, t - 1) - relative.clone().narrow(1, 0, t - 1);
     let velocity = Tensor::cat(vec![steps.clone().narrow(1, 0, 1), steps], 1);
     Tensor::cat(vec![relative, velocity], 3).reshape([b, t, j, MOTION_CHANNELS])
 }
@@ -531,7 +530,7 @@ mod tests {
                     );
                     let now = t.max(1);
                     let step = at(now, k, c) - at(now - 1, k, c);
-                    let velocity = at(t, k, c + 3) / RATE_HZ;
+                    let velocity = at(t, k, c + 3);
                     assert!((velocity - step).abs() < TOLERANCE, "{t} {k} {c}");
                 }
             }

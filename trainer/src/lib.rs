@@ -20,6 +20,7 @@
 //! - [`losses`]: the training losses.
 //! - [`discriminator`]: the adversarial loss's discriminator.
 //! - [`train`]: training steps and checkpoints.
+//! - [`infer`]: a trained teacher retargeting whole motions.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -31,6 +32,7 @@ mod error;
 pub mod features;
 pub mod fk;
 pub mod golfgen;
+pub mod infer;
 pub mod losses;
 pub mod metrics;
 pub mod model;

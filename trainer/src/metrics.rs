@@ -16,12 +16,12 @@ use crate::bodies::Variation;
 use crate::clip::{motion, standard_rest, Clip};
 use crate::dataset::{pair_on, Pair, Pool, Split, SplitRng, Structure};
 use crate::error::Error;
+use crate::infer::Retargeter;
 use posecoach_adapters::io::Motion;
 use posecoach_core::events;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
-use std::fmt::Write;
 
 /// A foot counts as planted within this height above its lowest point (metres)...
 pub const CONTACT_HEIGHT_M: f32 = 0.03;
@@ -198,9 +198,74 @@ impl Baseline {
     }
 }
 
-/// Means of some metrics (each optional one over the pairs that have it).
+/// A retargeter the table compares: a baseline or a trained teacher.
+#[derive(Clone, Copy, Debug)]
+pub enum Method<'a> {
+    /// A baseline.
+    Baseline(Baseline),
+    /// A trained teacher.
+    Teacher(&'a Retargeter),
+}
+
+impl Method<'_> {
+    /// Short name for tables.
+    pub fn name(self) -> String {
+        match self {
+            Method::Baseline(b) => b.name().to_string(),
+            Method::Teacher(t) => t.name.clone(),
+        }
+    }
+
+    /// The pair's source retargeted onto its target.
+    ///
+    /// # Errors
+    /// As [`Baseline::retarget`] and [`Retargeter::retarget`].
+    pub fn retarget(self, pair: &Pair) -> Result<Motion, Error> {
+        match self {
+            Method::Baseline(b) => b.retarget(pair),
+            Method::Teacher(t) => t.retarget(&pair.source, &pair.target.skeleton),
+        }
+    }
+}
+
+/// One row of the table: a method's means over the pairs of one cell. The optional means
+/// are over the pairs that have them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    /// `"every eval clip"` or `"golf swings only"`.
+    pub block: &'static str,
+    /// Same or different formats.
+    pub structure: Structure,
+    /// `"standard rest"` or `"varied rest"`.
+    pub rest: &'static str,
+    /// The method's name.
+    pub method: String,
+    /// Pairs.
+    pub pairs: usize,
+    /// Mean global joint error, fraction of the target's height.
+    pub global: f32,
+    /// Mean local joint error, fraction of the target's height.
+    pub local: f32,
+    /// Golf pairs.
+    pub golf: usize,
+    /// Mean hand-gap errors at address and impact, metres.
+    pub hand_gap: Option<[f32; 2]>,
+    /// Mean foot slide, metres per second.
+    pub foot_slide: Option<f32>,
+}
+
+/// The evaluation table: every method's means per cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    /// The evaluation clips and their frames at the clip rate.
+    pub clips: Vec<(String, usize)>,
+    /// The rows, block by block, cell by cell, method by method.
+    pub rows: Vec<Row>,
+}
+
+/// Sums of some metrics towards a [`Row`].
 #[derive(Clone, Copy, Debug, Default)]
-struct Mean {
+struct Sums {
     pairs: usize,
     global: f32,
     local: f32,
@@ -210,7 +275,7 @@ struct Mean {
     slid: usize,
 }
 
-impl Mean {
+impl Sums {
     fn add(&mut self, m: &Metrics) {
         self.pairs += 1;
         self.global += m.global;
@@ -225,23 +290,6 @@ impl Mean {
             self.slide += s;
         }
     }
-
-    fn row(&self) -> String {
-        let per = |sum: f32, n: usize, scale: f32| match n {
-            0 => "-".to_string(),
-            n => format!("{:.2}", sum * scale / n as f32),
-        };
-        format!(
-            "{:>5} {:>9} {:>9} {:>5} {:>10} {:>10} {:>11}",
-            self.pairs,
-            per(self.global, self.pairs, 100.0),
-            per(self.local, self.pairs, 100.0),
-            self.golf,
-            per(self.gap[0], self.golf, 100.0),
-            per(self.gap[1], self.golf, 100.0),
-            per(self.slide, self.slid, 100.0),
-        )
-    }
 }
 
 /// The variations the table compares, with their names.
@@ -253,35 +301,22 @@ const VARIATIONS: [(&str, Variation); 2] = [
 /// Pairs per golf clip and cell in the table's golf block (hand gaps need swings).
 pub const GOLF_PAIRS: usize = 5;
 
-/// A table of every [`Baseline`]'s mean metrics on the evaluation clips, characters from the
-/// evaluation stream at `seed`: one pair per clip, structure and variation, then
-/// [`GOLF_PAIRS`] per golf clip for the hand gaps.
+/// Every method's mean metrics on the evaluation clips, characters from the evaluation stream
+/// at `seed`: one pair per clip, structure and variation, then [`GOLF_PAIRS`] per golf clip for
+/// the hand gaps. Every method sees the same pairs. `progress` is called after each pair.
 ///
 /// # Errors
 /// [`Error::NoClips`] without evaluation clips, else the first pair that fails.
-pub fn baseline_table(pool: &Pool, seed: u64) -> Result<String, Error> {
+pub fn table(
+    pool: &Pool,
+    seed: u64,
+    methods: &[Method],
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Table, Error> {
     if pool.eval.is_empty() {
         return Err(Error::NoClips);
     }
     let mut rng = SplitRng::new(Split::Eval, seed);
-    let mut out = String::from("eval clips (frames at 60 Hz):");
-    for clip in &pool.eval {
-        let _ = write!(out, " {} ({})", clip.name, clip.frames());
-    }
-    let _ = writeln!(
-        out,
-        "\n{:<6} {:<14} {:<14} {:>5} {:>9} {:>9} {:>5} {:>10} {:>10} {:>11}",
-        "pairs",
-        "rest poses",
-        "baseline",
-        "n",
-        "global %h",
-        "local %h",
-        "golf",
-        "gap@addr cm",
-        "gap@imp cm",
-        "slide cm/s"
-    );
     let all: Vec<&Clip> = pool.eval.iter().collect();
     let golf: Vec<&Clip> = all.iter().copied().filter(|c| c.has_club()).collect();
     let golf: Vec<&Clip> = golf
@@ -290,37 +325,89 @@ pub fn baseline_table(pool: &Pool, seed: u64) -> Result<String, Error> {
         .cycle()
         .take(golf.len() * GOLF_PAIRS)
         .collect();
-    for (title, clips) in [("every eval clip", all), ("golf swings only", golf)] {
-        let _ = writeln!(out, "-- {title}");
-        block(&mut out, &clips, &mut rng)?;
-    }
-    Ok(out)
-}
-
-/// The table's rows for pairs on `clips`, one per clip, per structure and variation.
-fn block(out: &mut String, clips: &[&Clip], rng: &mut SplitRng) -> Result<(), Error> {
-    for structure in [Structure::Intra, Structure::Cross] {
-        for (name, variation) in &VARIATIONS {
-            let mut means = [Mean::default(); Baseline::ALL.len()];
-            for clip in clips {
-                let pair = pair_on(clip, rng, structure, variation)?;
-                for (mean, baseline) in means.iter_mut().zip(Baseline::ALL) {
-                    mean.add(&evaluate(&pair, &baseline.retarget(&pair)?)?);
+    let cells = 2 * VARIATIONS.len();
+    let total = (all.len() + golf.len()) * cells;
+    let mut done = 0;
+    let mut rows = Vec::new();
+    for (block, clips) in [("every eval clip", all), ("golf swings only", golf)] {
+        for structure in [Structure::Intra, Structure::Cross] {
+            for &(rest, variation) in &VARIATIONS {
+                let mut sums = vec![Sums::default(); methods.len()];
+                for clip in &clips {
+                    let pair = pair_on(clip, &mut rng, structure, &variation)?;
+                    for (sum, method) in sums.iter_mut().zip(methods) {
+                        sum.add(&evaluate(&pair, &method.retarget(&pair)?)?);
+                    }
+                    done += 1;
+                    progress(done, total);
                 }
-            }
-            for (mean, baseline) in means.iter().zip(Baseline::ALL) {
-                let _ = writeln!(
-                    out,
-                    "{:<6} {:<14} {:<14} {}",
-                    format!("{structure:?}").to_lowercase(),
-                    name,
-                    baseline.name(),
-                    mean.row()
-                );
+                rows.extend(sums.iter().zip(methods).map(|(s, m)| Row {
+                    block,
+                    structure,
+                    rest,
+                    method: m.name(),
+                    pairs: s.pairs,
+                    global: s.global / s.pairs.max(1) as f32,
+                    local: s.local / s.pairs.max(1) as f32,
+                    golf: s.golf,
+                    hand_gap: (s.golf > 0).then(|| s.gap.map(|g| g / s.golf as f32)),
+                    foot_slide: (s.slid > 0).then(|| s.slide / s.slid as f32),
+                }));
             }
         }
     }
-    Ok(())
+    let clips = pool
+        .eval
+        .iter()
+        .map(|c| (c.name.clone(), c.frames()))
+        .collect();
+    Ok(Table { clips, rows })
+}
+
+impl std::fmt::Display for Table {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "{} eval clips (frames at 60 Hz):", self.clips.len())?;
+        for (name, frames) in &self.clips {
+            writeln!(f, "  {name} ({frames})")?;
+        }
+        writeln!(
+            f,
+            "{:<6} {:<14} {:<14} {:>5} {:>9} {:>9} {:>5} {:>11} {:>10} {:>11}",
+            "pairs",
+            "rest poses",
+            "method",
+            "n",
+            "global %h",
+            "local %h",
+            "golf",
+            "gap@addr cm",
+            "gap@imp cm",
+            "slide cm/s"
+        )?;
+        let mut block = "";
+        for row in &self.rows {
+            if row.block != block {
+                block = row.block;
+                writeln!(f, "-- {block}")?;
+            }
+            let cm = |v: Option<f32>| v.map_or("-".to_string(), |v| format!("{:.2}", v * 100.0));
+            writeln!(
+                f,
+                "{:<6} {:<14} {:<14} {:>5} {:>9.2} {:>9.2} {:>5} {:>11} {:>10} {:>11}",
+                format!("{:?}", row.structure).to_lowercase(),
+                row.rest,
+                row.method,
+                row.pairs,
+                row.global * 100.0,
+                row.local * 100.0,
+                row.golf,
+                cm(row.hand_gap.map(|g| g[0])),
+                cm(row.hand_gap.map(|g| g[1])),
+                cm(row.foot_slide),
+            )?;
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -361,12 +448,16 @@ mod tests {
             return;
         };
         let pool = Pool::load(&dir).unwrap();
-        let table = baseline_table(&pool, 0).unwrap();
+        let methods = Baseline::ALL.map(Method::Baseline);
+        let table = table(&pool, 0, &methods, |_, _| {}).unwrap();
         println!("{table}");
         // Intra-structure pairs on standard rest poses: the analytic retargeter's poses are the
         // ground truth's (the root differs by the leg-length convention, see `clip`).
-        let first = table.lines().nth(3).unwrap();
-        let local: f32 = first.split_whitespace().nth(6).unwrap().parse().unwrap();
-        assert!(local < 0.05, "{first}");
+        let first = &table.rows[0];
+        assert_eq!(
+            (first.structure, first.method.as_str()),
+            (Structure::Intra, "analytic")
+        );
+        assert!(first.local < 0.0005, "{first:?}");
     }
 }

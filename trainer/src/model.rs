@@ -126,7 +126,9 @@ impl Teacher {
         let skeleton = self.skeleton.forward(&batch.target);
         let [b, channels, _] = features.dims();
         let fused = features.clone() + skeleton.reshape([b, channels, 1]);
-        let (raw, root) = self.decoder.forward(fused, &batch.target);
+        let (raw, correction) = self.decoder.forward(fused, &batch.target);
+        let [_, t, _, _] = batch.positions.dims();
+        let root = batch.positions.clone().narrow(2, 0, 1).reshape([b, t, 3]) + correction;
         let rotations = fk::normalize(raw);
         let positions = fk::forward(rotations.clone(), root.clone(), &batch.target);
         Retargeted {
@@ -268,7 +270,9 @@ impl MotionEncoder {
 /// MD: two stages of linear ×2 upsampling and a convolution within segments; then, per
 /// target joint, an MLP from its segment's feature and its rest offset and position to a raw
 /// quaternion (biased towards the identity, so an untrained teacher keeps the T-pose), and a
-/// linear layer from all segments to the root position.
+/// linear layer from all segments to a correction of the root trajectory. The trajectory in
+/// heights carries over from source to target (ARCHITECTURE.md), so the source's is the
+/// starting point and the network learns only what differs, such as a pelvis held lower.
 #[derive(Module, Debug)]
 struct Decoder {
     upsample: Interpolate1d,
@@ -294,7 +298,7 @@ impl Decoder {
         }
     }
 
-    /// Raw quaternions `[B, J, T, 4]` and the root `[B, T, 3]`.
+    /// Raw quaternions `[B, J, T, 4]` and the root's correction `[B, T, 3]`.
     fn forward(&self, x: Tensor<3>, target: &Skeletons) -> (Tensor<4>, Tensor<3>) {
         let x = act(self.up_1.forward(self.upsample.forward(x)));
         let x = act(self.up_2.forward(self.upsample.forward(x)));

@@ -1,0 +1,380 @@
+//! `posecoach train`, `posecoach finetune` and `posecoach eval`: the learned retargeter.
+//!
+//! Training draws every batch at random (clip, window, characters), so an *epoch* is a fixed
+//! [`STEPS_PER_EPOCH`] steps rather than a pass over the data; a checkpoint is written after
+//! each, and a run resumed from one continues exactly as if it had not stopped.
+
+use anyhow::{bail, Context, Result};
+use burn::prelude::Device;
+use indicatif::{ProgressBar, ProgressStyle};
+use posecoach_adapters::io;
+use posecoach_train::dataset::Pool;
+use posecoach_train::infer::Retargeter;
+use posecoach_train::losses::Switches;
+use posecoach_train::metrics::{self, Baseline, Method, Table};
+use posecoach_train::train::{StepLosses, TrainConfig, Trainer, BATCH, LEARNING_RATE};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Steps in an epoch.
+pub const STEPS_PER_EPOCH: usize = 1000;
+/// The progress bar's loss is the mean over this many steps; without a terminal for the bar,
+/// a line of every loss's mean is printed instead.
+pub const LOG_EVERY: usize = 100;
+/// Synthetic golf swings and putts added to each split.
+pub const SYNTHETIC_SWINGS: usize = 40;
+/// Steps of a per-student fine-tune.
+pub const FINETUNE_STEPS: usize = 200;
+/// Learning rate of a fine-tune.
+pub const FINETUNE_LEARNING_RATE: f64 = 2e-4;
+
+/// Where the motion data is: `--data` folders, else `$POSECOACH_DATA`, else `../shared/data`.
+#[derive(clap::Args)]
+pub struct Data {
+    /// Folders of motion files (.bvh, .c3d), searched recursively; repeatable.
+    #[arg(long = "data")]
+    dirs: Vec<PathBuf>,
+    /// Synthetic golf swings and putts added to each split.
+    #[arg(long, default_value_t = SYNTHETIC_SWINGS)]
+    synthetic: usize,
+}
+
+impl Data {
+    /// The clips of every folder, plus the synthetic swings seeded by `seed`.
+    fn pool(&self, seed: u64) -> Result<Pool> {
+        let dirs = match self.dirs.is_empty() {
+            false => self.dirs.clone(),
+            true => vec![std::env::var_os("POSECOACH_DATA")
+                .map_or_else(|| PathBuf::from("../shared/data"), PathBuf::from)],
+        };
+        let mut pool = Pool::default();
+        for dir in &dirs {
+            if !dir.is_dir() {
+                bail!(
+                    "no motion data at {}: pass --data DIR or set POSECOACH_DATA",
+                    dir.display()
+                );
+            }
+            let more = Pool::load(dir).with_context(|| format!("loading {}", dir.display()))?;
+            pool.train.extend(more.train);
+            pool.eval.extend(more.eval);
+        }
+        pool.add_synthetic_golf(self.synthetic, seed)?;
+        Ok(pool)
+    }
+}
+
+/// The losses an ablation switches off.
+#[derive(clap::Args)]
+pub struct Ablations {
+    /// Train without the cycle loss.
+    #[arg(long)]
+    no_cycle: bool,
+    /// Train without the end-effector velocity loss.
+    #[arg(long)]
+    no_effectors: bool,
+    /// Train without the adversarial loss.
+    #[arg(long)]
+    no_adversarial: bool,
+    /// Train without the joint-distance-matrix loss.
+    #[arg(long)]
+    no_jdm: bool,
+    /// Train without the geometry loss.
+    #[arg(long)]
+    no_geometry: bool,
+}
+
+impl Ablations {
+    fn switches(&self) -> Switches {
+        Switches {
+            cycle: !self.no_cycle,
+            effectors: !self.no_effectors,
+            adversarial: !self.no_adversarial,
+            joint_distances: !self.no_jdm,
+            geometry: !self.no_geometry,
+        }
+    }
+}
+
+#[derive(clap::Args)]
+pub struct TrainArgs {
+    #[command(flatten)]
+    data: Data,
+    /// Epochs of STEPS_PER_EPOCH (1000) steps, counting those a resumed checkpoint has done.
+    #[arg(long, default_value_t = 14)]
+    epochs: usize,
+    /// Seeds the weights and every batch.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Windows per batch.
+    #[arg(long, default_value_t = BATCH)]
+    batch: usize,
+    /// Continue the run in this checkpoint.
+    #[arg(long)]
+    resume: Option<PathBuf>,
+    /// The checkpoint, rewritten after every epoch.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write the teacher alone here at the end (what `--weights` needs; small).
+    #[arg(long)]
+    teacher: Option<PathBuf>,
+    #[command(flatten)]
+    ablations: Ablations,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn train(args: &TrainArgs) -> Result<String> {
+    let device = Device::flex().autodiff();
+    let config = TrainConfig {
+        batch: args.batch,
+        learning_rate: LEARNING_RATE,
+        switches: args.ablations.switches(),
+        seed: args.seed,
+        ..TrainConfig::default()
+    };
+    let trainer = match &args.resume {
+        Some(path) => Trainer::load(path, &device)
+            .with_context(|| format!("resuming from {}", path.display()))?,
+        None => Trainer::new(config, &device),
+    };
+    let pool = args.data.pool(trainer.config().seed)?;
+    let steps = args.epochs * STEPS_PER_EPOCH;
+    run(
+        trainer,
+        &pool,
+        steps,
+        &args.out,
+        args.teacher.as_deref(),
+        args.json,
+    )
+}
+
+#[derive(clap::Args)]
+pub struct FinetuneArgs {
+    /// The trained teacher (checkpoint or teacher file).
+    #[arg(long)]
+    weights: PathBuf,
+    /// The student's T-pose: a one-row CSV, or any motion file whose skeleton is used.
+    #[arg(long)]
+    student_tpose: PathBuf,
+    #[command(flatten)]
+    data: Data,
+    /// Fine-tuning steps.
+    #[arg(long, default_value_t = FINETUNE_STEPS)]
+    steps: usize,
+    /// Seeds the batches.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Where to write the student's teacher.
+    #[arg(long)]
+    out: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn finetune(args: &FinetuneArgs) -> Result<String> {
+    let device = Device::flex().autodiff();
+    let student = io::load(&args.student_tpose)?.skeleton;
+    let config = TrainConfig {
+        learning_rate: FINETUNE_LEARNING_RATE,
+        seed: args.seed,
+        ..TrainConfig::default()
+    };
+    let trainer = Trainer::from_teacher(&args.weights, config, &device)
+        .with_context(|| format!("loading {}", args.weights.display()))?
+        .for_student(student);
+    let pool = args.data.pool(args.seed)?;
+    run(trainer, &pool, args.steps, &args.out, None, args.json)
+}
+
+/// Trains until `steps`, checkpointing every epoch and at the end.
+fn run(
+    mut trainer: Trainer,
+    pool: &Pool,
+    steps: usize,
+    out: &Path,
+    teacher: Option<&Path>,
+    json: bool,
+) -> Result<String> {
+    let bar = ProgressBar::new(steps as u64).with_position(trainer.step() as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} steps {elapsed_precise} (eta {eta}) {msg}",
+        )
+        .context("progress template")?,
+    );
+    let start = Instant::now();
+    let first = trainer.step();
+    let mut epochs = Vec::new();
+    let (mut sums, mut count) = (StepLosses::default(), 0);
+    let (mut recent, mut recent_count) = (StepLosses::default(), 0);
+    while trainer.step() < steps {
+        let losses = trainer.train_step(pool)?;
+        sums = sums.plus(&losses);
+        recent = recent.plus(&losses);
+        (count, recent_count) = (count + 1, recent_count + 1);
+        bar.inc(1);
+        if trainer.step().is_multiple_of(LOG_EVERY) {
+            let mean = recent.times(1.0 / recent_count as f32);
+            bar.set_message(format!("loss {:.3}", mean.total));
+            if bar.is_hidden() {
+                let elapsed = start.elapsed().as_secs_f64();
+                eprintln!(
+                    "step {:>6}/{steps} {elapsed:>6.0} s  {}",
+                    trainer.step(),
+                    describe(&mean)
+                );
+            }
+            (recent, recent_count) = (StepLosses::default(), 0);
+        }
+        if trainer.step().is_multiple_of(STEPS_PER_EPOCH) || trainer.step() == steps {
+            trainer.save(out)?;
+            let mean = sums.times(1.0 / count.max(1) as f32);
+            let line = format!(
+                "epoch done at step {:>6}: {}",
+                trainer.step(),
+                describe(&mean)
+            );
+            match bar.is_hidden() {
+                true => eprintln!("{line}"),
+                false => bar.println(line),
+            }
+            epochs.push(json!({"step": trainer.step(), "losses": losses_json(&mean)}));
+            (sums, count) = (StepLosses::default(), 0);
+        }
+    }
+    bar.finish_and_clear();
+    if let Some(path) = teacher {
+        trainer.save_teacher(path)?;
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let taken = trainer.step() - first;
+    let summary = json!({
+        "steps": trainer.step(),
+        "steps_this_run": taken,
+        "seconds": seconds,
+        "ms_per_step": 1e3 * seconds / taken.max(1) as f64,
+        "epochs": epochs,
+        "checkpoint": out.display().to_string(),
+        "teacher": teacher.map(|p| p.display().to_string()),
+    });
+    Ok(match json {
+        true => format!("{summary}\n"),
+        false => format!(
+            "{taken} steps in {seconds:.0} s ({:.0} ms per step); checkpoint {}{}\n",
+            1e3 * seconds / taken.max(1) as f64,
+            out.display(),
+            teacher.map_or(String::new(), |p| format!(", teacher {}", p.display())),
+        ),
+    })
+}
+
+fn losses_json(l: &StepLosses) -> Value {
+    json!({
+        "total": l.total, "reconstruction": l.reconstruction, "cycle": l.cycle,
+        "effectors": l.effectors, "adversarial": l.adversarial,
+        "joint_distances": l.joint_distances, "geometry": l.geometry,
+        "discriminator": l.discriminator,
+    })
+}
+
+fn describe(l: &StepLosses) -> String {
+    format!(
+        "total {:.4}  rec {:.4}  cycle {:.4}  eff {:.5}  adv {:.3}  jdm {:.4}  geo {:.6}  disc {:.3}",
+        l.total,
+        l.reconstruction,
+        l.cycle,
+        l.effectors,
+        l.adversarial,
+        l.joint_distances,
+        l.geometry,
+        l.discriminator
+    )
+}
+
+#[derive(clap::Args)]
+pub struct EvalArgs {
+    /// A trained teacher (checkpoint or teacher file); repeatable.
+    #[arg(long)]
+    weights: Vec<PathBuf>,
+    /// Include the analytic retargeter (bone-direction copy).
+    #[arg(long)]
+    analytic: bool,
+    /// Include the rotation copy from the format's standard T-pose.
+    #[arg(long)]
+    copy: bool,
+    #[command(flatten)]
+    data: Data,
+    /// Seeds the evaluation characters.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn eval(args: &EvalArgs) -> Result<String> {
+    let teachers = args
+        .weights
+        .iter()
+        .map(|p| Retargeter::load(p).with_context(|| format!("loading {}", p.display())))
+        .collect::<Result<Vec<_>>>()?;
+    let mut methods: Vec<Method> = teachers.iter().map(Method::Teacher).collect();
+    if args.analytic {
+        methods.push(Method::Baseline(Baseline::Analytic));
+    }
+    if args.copy {
+        methods.push(Method::Baseline(Baseline::RotationCopy));
+    }
+    if methods.is_empty() {
+        bail!("nothing to evaluate: pass --weights FILE, --analytic or --copy");
+    }
+    let pool = args.data.pool(args.seed)?;
+    let bar = ProgressBar::new(0);
+    let table = metrics::table(&pool, args.seed, &methods, |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    Ok(match args.json {
+        true => format!("{}\n", table_json(&table, &args.weights, &teachers)),
+        false => {
+            let mut text = String::new();
+            for (path, t) in args.weights.iter().zip(&teachers) {
+                text += &format!("teacher {}: {} steps\n", path.display(), t.steps);
+            }
+            text + &table.to_string()
+        }
+    })
+}
+
+fn table_json(table: &Table, paths: &[PathBuf], teachers: &[Retargeter]) -> Value {
+    let rows: Vec<Value> = table
+        .rows
+        .iter()
+        .map(|r| {
+            json!({
+                "block": r.block,
+                "structure": format!("{:?}", r.structure).to_lowercase(),
+                "rest": r.rest,
+                "method": r.method,
+                "pairs": r.pairs,
+                "global_pct_height": r.global * 100.0,
+                "local_pct_height": r.local * 100.0,
+                "golf_pairs": r.golf,
+                "hand_gap_error_cm": r.hand_gap.map(|g| [g[0] * 100.0, g[1] * 100.0]),
+                "foot_slide_cm_s": r.foot_slide.map(|s| s * 100.0),
+            })
+        })
+        .collect();
+    json!({
+        "teachers": paths.iter().zip(teachers).map(|(p, t)| json!({
+            "file": p.display().to_string(), "steps": t.steps})).collect::<Vec<_>>(),
+        "clips": table.clips.iter().map(|(n, f)| json!({"name": n, "frames": f})).collect::<Vec<_>>(),
+        "rows": rows,
+    })
+}
