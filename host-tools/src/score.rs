@@ -4,6 +4,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use posecoach_adapters::io::{self, Motion};
 use posecoach_core::events::SwingEvents;
 use posecoach_core::score::{self, Advice, Report};
+use posecoach_train::infer::Retargeter;
 use serde_json::{json, Map, Value};
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -19,10 +20,13 @@ pub struct Args {
     /// The student's T-pose; without it the skeleton comes from the student's own frames.
     #[arg(long)]
     student_tpose: Option<PathBuf>,
-    /// Retarget with the analytic retargeter (bone-direction copy): the only method until
-    /// learned weights exist.
-    #[arg(long)]
+    /// Retarget the coach with the analytic retargeter (bone-direction copy): the default
+    /// without `--weights`.
+    #[arg(long, conflicts_with = "weights")]
     analytic: bool,
+    /// Retarget the coach with the learned retargeter in this teacher file or checkpoint.
+    #[arg(long)]
+    weights: Option<PathBuf>,
     /// DTW band radius in frames at the scoring rate.
     #[arg(long, default_value_t = 10)]
     band: u16,
@@ -59,7 +63,12 @@ pub fn run(args: &Args) -> Result<String> {
             .map_err(|(f, e)| anyhow!("{who} frame {f} onto the student's skeleton: {e}"))
     };
     let student = on_body(&student, "student")?;
-    let virtual_coach = on_body(&coach, "coach")?;
+    let virtual_coach = match &args.weights {
+        Some(path) => Retargeter::load(path)
+            .with_context(|| format!("loading {}", path.display()))?
+            .retarget(&coach, &body.skeleton)?,
+        None => on_body(&coach, "coach")?,
+    };
     let (student, virtual_coach) = (
         student.resampled(args.rate),
         virtual_coach.resampled(args.rate),

@@ -1,0 +1,157 @@
+//! The learned retargeter through the command line: `retarget`, `score` and `eval` with
+//! `--weights`, on the committed teacher or a tiny untrained one written the way
+//! `posecoach train --teacher` does.
+
+use burn::prelude::Device;
+use clap::Parser;
+use posecoach_adapters::io;
+use posecoach_cli::{learn, retarget, score};
+use posecoach_train::model::TeacherConfig;
+use posecoach_train::train::{TrainConfig, Trainer};
+use std::path::{Path, PathBuf};
+
+/// Parses a command's arguments as the binary does.
+#[derive(Parser)]
+struct Command<T: clap::Args> {
+    #[command(flatten)]
+    args: T,
+}
+
+fn parse<T: clap::Args>(args: &[&str]) -> T {
+    Command::<T>::parse_from(std::iter::once("posecoach").chain(args.iter().copied())).args
+}
+
+fn fixture(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// A folder of its own for a test, and a tiny teacher file in it.
+fn teacher(test: &str) -> (PathBuf, String) {
+    let dir = std::env::temp_dir().join(format!("posecoach-{test}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let config = TrainConfig {
+        teacher: TeacherConfig::TINY,
+        ..TrainConfig::default()
+    };
+    let path = dir.join("tiny.pcw");
+    Trainer::new(config, &Device::flex().autodiff())
+        .save_teacher(&path)
+        .unwrap();
+    let path = path.display().to_string();
+    (dir, path)
+}
+
+#[test]
+fn retarget_with_weights_keeps_the_students_bones_and_the_coachs_frames() {
+    let (dir, weights) = teacher("retarget");
+    let out = dir.join("virtual.csv").display().to_string();
+    let coach = fixture("golf_driver_60hz.csv");
+    let tpose = fixture("h36m17_tpose.csv");
+    let args: retarget::Args = parse(&[
+        "--coach",
+        &coach,
+        "--student-tpose",
+        &tpose,
+        "--out",
+        &out,
+        "--weights",
+        &weights,
+        "--json",
+    ]);
+    let summary: serde_json::Value = serde_json::from_str(&retarget::run(&args).unwrap()).unwrap();
+    assert_eq!(summary["method"], "teacher");
+    let (virtual_swing, coach) = (
+        io::load(Path::new(&out)).unwrap(),
+        io::load(Path::new(&coach)).unwrap(),
+    );
+    let student = io::load(Path::new(&tpose)).unwrap().skeleton;
+    assert_eq!(virtual_swing.frames(), coach.frames());
+    let first = virtual_swing.frame(0);
+    for k in 1..student.len() {
+        let bone = (first[k] - first[student.parent(k).unwrap()]).norm();
+        assert!((bone - student.offset(k).norm()).abs() < 1e-3, "joint {k}");
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// The committed teacher (`posecoach train`'s `--teacher`).
+fn committed_weights() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../weights/teacher.pcw")
+        .display()
+        .to_string()
+}
+
+fn score_with(weights: &str) -> anyhow::Result<String> {
+    let (coach, student) = (
+        fixture("golf_driver_60hz.csv"),
+        fixture("golf_iron_60hz.csv"),
+    );
+    let args: score::Args = parse(&[
+        "--coach",
+        &coach,
+        "--student",
+        &student,
+        "--weights",
+        weights,
+        "--json",
+    ]);
+    score::run(&args)
+}
+
+#[test]
+#[ignore = "the committed teacher blurs the downswing: its virtual driver swing has no detectable impact yet (issue 5)"]
+fn score_with_the_committed_teacher() {
+    let report: serde_json::Value =
+        serde_json::from_str(&score_with(&committed_weights()).unwrap()).unwrap();
+    let value = report["score"].as_f64().unwrap();
+    assert!((0.0..=100.0).contains(&value), "{value}");
+}
+
+#[test]
+fn score_with_a_missing_teacher_says_which_file() {
+    let error = format!("{:#}", score_with("no/such/teacher.pcw").unwrap_err());
+    assert!(error.contains("no/such/teacher.pcw"), "{error}");
+}
+
+#[test]
+fn eval_compares_a_teacher_with_the_analytic_baseline() {
+    let data = std::env::var_os("POSECOACH_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
+    if !data.is_dir() {
+        eprintln!("skipped: no real data at {}", data.display());
+        return;
+    }
+    let (dir, weights) = teacher("eval");
+    let data = data.display().to_string();
+    let args: learn::EvalArgs = parse(&[
+        "--weights",
+        &weights,
+        "--analytic",
+        "--data",
+        &data,
+        "--synthetic",
+        "1",
+        "--json",
+    ]);
+    let table: serde_json::Value = serde_json::from_str(&learn::eval(&args).unwrap()).unwrap();
+    let rows = table["rows"].as_array().unwrap();
+    for method in ["tiny", "analytic"] {
+        assert!(rows.iter().any(|r| r["method"] == method), "{method}");
+    }
+    let cross = |m: &str| {
+        rows.iter()
+            .find(|r| r["method"] == m && r["structure"] == "cross")
+            .unwrap()["global_pct_height"]
+            .as_f64()
+            .unwrap()
+    };
+    // An untrained teacher holds the T-pose: far worse than copying bone directions.
+    assert!(cross("tiny") > 2.0 * cross("analytic"));
+    std::fs::remove_dir_all(dir).unwrap();
+}
