@@ -22,11 +22,7 @@ fn parse<T: clap::Args>(args: &[&str]) -> T {
 }
 
 fn fixture(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(name)
-        .display()
-        .to_string()
+    posecoach_tests::fixture(name).display().to_string()
 }
 
 /// A folder of its own for a test, and a tiny teacher file in it.
@@ -120,13 +116,11 @@ fn score_with_a_missing_teacher_says_which_file() {
 
 #[test]
 fn eval_compares_a_teacher_with_the_analytic_baseline() {
-    let data = std::env::var_os("POSECOACH_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
-    if !data.is_dir() {
-        eprintln!("skipped: no real data at {}", data.display());
+    let Some(data) =
+        posecoach_tests::shared_data("eval_compares_a_teacher_with_the_analytic_baseline")
+    else {
         return;
-    }
+    };
     let (dir, weights) = teacher("eval");
     let data = data.display().to_string();
     let args: learn::EvalArgs = parse(&[
