@@ -70,6 +70,18 @@ impl core::fmt::Display for RetargetError {
 
 impl core::error::Error for RetargetError {}
 
+/// The source chord whose swing turns a target bone: the bone's rotation is the smallest
+/// that takes `rest` (a chord of the target's rest pose) onto `source[to] - source[from]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Chord {
+    /// Source joint the chord starts at.
+    pub from: usize,
+    /// Source joint the chord ends at.
+    pub to: usize,
+    /// The corresponding chord of the target's rest pose.
+    pub rest: Vec3,
+}
+
 /// A precomputed joint correspondence from one skeleton onto another.
 #[derive(Clone, Debug)]
 pub struct Analytic<'a> {
@@ -146,6 +158,32 @@ impl<'a> Analytic<'a> {
         self.scale
     }
 
+    /// The source joint whose trajectory, times [`Analytic::scale`], is the target root's.
+    pub fn root(&self) -> usize {
+        self.counterpart[0] as usize
+    }
+
+    /// The chord that turns the bone into target joint `k`, as [`Analytic::frame`] does; `None`
+    /// for a bone that keeps its rest direction (out of the root without an anchored joint
+    /// below it), for the root and for `k` out of range.
+    pub fn chord(&self, k: usize) -> Option<Chord> {
+        let mut k = k;
+        while (1..self.target.len()).contains(&k) {
+            match self.driver[k] {
+                NONE => k = self.target.parent(k)?,
+                d => {
+                    let d = d as usize;
+                    return Some(Chord {
+                        from: self.counterpart[self.anchor[d] as usize] as usize,
+                        to: self.counterpart[d] as usize,
+                        rest: self.rest_chord[d],
+                    });
+                }
+            }
+        }
+        None
+    }
+
     /// Retargets one source frame into `out` (target joint order).
     ///
     /// # Errors
@@ -161,16 +199,17 @@ impl<'a> Analytic<'a> {
             return Err(RetargetError::NonFinite { joint });
         }
         let at = |k: u8| source[self.counterpart[k as usize] as usize];
+        let n = self.target.len();
         let mut rotation = [Quat::identity(); MAX_JOINTS];
+        // Anchored joints first: a joint between two anchors follows the one below it.
+        for k in (1..n).filter(|&k| self.driver[k] as usize == k) {
+            rotation[k] = swing(self.rest_chord[k], at(k as u8) - at(self.anchor[k]));
+        }
         out[0] = at(0) * self.scale;
-        for k in 1..self.target.len() {
+        for k in 1..n {
             let parent = self.target.parent(k).unwrap_or(0);
             rotation[k] = match self.driver[k] {
                 NONE => rotation[parent],
-                d if d as usize == k => {
-                    let chord = at(d) - at(self.anchor[k]);
-                    swing(self.rest_chord[k], chord)
-                }
                 d => rotation[d as usize],
             };
             out[k] = out[parent] + rotation[k] * self.target.offset(k);
@@ -237,6 +276,32 @@ mod tests {
                 let bone = (out[k] - out[target.parent(k).unwrap()]).norm();
                 prop_assert!((bone - target.offset(k).norm()).abs() <= TOLERANCE_M);
             }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn chords_turn_bones_as_frame_does(
+            from in prop::sample::select(Format::BUILT_IN.to_vec()),
+            onto in prop::sample::select(Format::BUILT_IN.to_vec()),
+            raw in prop::collection::vec(prop::array::uniform4(-1.0f32..1.0), MAX_JOINTS),
+        ) {
+            let source = from.default_skeleton().unwrap();
+            let target = onto.default_skeleton().unwrap();
+            let frame = pose(&source, &raw, [0.0, 1.0, 0.0]);
+            let retarget = Analytic::new(&source, &target).unwrap();
+            let mut out = [Vec3::zeros(); MAX_JOINTS];
+            retarget.frame(&frame, &mut out).unwrap();
+            prop_assert!((out[0] - frame[retarget.root()] * retarget.scale()).norm() <= TOLERANCE_M);
+            for k in 1..target.len() {
+                let turn = retarget.chord(k).map_or(Quat::identity(), |c| {
+                    swing(c.rest, frame[c.to] - frame[c.from])
+                });
+                let bone = out[k] - out[target.parent(k).unwrap()];
+                prop_assert!((bone - turn * target.offset(k)).norm() <= TOLERANCE_M, "joint {k}");
+            }
+            prop_assert_eq!(retarget.chord(0), None);
+            prop_assert_eq!(retarget.chord(target.len()), None);
         }
     }
 
