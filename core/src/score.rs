@@ -340,15 +340,18 @@ pub fn scratch_len(joints: usize, student: usize, coach: usize) -> ScratchLen {
     }
 }
 
-/// Stance frame of one swing at its address.
-struct Stance {
+/// A golfer's stance frame at address (see the [module documentation](self)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stance {
     origin: Vec3,
     target: Vec3,
     ball: Vec3,
 }
 
 impl Stance {
-    fn new(skeleton: &Skeleton, frame: &[Vec3], lead: Side) -> Stance {
+    /// The stance of the address `frame` of a golfer whose lead side is `lead`. Joints the
+    /// skeleton lacks count as at the origin; feet together face +X.
+    pub fn new(skeleton: &Skeleton, frame: &[Vec3], lead: Side) -> Stance {
         let at = |joints: &[Joint]| skeleton.find(joints).map_or(Vec3::zeros(), |k| frame[k]);
         let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
         let (left, right) = (
@@ -378,7 +381,8 @@ impl Stance {
     }
 
     /// `p` in stance coordinates: toward target, toward ball, up.
-    fn local(&self, p: Vec3) -> Vec3 {
+    /// `p` as (toward the target, toward the ball, up) from between the feet.
+    pub fn local(&self, p: Vec3) -> Vec3 {
         let d = p - self.origin;
         Vec3::new(d.dot(&self.target), d.dot(&self.ball), d.y)
     }
