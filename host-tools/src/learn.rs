@@ -110,6 +110,9 @@ pub struct TrainArgs {
     /// Windows per batch.
     #[arg(long, default_value_t = BATCH)]
     batch: usize,
+    /// Adam's starting learning rate (a third of it after each of 5 000 and 15 000 steps).
+    #[arg(long, default_value_t = LEARNING_RATE)]
+    learning_rate: f64,
     /// Continue the run in this checkpoint.
     #[arg(long)]
     resume: Option<PathBuf>,
@@ -130,7 +133,7 @@ pub fn train(args: &TrainArgs) -> Result<String> {
     let device = Device::flex().autodiff();
     let config = TrainConfig {
         batch: args.batch,
-        learning_rate: LEARNING_RATE,
+        learning_rate: args.learning_rate,
         switches: args.ablations.switches(),
         seed: args.seed,
         ..TrainConfig::default()

@@ -145,7 +145,13 @@ fn eval_compares_a_teacher_with_the_analytic_baseline() {
             .as_f64()
             .unwrap()
     };
-    // An untrained teacher holds the T-pose: far worse than copying bone directions.
-    assert!(cross("tiny") > 2.0 * cross("analytic"));
+    // An untrained teacher's corrections are zero: it is the analytic retargeter, run through
+    // the network's windows and interleaved 30 Hz streams.
+    let (tiny, analytic) = (cross("tiny"), cross("analytic"));
+    assert!(
+        analytic > 0.1,
+        "cross-format pairs differ from their ground truth: {analytic}"
+    );
+    assert!((tiny - analytic).abs() < 1e-3, "{tiny} against {analytic}");
     std::fs::remove_dir_all(dir).unwrap();
 }

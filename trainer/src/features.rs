@@ -27,6 +27,7 @@
 //! first frame, horizontally (X and Z); its height (Y) is kept, so a crouch is not a drift.
 
 use crate::error::Error;
+use crate::prior::Prior;
 use burn::prelude::{Bool, Device, Tensor, TensorData};
 use posecoach_adapters::io::Motion;
 use posecoach_core::joint::{Joint, JOINT_COUNT};
@@ -241,6 +242,8 @@ pub struct Batch {
     pub motion: Tensor<4>,
     /// The target skeletons.
     pub target: Skeletons,
+    /// The analytic retargeter from source onto target.
+    pub prior: Prior,
 }
 
 impl Batch {
@@ -267,7 +270,7 @@ impl Batch {
             TensorData::new(positions, [windows.len(), WINDOW, joints, 3]),
             device,
         );
-        Ok(Batch::on(source, positions, target))
+        Batch::on(source, positions, target)
     }
 
     /// Each window retargeted onto its own skeleton: the reconstruction task.
@@ -280,13 +283,17 @@ impl Batch {
     }
 
     /// Motions `[B, T, J, 3]` on `source` to retarget onto `target`.
-    pub fn on(source: Skeletons, positions: Tensor<4>, target: Skeletons) -> Batch {
-        Batch {
+    ///
+    /// # Errors
+    /// As [`Prior::new`].
+    pub fn on(source: Skeletons, positions: Tensor<4>, target: Skeletons) -> Result<Batch, Error> {
+        Ok(Batch {
+            prior: Prior::new(&source, &target, &positions.device())?,
             motion: motion_features(positions.clone(), &source),
             positions,
             source,
             target,
-        }
+        })
     }
 
     /// Windows in the batch.

@@ -61,8 +61,20 @@ fn outer(a: Tensor<4>, b: Tensor<4>) -> Tensor<2> {
     product.reshape([n * j * t, 16])
 }
 
-/// Hamilton product `a · b`.
-fn multiply(a: Tensor<4>, b: Tensor<4>) -> Tensor<4> {
+/// Rotations relative to the parent bone from global ones (`[B, J, T, 4]`, unit):
+/// `q_k = Ḡ_parent(k) · G_k`, the inverse of what [`forward`] composes.
+pub fn local(global: Tensor<4>, target: &Skeletons) -> Tensor<4> {
+    let [b, j, t, _] = global.dims();
+    let conjugate = Tensor::<1>::from_floats([1.0, -1.0, -1.0, -1.0], &global.device());
+    let parents = target.ancestors[0]
+        .clone()
+        .matmul(global.clone().reshape([b, j, t * 4]))
+        .reshape([b, j, t, 4]);
+    multiply(parents * conjugate.reshape([1, 1, 1, 4]), global)
+}
+
+/// Hamilton products `a · b` of quaternions `[B, J, T, 4]`.
+pub fn multiply(a: Tensor<4>, b: Tensor<4>) -> Tensor<4> {
     let dims = a.dims();
     let table = table(&a.device(), 4, |i, j| hamilton(basis(i), basis(j)).to_vec());
     outer(a, b).matmul(table).reshape(dims)

@@ -16,6 +16,7 @@
 //! - [`metrics`]: evaluation against the ground truth, and the baselines' table.
 //! - [`features`]: motion windows and target T-poses as padded, batched tensors.
 //! - [`fk`]: differentiable forward kinematics.
+//! - [`prior`]: the analytic retargeter as tensors, which the teacher corrects.
 //! - [`model`]: the teacher network.
 //! - [`losses`]: the training losses.
 //! - [`discriminator`]: the adversarial loss's discriminator.
@@ -36,6 +37,7 @@ pub mod infer;
 pub mod losses;
 pub mod metrics;
 pub mod model;
+pub mod prior;
 pub mod train;
 
 pub use error::Error;

@@ -251,12 +251,15 @@ impl Trainer {
     /// As [`Trainer::batch_for`].
     pub fn train_step(&mut self, pool: &Pool) -> Result<StepLosses, Error> {
         let parts = self.batch_for(pool, self.step)?;
-        Ok(self.step_on(&parts))
+        self.step_on(&parts)
     }
 
     /// One step on a batch given in parts, one thread each; every loss is the mean over the
     /// parts' means, weighted by their windows.
-    pub fn step_on(&mut self, parts: &[Batch]) -> StepLosses {
+    ///
+    /// # Errors
+    /// As [`Batch::on`], for the reconstruction and the cycle's way back.
+    pub fn step_on(&mut self, parts: &[Batch]) -> Result<StepLosses, Error> {
         let switches = self.config.switches;
         let windows: usize = parts.iter().map(Batch::len).sum();
         let shares: Vec<f32> = parts
@@ -275,8 +278,8 @@ impl Trainer {
                     scope.spawn(move || teacher_pass(&t, &d, part, switches, share))
                 })
                 .collect();
-            handles.into_iter().filter_map(|h| h.join().ok()).collect()
-        });
+            handles.into_iter().map(joined).collect::<Result<_, _>>()
+        })?;
         let mut report = StepLosses::default();
         let mut sum = GradientsAccumulator::<Teacher>::new();
         let mut fakes = Vec::new();
@@ -301,7 +304,7 @@ impl Trainer {
                         scope.spawn(move || discriminator_pass(&d, part, fake, share))
                     })
                     .collect();
-                handles.into_iter().filter_map(|h| h.join().ok()).collect()
+                handles.into_iter().map(joined).collect()
             });
             let mut sum = GradientsAccumulator::<Discriminator>::new();
             for (grads, loss) in passes {
@@ -313,7 +316,7 @@ impl Trainer {
                     .step(lr, self.discriminator.clone(), sum.grads());
         }
         self.step += 1;
-        report
+        Ok(report)
     }
 
     /// The learning rate of the next step: the configured one, a third of it after each of
@@ -389,17 +392,18 @@ fn teacher_pass(
     batch: &Batch,
     switches: Switches,
     share: f32,
-) -> (GradientsParams, StepLosses, Tensor<4>) {
+) -> Result<(GradientsParams, StepLosses, Tensor<4>), Error> {
     let mut report = StepLosses::default();
     let mut terms = Vec::new();
     let mut add = |value: &mut f32, loss: Tensor<1>, weight: f32| {
         *value = scalar(&loss) * share;
         terms.push(loss.mul_scalar(weight));
     };
-    let reconstruct = Batch {
-        target: batch.source.clone(),
-        ..batch.clone()
-    };
+    let reconstruct = Batch::on(
+        batch.source.clone(),
+        batch.positions.clone(),
+        batch.source.clone(),
+    )?;
     let own = teacher.forward(&reconstruct);
     let truth = batch.positions.clone();
     let rec = Reconstruction::new(own.positions, truth.clone(), &batch.source).total();
@@ -410,7 +414,7 @@ fn teacher_pass(
             batch.target.clone(),
             forth.positions.clone(),
             batch.source.clone(),
-        );
+        )?;
         let back = teacher.forward(&back);
         let loss = losses::cycle(&forth, &back, truth.clone(), &batch.source);
         add(&mut report.cycle, loss, losses::CYCLE_WEIGHT);
@@ -449,7 +453,7 @@ fn teacher_pass(
         .unwrap_or_else(|| Tensor::zeros([1], &batch.positions.device()));
     report.total = scalar(&total);
     let grads = GradientsParams::from_grads(total.backward(), teacher);
-    (grads, report, fake.detach())
+    Ok((grads, report, fake.detach()))
 }
 
 /// The discriminator's loss on one part: real windows against their retargeted `fake`
@@ -499,6 +503,13 @@ fn initialized<M: Module>(module: M) -> M {
 }
 
 /// The value of a one-element tensor.
+/// A scoped thread's result; its panic, if it panicked, carries on in the caller.
+fn joined<T>(handle: std::thread::ScopedJoinHandle<'_, T>) -> T {
+    handle
+        .join()
+        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+}
+
 fn scalar(t: &Tensor<1>) -> f32 {
     t.clone().into_scalar::<f32>()
 }
@@ -640,9 +651,11 @@ mod tests {
 
     const SEED: u64 = 7;
     const SMOKE_STEPS: usize = 20;
-    const SMOKE_LEARNING_RATE: f64 = 1e-2;
-    /// The reconstruction loss must fall at least this many times over the smoke test.
-    const SMOKE_FACTOR: f32 = 3.0;
+    const SMOKE_LEARNING_RATE: f64 = 1e-3;
+    /// The cycle loss must fall at least this many times over the smoke test.
+    const SMOKE_FACTOR: f32 = 1.1;
+    /// The untrained teacher's reconstruction loss: the analytic retargeter's, float error.
+    const RECONSTRUCTION_AT_START: f32 = 1e-9;
     const TIMED_STEPS: usize = 5;
 
     /// A pool of synthetic waves, one per format, long enough for a few windows.
@@ -673,20 +686,22 @@ mod tests {
     }
 
     #[test]
-    fn training_reduces_the_reconstruction_loss() {
+    fn training_reduces_the_cycle_loss() {
+        // An untrained teacher is the analytic retargeter, which reconstructs a motion on its
+        // own skeleton exactly; what training must first reduce is the round trip's error.
         let device = Device::flex().autodiff();
         let mut trainer = Trainer::new(tiny(3), &device);
         let batch = trainer.batch_for(&pool(), 0).unwrap();
         let start = Instant::now();
-        let losses: Vec<StepLosses> = (0..SMOKE_STEPS).map(|_| trainer.step_on(&batch)).collect();
-        let reconstruction: Vec<f32> = losses.iter().map(|l| l.reconstruction).collect();
-        eprintln!(
-            "smoke reconstruction {reconstruction:.4?} in {:?}",
-            start.elapsed()
-        );
+        let losses: Vec<StepLosses> = (0..SMOKE_STEPS)
+            .map(|_| trainer.step_on(&batch).unwrap())
+            .collect();
+        let cycle: Vec<f32> = losses.iter().map(|l| l.cycle).collect();
+        eprintln!("smoke cycle {cycle:.4?} in {:?}", start.elapsed());
         eprintln!("first {:?}\nlast {:?}", losses[0], losses[SMOKE_STEPS - 1]);
-        let (first, last) = (reconstruction[0], reconstruction[SMOKE_STEPS - 1]);
+        let (first, last) = (cycle[0], cycle[SMOKE_STEPS - 1]);
         assert!(last * SMOKE_FACTOR < first, "{first} -> {last}");
+        assert!(losses[0].reconstruction < RECONSTRUCTION_AT_START);
         assert!(losses.iter().all(|l| l.total.is_finite()));
         let on = losses[0];
         assert!(on.cycle > 0.0 && on.effectors > 0.0 && on.joint_distances > 0.0);
@@ -759,8 +774,10 @@ mod tests {
         let two = split.batch_in(&pool, 0, 2).unwrap();
         assert_eq!((one.len(), two.len()), (1, 2));
         for _ in 0..2 {
-            let (a, b) = (whole.step_on(&one), split.step_on(&two));
-            let close = |x: f32, y: f32| (x - y).abs() <= 1e-3 * x.abs().max(1e-3);
+            let (a, b) = (whole.step_on(&one).unwrap(), split.step_on(&two).unwrap());
+            // Relative to the loss, or to 0.01 for one near zero (an untrained teacher
+            // reconstructs exactly, so what is left is float summation order).
+            let close = |x: f32, y: f32| (x - y).abs() <= 1e-3 * x.abs().max(1e-2);
             assert!(close(a.reconstruction, b.reconstruction), "{a:?}\n{b:?}");
             assert!(
                 close(a.cycle, b.cycle) && close(a.effectors, b.effectors),
@@ -784,10 +801,10 @@ mod tests {
             &device,
         );
         let batch = trainer.batch_for(&pool(), 0).unwrap();
-        trainer.step_on(&batch);
+        trainer.step_on(&batch).unwrap();
         let start = Instant::now();
         for _ in 0..TIMED_STEPS {
-            trainer.step_on(&batch);
+            trainer.step_on(&batch).unwrap();
         }
         let per_step = start.elapsed() / TIMED_STEPS as u32;
         let params = trainer.teacher().num_params();
