@@ -157,6 +157,21 @@ pub struct Swing {
     pub frames: usize,
 }
 
+/// The two swings a report compares, on the student's skeleton: what a report view draws.
+#[derive(Clone, Copy, Debug)]
+pub struct Compared<'r> {
+    /// The student's skeleton.
+    pub skeleton: &'r Skeleton,
+    /// The student's swing, frame-major.
+    pub student: &'r [Vec3],
+    /// Its frame rate.
+    pub student_hz: f32,
+    /// The virtual coach's swing (the coach retargeted onto the student), frame-major.
+    pub coach: &'r [Vec3],
+    /// Its frame rate.
+    pub coach_hz: f32,
+}
+
 /// What a message led to.
 #[derive(Debug)]
 pub enum Outcome<'r> {
@@ -166,6 +181,8 @@ pub enum Outcome<'r> {
         swing: Swing,
         /// Its report.
         report: &'r Report,
+        /// The swings the report compares.
+        compared: Compared<'r>,
     },
     /// A swing that could not be scored (its events not found, or not like the coach's).
     Unscored {
@@ -610,11 +627,18 @@ impl<'b> Session<'b> {
             frames: span.len(),
         };
         let coach = &student.coach_swing;
+        let compared = Compared {
+            skeleton: &student.skeleton,
+            student: &frames[span.start * joints..span.end * joints],
+            student_hz: rate,
+            coach: &self.virtual_coach[coach.start * joints..coach.end * joints],
+            coach_hz,
+        };
         let result = score::score(
-            &student.skeleton,
-            &frames[span.start * joints..span.end * joints],
+            compared.skeleton,
+            compared.student,
             rate,
-            &self.virtual_coach[coach.start * joints..coach.end * joints],
+            compared.coach,
             coach_hz,
             self.config.band_radius,
             self.config.anchored,
@@ -624,7 +648,11 @@ impl<'b> Session<'b> {
         match result {
             Ok(report) => {
                 let report = &*self.report.insert(report);
-                on(Outcome::Scored { swing, report });
+                on(Outcome::Scored {
+                    swing,
+                    report,
+                    compared,
+                });
             }
             Err(error) => on(Outcome::Unscored { swing, error }),
         }

@@ -5,6 +5,8 @@
 
 pub mod bench;
 pub mod coaches;
+pub mod demo;
+pub mod html;
 pub mod inspect;
 pub mod learn;
 pub mod replay;

@@ -3,7 +3,7 @@
 //! Every command returns its output as text (a readable summary, or one JSON object with
 //! `--json`) and `main` prints it.
 
-use posecoach_cli::{bench, inspect, learn, replay, retarget, score, synth, tpose};
+use posecoach_cli::{bench, demo, inspect, learn, replay, retarget, score, synth, tpose};
 
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -22,6 +22,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Score a bundled recorded session against the bundled coaches: report.html, report.json.
+    Demo(demo::Args),
     /// Retarget a coach's motion onto a student's skeleton, given by a T-pose.
     Retarget(retarget::Args),
     /// Score a student's swing against the coach's swing retargeted onto the student.
@@ -52,6 +54,7 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Demo(args) => demo::run(&args),
         Command::Retarget(args) => retarget::run(&args),
         Command::Score(args) => score::run(&args),
         Command::Inspect(args) => inspect::run(&args),

@@ -1,6 +1,6 @@
 //! `posecoach replay`: a recorded session through the device's pipeline, swing by swing.
 
-use crate::{coaches, score};
+use crate::{coaches, html, score};
 use anyhow::{Context, Result};
 use posecoach_adapters::log::LogReader;
 use posecoach_adapters::session::{BufferLens, Coach, Outcome, OwnedBuffers, Session, RATES_HZ};
@@ -16,6 +16,10 @@ pub struct Args {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
+    /// Also write the report to this file: the HTML page for a name ending in `.html`, else
+    /// the JSON.
+    #[arg(long)]
+    report: Option<PathBuf>,
 }
 
 /// What a replay found.
@@ -28,15 +32,30 @@ pub struct Replay {
     pub refused: Vec<String>,
     /// Decoder and stream counters.
     pub counters: Value,
+    /// Every swing as the HTML report draws it.
+    pub pages: Vec<html::Swing>,
+}
+
+impl Replay {
+    /// The JSON `--json` prints.
+    pub fn to_json(&self) -> Value {
+        json!({"swings": self.swings, "refused": self.refused, "counters": self.counters})
+    }
 }
 
 pub fn run(args: &Args) -> Result<String> {
     let bytes =
         std::fs::read(&args.log).with_context(|| format!("reading {}", args.log.display()))?;
     let replay = replay(&bytes).with_context(|| format!("replaying {}", args.log.display()))?;
+    let json = replay.to_json();
+    if let Some(path) = &args.report {
+        let notes = [format!("Recorded session: {}", args.log.display())];
+        score::write_report(path, &json, || {
+            html::page("posecoach session report", &notes, &replay.pages)
+        })?;
+    }
     if args.json {
-        let out = json!({"swings": replay.swings, "refused": replay.refused, "counters": replay.counters});
-        return Ok(format!("{out}\n"));
+        return Ok(format!("{json}\n"));
     }
     let mut out = replay.text;
     for r in &replay.refused {
@@ -65,23 +84,35 @@ pub fn replay(log: &[u8]) -> Result<Replay> {
     let mut session = Session::new(&refs, buffers.buffers());
     let mut reader = LogReader::new(log)?;
     let (mut swings, mut text, mut refused) = (Vec::new(), String::new(), Vec::new());
+    let mut pages = Vec::new();
     for message in reader.by_ref() {
         session.handle(&message, |outcome| {
             let (swing, result) = match outcome {
-                Outcome::Scored { swing, report } => (swing, Ok(report)),
+                Outcome::Scored {
+                    swing,
+                    report,
+                    compared,
+                } => (swing, Ok((report, compared))),
                 Outcome::Unscored { swing, error } => (swing, Err(error)),
                 Outcome::Refused(r) => return refused.push(r.to_string()),
             };
             let start_s = swing.start_us as f64 * 1e-6;
-            let _ = write!(
-                text,
-                "swing {} at {start_s:.2} s ({} frames):",
+            let heading = format!(
+                "swing {} at {start_s:.2} s ({} frames)",
                 swing.number, swing.frames
             );
+            let _ = write!(text, "{heading}:");
+            pages.push(html::Swing {
+                heading,
+                outcome: match &result {
+                    Ok((report, compared)) => Ok(html::Scored::new(report, compared)),
+                    Err(error) => Err(error.to_string()),
+                },
+            });
             let mut entry =
                 json!({"swing": swing.number, "start_s": start_s, "frames": swing.frames});
             match result {
-                Ok(report) => {
+                Ok((report, _)) => {
                     text.push('\n');
                     text.push_str(&score::to_text(report));
                     entry["report"] = score::to_json(report);
@@ -112,5 +143,6 @@ pub fn replay(log: &[u8]) -> Result<Replay> {
         text,
         refused,
         counters,
+        pages,
     })
 }

@@ -1,5 +1,6 @@
 //! `posecoach score`: a student's swing against the coach's, retargeted onto the student.
 
+use crate::html;
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_adapters::io::{self, Motion};
 use posecoach_core::events::SwingEvents;
@@ -7,7 +8,7 @@ use posecoach_core::score::{self, Advice, Report};
 use posecoach_train::infer::Retargeter;
 use serde_json::{json, Map, Value};
 use std::fmt::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -39,7 +40,8 @@ pub struct Args {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
-    /// Also write the JSON report to this file.
+    /// Also write the report to this file: the HTML page (self-contained, for any browser)
+    /// for a name ending in `.html`, else the JSON.
     #[arg(long)]
     report: Option<PathBuf>,
 }
@@ -76,14 +78,50 @@ pub fn run(args: &Args) -> Result<String> {
     let report = score_swings(&student, &virtual_coach, args.band, !args.global_band)?;
     let json = to_json(&report);
     if let Some(path) = &args.report {
-        std::fs::write(path, format!("{json:#}\n"))
-            .with_context(|| format!("writing {}", path.display()))?;
+        let retargeter = match &args.weights {
+            Some(w) => format!("learned retargeter {}", w.display()),
+            None => "analytic retargeter".to_string(),
+        };
+        let notes = [
+            format!("Coach: {}", args.coach.display()),
+            format!("Student: {}", args.student.display()),
+            format!("Coach retargeted onto the student by the {retargeter}"),
+        ];
+        let swing = html::Swing {
+            heading: format!("Swing of {}", args.student.display()),
+            outcome: Ok(html::Scored {
+                report: report.clone(),
+                skeleton: student.skeleton.clone(),
+                student: student.positions.clone(),
+                student_hz: student.rate_hz,
+                coach: virtual_coach.positions.clone(),
+                coach_hz: virtual_coach.rate_hz,
+            }),
+        };
+        write_report(path, &json, || {
+            html::page("posecoach swing report", &notes, &[swing])
+        })?;
     }
     Ok(if args.json {
         format!("{json}\n")
     } else {
         to_text(&report)
     })
+}
+
+/// Writes `path`: the page `html` makes for a name ending in `.html`, else `json`.
+///
+/// # Errors
+/// If the file cannot be written.
+pub fn write_report(path: &Path, json: &Value, html: impl FnOnce() -> String) -> Result<()> {
+    let text = match path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("html"))
+    {
+        true => html(),
+        false => format!("{json:#}\n"),
+    };
+    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
 }
 
 /// Scores `student` against `coach`, both on the student's skeleton.

@@ -1,0 +1,592 @@
+//! The HTML swing report: one self-contained page (inline SVG, no scripts, no network).
+//!
+//! Per swing, in the order a coach reads it: the score and the advice; the student (green)
+//! over the virtual coach (red) at each key event, face-on and down the line, each swing in its
+//! own stance frame (as the spatial advice measures it); the tempo of each phase; the DTW path
+//! over the frame-cost matrix with the events; and the deviation of the most-advised joints
+//! along the alignment. Element ids (`score-N`, `advice-N`, `poses-N`, `tempo-N`, `dtw-N`,
+//! `deviation-N` for swing `N` from 1) let tests and scripts find each part.
+
+use base64::Engine;
+use posecoach_adapters::session::Compared;
+use posecoach_core::events::{Event, SwingEvents};
+use posecoach_core::joint::Joint;
+use posecoach_core::score::{Report, Stance};
+use posecoach_core::skeleton::Skeleton;
+use posecoach_core::Vec3;
+use std::fmt::Write;
+
+/// The student's colour.
+const STUDENT: &str = "#1a9641";
+/// The virtual coach's colour.
+const COACH: &str = "#d7191c";
+/// Most cells per side of the drawn cost matrix (larger matrices are sampled).
+const MATRIX_CELLS: usize = 300;
+/// Joints drawn in the deviation chart.
+const DEVIATION_JOINTS: usize = 4;
+/// Colours of the deviation chart's joints.
+const PALETTE: [&str; DEVIATION_JOINTS] = ["#7b3294", "#e66101", "#0571b0", "#4d4d4d"];
+
+/// Points of a pose on the screen.
+type Points = Vec<(f32, f32)>;
+
+/// A scored swing and the motions it compares, owned.
+#[derive(Clone, Debug)]
+pub struct Scored {
+    /// The report.
+    pub report: Report,
+    /// The student's skeleton.
+    pub skeleton: Skeleton,
+    /// The student's swing, frame-major.
+    pub student: Vec<Vec3>,
+    /// Its rate, Hz.
+    pub student_hz: f32,
+    /// The virtual coach's swing on the student's skeleton, frame-major.
+    pub coach: Vec<Vec3>,
+    /// Its rate, Hz.
+    pub coach_hz: f32,
+}
+
+impl Scored {
+    /// A copy of `report` and the swings it compares.
+    pub fn new(report: &Report, compared: &Compared<'_>) -> Scored {
+        Scored {
+            report: report.clone(),
+            skeleton: compared.skeleton.clone(),
+            student: compared.student.to_vec(),
+            student_hz: compared.student_hz,
+            coach: compared.coach.to_vec(),
+            coach_hz: compared.coach_hz,
+        }
+    }
+
+    fn frame<'a>(&self, swing: &'a [Vec3], f: usize) -> &'a [Vec3] {
+        let n = self.skeleton.len();
+        &swing[f * n..(f + 1) * n]
+    }
+
+    fn frames(&self, swing: &[Vec3]) -> usize {
+        swing.len() / self.skeleton.len().max(1)
+    }
+
+    /// The coach frame the alignment first matches with student frame `i`.
+    fn matched(&self, i: usize) -> usize {
+        let path = &self.report.path;
+        path.iter()
+            .find(|&&(a, _)| a as usize >= i)
+            .or(path.last())
+            .map_or(0, |&(_, b)| b as usize)
+    }
+
+    fn stances(&self) -> (Stance, Stance) {
+        let (s, c) = (&self.report.student_events, &self.report.coach_events);
+        (
+            Stance::new(
+                &self.skeleton,
+                self.frame(&self.student, s.address()),
+                s.lead,
+            ),
+            Stance::new(&self.skeleton, self.frame(&self.coach, c.address()), c.lead),
+        )
+    }
+}
+
+/// One swing of a page: its heading, and its report or why it has none.
+#[derive(Clone, Debug)]
+pub struct Swing {
+    /// Shown above the swing ("swing 2 at 14.20 s").
+    pub heading: String,
+    /// The scored swing, or why it was not scored.
+    pub outcome: Result<Scored, String>,
+}
+
+/// The whole page: `title`, a line per `notes` entry (inputs, retargeter), then each swing.
+pub fn page(title: &str, notes: &[String], swings: &[Swing]) -> String {
+    let mut out = String::new();
+    let _ = write!(
+        out,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
+         <title>{}</title><style>{STYLE}</style></head><body>\n<h1>{}</h1>\n",
+        escape(title),
+        escape(title)
+    );
+    for note in notes {
+        let _ = writeln!(out, "<p class=\"note\">{}</p>", escape(note));
+    }
+    let _ = writeln!(
+        out,
+        "<p class=\"legend\"><span style=\"color:{STUDENT}\">&#9632; you</span> \
+         <span style=\"color:{COACH}\">&#9632; virtual coach (the coach's swing on your body)</span></p>"
+    );
+    if swings.is_empty() {
+        out.push_str("<p id=\"no-swing\">No swing found.</p>\n");
+    }
+    for (i, swing) in swings.iter().enumerate() {
+        let n = i + 1;
+        let _ = writeln!(
+            out,
+            "<section id=\"swing-{n}\"><h2>{}</h2>",
+            escape(&swing.heading)
+        );
+        match &swing.outcome {
+            Ok(scored) => section(&mut out, n, scored),
+            Err(why) => {
+                let _ = writeln!(out, "<p class=\"error\">Not scored: {}</p>", escape(why));
+            }
+        }
+        out.push_str("</section>\n");
+    }
+    out.push_str("</body></html>\n");
+    out
+}
+
+const STYLE: &str = "body{font-family:sans-serif;margin:24px;color:#222;max-width:1200px}\
+h2{border-bottom:1px solid #ccc}.note{color:#555;margin:2px 0}.score{font-size:44px;font-weight:bold}\
+.poses{display:flex;flex-wrap:wrap;gap:6px}.pose{text-align:center;font-size:12px;width:146px}\
+svg{background:#fafafa;border:1px solid #ddd}.error{color:#b00}li{margin:4px 0}\
+text{font-family:sans-serif}";
+
+fn section(out: &mut String, n: usize, s: &Scored) {
+    let r = &s.report;
+    let _ = writeln!(
+        out,
+        "<p id=\"score-{n}\"><span class=\"score\">{:.0}</span> / 100 &#8212; mean joint distance \
+         {:.1} cm along the alignment; tempo (backswing:downswing) you {:.1}:1, coach {:.1}:1</p>",
+        r.score,
+        r.normalized * 100.0,
+        r.student_tempo_ratio,
+        r.coach_tempo_ratio
+    );
+    let _ = writeln!(out, "<h3>Advice</h3><ol id=\"advice-{n}\">");
+    for advice in &r.advice {
+        let _ = writeln!(out, "<li>{}</li>", escape(&advice.to_string()));
+    }
+    if r.advice.is_empty() {
+        out.push_str("<li>Nothing to fix: tempo and positions are within tolerance.</li>\n");
+    }
+    out.push_str("</ol>\n");
+    poses(out, n, s);
+    tempo(out, n, r);
+    dtw(out, n, s);
+    deviation(out, n, s);
+}
+
+/// A view of the stance frame: screen x and y (down) from (toward target, toward ball, up).
+#[derive(Clone, Copy)]
+enum View {
+    /// From in front of the golfer: the target to the viewer's left for a right-hander.
+    FaceOn,
+    /// From behind the golfer, along the target line: the ball to the right.
+    DownTheLine,
+}
+
+impl View {
+    fn project(self, p: Vec3) -> (f32, f32) {
+        match self {
+            View::FaceOn => (-p.x, -p.z),
+            View::DownTheLine => (p.y, -p.z),
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            View::FaceOn => "face-on",
+            View::DownTheLine => "down the line",
+        }
+    }
+}
+
+fn poses(out: &mut String, n: usize, s: &Scored) {
+    const SIZE: f32 = 140.0;
+    let (student_stance, coach_stance) = s.stances();
+    let events: Vec<(Event, usize, usize)> = s
+        .report
+        .student_events
+        .iter()
+        .map(|(e, i)| (e, i, s.matched(i)))
+        .collect();
+    let _ = writeln!(out, "<h3>Key positions</h3><div id=\"poses-{n}\">");
+    for view in [View::FaceOn, View::DownTheLine] {
+        let pose = |swing: &[Vec3], stance: &Stance, f: usize| -> Points {
+            s.frame(swing, f)
+                .iter()
+                .map(|&p| view.project(stance.local(p)))
+                .collect()
+        };
+        let drawn: Vec<[Points; 2]> = events
+            .iter()
+            .map(|&(_, i, j)| {
+                [
+                    pose(&s.student, &student_stance, i),
+                    pose(&s.coach, &coach_stance, j),
+                ]
+            })
+            .collect();
+        let all = drawn.iter().flatten().flatten();
+        let (x0, x1, y0, y1) = all.fold(
+            (f32::MAX, f32::MIN, f32::MAX, f32::MIN),
+            |(x0, x1, y0, y1), &(x, y)| (x0.min(x), x1.max(x), y0.min(y), y1.max(y)),
+        );
+        let span = (x1 - x0).max(y1 - y0).max(1e-3) * 1.08;
+        let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+        let to_px = |(x, y): (f32, f32)| {
+            (
+                SIZE / 2.0 + (x - cx) / span * SIZE,
+                SIZE / 2.0 + (y - cy) / span * SIZE,
+            )
+        };
+        let _ = writeln!(
+            out,
+            "<p>{} view{}</p><div class=\"poses\">",
+            capitalized(view.name()),
+            match view {
+                View::FaceOn => " (target to the left for a right-handed golfer)",
+                View::DownTheLine => " (looking at the target, the ball to the right)",
+            }
+        );
+        for (&(event, i, j), [student, coach]) in events.iter().zip(&drawn) {
+            let _ = write!(
+                out,
+                "<div class=\"pose\"><svg class=\"pose-svg\" width=\"{SIZE}\" height=\"{SIZE}\" \
+                 viewBox=\"0 0 {SIZE} {SIZE}\">"
+            );
+            for (points, colour, width) in [(coach, COACH, 2.6), (student, STUDENT, 1.8)] {
+                skeleton_lines(out, &s.skeleton, points, &to_px, colour, width);
+            }
+            let _ = writeln!(
+                out,
+                "</svg><br><b>{}</b><br><span class=\"frames\">you {:.2} s, coach {:.2} s</span></div>",
+                event_label(event),
+                i as f32 / s.student_hz,
+                j as f32 / s.coach_hz
+            );
+        }
+        out.push_str("</div>\n");
+    }
+    out.push_str("</div>\n");
+}
+
+fn skeleton_lines(
+    out: &mut String,
+    skeleton: &Skeleton,
+    points: &[(f32, f32)],
+    to_px: &impl Fn((f32, f32)) -> (f32, f32),
+    colour: &str,
+    width: f32,
+) {
+    let _ = write!(
+        out,
+        "<g stroke=\"{colour}\" stroke-width=\"{width}\" stroke-linecap=\"round\">"
+    );
+    for k in 1..skeleton.len() {
+        let Some(parent) = skeleton.parent(k) else {
+            continue;
+        };
+        let club = skeleton.joint(k).is_some_and(Joint::is_club);
+        let ((x1, y1), (x2, y2)) = (to_px(points[parent]), to_px(points[k]));
+        let dash = if club {
+            " stroke-dasharray=\"3 2\""
+        } else {
+            ""
+        };
+        let _ = write!(
+            out,
+            "<line x1=\"{x1:.1}\" y1=\"{y1:.1}\" x2=\"{x2:.1}\" y2=\"{y2:.1}\"{dash}/>"
+        );
+    }
+    out.push_str("</g>");
+}
+
+fn tempo(out: &mut String, n: usize, r: &Report) {
+    const WIDTH: f32 = 560.0;
+    const LABEL: f32 = 120.0;
+    const ROW: f32 = 40.0;
+    let longest = r
+        .tempo
+        .iter()
+        .map(|t| t.student_s.max(t.coach_s))
+        .fold(1e-3, f32::max);
+    let height = ROW * r.tempo.len() as f32 + 30.0;
+    let scale = (WIDTH - LABEL - 170.0) / longest;
+    let _ = writeln!(
+        out,
+        "<h3>Tempo</h3><svg id=\"tempo-{n}\" width=\"{WIDTH}\" height=\"{height}\">"
+    );
+    for (row, t) in r.tempo.iter().enumerate() {
+        let y = 10.0 + row as f32 * ROW;
+        let _ = write!(
+            out,
+            "<text x=\"4\" y=\"{:.1}\" font-size=\"13\">{}</text>",
+            y + 18.0,
+            capitalized(&t.phase.name().replace('_', " "))
+        );
+        for (k, (seconds, colour)) in [(t.student_s, STUDENT), (t.coach_s, COACH)]
+            .into_iter()
+            .enumerate()
+        {
+            let _ = write!(
+                out,
+                "<rect class=\"bar\" x=\"{LABEL}\" y=\"{:.1}\" width=\"{:.1}\" height=\"13\" fill=\"{colour}\"/>\
+                 <text x=\"{:.1}\" y=\"{:.1}\" font-size=\"11\">{seconds:.2} s</text>",
+                y + k as f32 * 15.0,
+                (seconds * scale).max(1.0),
+                LABEL + seconds * scale + 4.0,
+                y + k as f32 * 15.0 + 11.0
+            );
+        }
+        let _ = write!(
+            out,
+            "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"12\" font-weight=\"bold\">{} (&#215;{:.2})</text>",
+            WIDTH - 100.0,
+            y + 18.0,
+            t.verdict.name(),
+            t.ratio
+        );
+    }
+    let _ = writeln!(
+        out,
+        "<text x=\"4\" y=\"{:.1}\" font-size=\"12\">backswing:downswing you {:.1}:1, coach {:.1}:1 \
+         (tour players about 3:1, putts about 2:1)</text></svg>",
+        height - 6.0,
+        r.student_tempo_ratio,
+        r.coach_tempo_ratio
+    );
+}
+
+/// The DTW frame cost: the mean joint distance with the roots at the origin.
+fn frame_cost(a: &[Vec3], b: &[Vec3]) -> f32 {
+    let sum: f32 = a
+        .iter()
+        .zip(b)
+        .map(|(p, q)| ((p - a[0]) - (q - b[0])).norm())
+        .sum();
+    sum / a.len().max(1) as f32
+}
+
+fn dtw(out: &mut String, n: usize, s: &Scored) {
+    const SIZE: f32 = 360.0;
+    const MARGIN: f32 = 40.0;
+    let (rows, cols) = (s.frames(&s.student), s.frames(&s.coach));
+    let (cells_r, cells_c) = (rows.min(MATRIX_CELLS), cols.min(MATRIX_CELLS));
+    let sample = |cell: usize, cells: usize, len: usize| (cell * len + len / 2) / cells.max(1);
+    let costs: Vec<f32> = (0..cells_r * cells_c)
+        .map(|c| {
+            let (i, j) = (
+                sample(c / cells_c, cells_r, rows),
+                sample(c % cells_c, cells_c, cols),
+            );
+            frame_cost(s.frame(&s.student, i), s.frame(&s.coach, j))
+        })
+        .collect();
+    let top = costs.iter().copied().fold(1e-6, f32::max);
+    let pixels: Vec<u8> = costs
+        .iter()
+        .flat_map(|cost| {
+            let shade = (40.0 + 210.0 * (cost / top).sqrt()).min(250.0) as u8;
+            [shade, shade, 255]
+        })
+        .collect();
+    let _ = writeln!(
+        out,
+        "<h3>Alignment</h3><p>Frame-to-frame distance (darker: closer poses) and the warping \
+         path; lines mark the events (you across, coach down).</p>\
+         <svg id=\"dtw-{n}\" width=\"{:.0}\" height=\"{:.0}\"><g transform=\"translate({MARGIN},10)\">\
+         <image class=\"costs\" width=\"{SIZE}\" height=\"{SIZE}\" preserveAspectRatio=\"none\" \
+         style=\"image-rendering:pixelated\" href=\"data:image/png;base64,{}\"/>",
+        SIZE + MARGIN + 10.0,
+        SIZE + MARGIN + 10.0,
+        png_base64(&pixels, cells_c, cells_r)
+    );
+    let (x_of, y_of) = (
+        |j: usize| (j as f32 + 0.5) * SIZE / cols as f32,
+        |i: usize| (i as f32 + 0.5) * SIZE / rows as f32,
+    );
+    event_lines(out, &s.report.student_events, |i| {
+        (0.0, y_of(i), SIZE, y_of(i), STUDENT)
+    });
+    event_lines(out, &s.report.coach_events, |j| {
+        (x_of(j), 0.0, x_of(j), SIZE, COACH)
+    });
+    let points: Vec<String> = s
+        .report
+        .path
+        .iter()
+        .map(|&(i, j)| format!("{:.1},{:.1}", x_of(j as usize), y_of(i as usize)))
+        .collect();
+    let _ = writeln!(
+        out,
+        "<polyline class=\"path\" points=\"{}\" fill=\"none\" stroke=\"#ff9900\" stroke-width=\"2\"/>\
+         <text x=\"{:.0}\" y=\"{:.0}\" font-size=\"12\" text-anchor=\"middle\">coach frame ({cols})</text>\
+         <text x=\"-30\" y=\"{:.0}\" font-size=\"12\" text-anchor=\"middle\" \
+         transform=\"rotate(-90 -30 {:.0})\">your frame ({rows})</text></g></svg>",
+        points.join(" "),
+        SIZE / 2.0,
+        SIZE + 28.0,
+        SIZE / 2.0,
+        SIZE / 2.0
+    );
+}
+
+/// An RGB image `width` × `height` as a base64 PNG.
+fn png_base64(rgb: &[u8], width: usize, height: usize) -> String {
+    let mut bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut bytes, width as u32, height as u32);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    // Writing to memory fails only for a size that does not match the pixels, which the
+    // caller's lengths rule out; an empty image then draws nothing.
+    let written = encoder
+        .write_header()
+        .and_then(|mut writer| writer.write_image_data(rgb));
+    match written {
+        Ok(()) => base64::engine::general_purpose::STANDARD.encode(bytes),
+        Err(_) => String::new(),
+    }
+}
+
+fn event_lines(
+    out: &mut String,
+    events: &SwingEvents,
+    line: impl Fn(usize) -> (f32, f32, f32, f32, &'static str),
+) {
+    for (_, f) in events.iter() {
+        let (x1, y1, x2, y2, colour) = line(f);
+        let _ = write!(
+            out,
+            "<line x1=\"{x1:.1}\" y1=\"{y1:.1}\" x2=\"{x2:.1}\" y2=\"{y2:.1}\" stroke=\"{colour}\" \
+             stroke-width=\"0.8\" stroke-dasharray=\"4 3\"/>"
+        );
+    }
+}
+
+fn deviation(out: &mut String, n: usize, s: &Scored) {
+    const WIDTH: f32 = 640.0;
+    const HEIGHT: f32 = 220.0;
+    const LEFT: f32 = 44.0;
+    let (student_stance, coach_stance) = s.stances();
+    let mut joints: Vec<(usize, Joint)> = Vec::new();
+    for d in &s.report.spatial {
+        if joints.len() < DEVIATION_JOINTS && !joints.iter().any(|&(_, j)| j == d.joint) {
+            if let Some(k) = s.skeleton.index_of(d.joint) {
+                joints.push((k, d.joint));
+            }
+        }
+    }
+    let frames = s.frames(&s.student);
+    let series: Vec<Vec<f32>> = joints
+        .iter()
+        .map(|&(k, _)| {
+            (0..frames)
+                .map(|i| {
+                    let a = student_stance.local(s.frame(&s.student, i)[k]);
+                    let b = coach_stance.local(s.frame(&s.coach, s.matched(i))[k]);
+                    (a - b).norm() * 100.0
+                })
+                .collect()
+        })
+        .collect();
+    let top = series.iter().flatten().copied().fold(5.0, f32::max) * 1.1;
+    let x_of = |i: usize| LEFT + i as f32 * (WIDTH - LEFT - 10.0) / frames.max(2) as f32;
+    let y_of = |cm: f32| HEIGHT - 30.0 - cm / top * (HEIGHT - 52.0);
+    let _ = writeln!(
+        out,
+        "<h3>Deviation over the swing</h3><p>How far your joints are from the virtual coach's \
+         at the matched moment, in your stance frame (cm).</p>\
+         <svg id=\"deviation-{n}\" width=\"{WIDTH}\" height=\"{HEIGHT}\">"
+    );
+    for tick in [0.0, top / 2.0, top / 1.1] {
+        let _ = write!(
+            out,
+            "<text x=\"4\" y=\"{:.1}\" font-size=\"10\">{tick:.0} cm</text>\
+             <line x1=\"{LEFT}\" y1=\"{:.1}\" x2=\"{:.1}\" y2=\"{:.1}\" stroke=\"#ddd\"/>",
+            y_of(tick) + 3.0,
+            y_of(tick),
+            WIDTH - 10.0,
+            y_of(tick)
+        );
+    }
+    for (row, (event, i)) in s.report.student_events.iter().enumerate() {
+        let x = x_of(i);
+        let _ = write!(
+            out,
+            "<line x1=\"{x:.1}\" y1=\"10\" x2=\"{x:.1}\" y2=\"{:.1}\" stroke=\"#999\" stroke-dasharray=\"3 3\"/>\
+             <text x=\"{x:.1}\" y=\"{:.1}\" font-size=\"9\" text-anchor=\"middle\">{}</text>",
+            HEIGHT - 30.0,
+            HEIGHT - 18.0 + (row % 2) as f32 * 11.0,
+            event.name().replace('_', " ")
+        );
+    }
+    for (row, ((_, joint), values)) in joints.iter().zip(&series).enumerate() {
+        let points: Vec<String> = values
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| format!("{:.1},{:.1}", x_of(i), y_of(v)))
+            .collect();
+        let colour = PALETTE[row];
+        let _ = write!(
+            out,
+            "<polyline class=\"joint-line\" points=\"{}\" fill=\"none\" stroke=\"{colour}\" stroke-width=\"1.6\"/>\
+             <text x=\"{:.0}\" y=\"{:.0}\" font-size=\"11\" fill=\"{colour}\">{}</text>",
+            points.join(" "),
+            LEFT + 10.0 + row as f32 * 120.0,
+            12.0,
+            joint.name().replace('_', " ")
+        );
+    }
+    if joints.is_empty() {
+        let _ = write!(
+            out,
+            "<text x=\"{LEFT}\" y=\"40\" font-size=\"13\">Every joint within tolerance at every event.</text>"
+        );
+    }
+    out.push_str("</svg>\n");
+}
+
+fn event_label(e: Event) -> String {
+    capitalized(&e.name().replace('_', " "))
+}
+
+fn capitalized(s: &str) -> String {
+    let mut chars = s.chars();
+    chars
+        .next()
+        .map_or_else(String::new, |c| c.to_uppercase().chain(chars).collect())
+}
+
+/// `s` with the characters HTML gives meaning to escaped.
+fn escape(s: &str) -> String {
+    s.chars()
+        .fold(String::with_capacity(s.len()), |mut out, c| {
+            match c {
+                '<' => out.push_str("&lt;"),
+                '>' => out.push_str("&gt;"),
+                '&' => out.push_str("&amp;"),
+                '"' => out.push_str("&quot;"),
+                _ => out.push(c),
+            }
+            out
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_is_escaped() {
+        assert_eq!(escape("<a & \"b\">"), "&lt;a &amp; &quot;b&quot;&gt;");
+        let page = page("x<y", &["a&b".into()], &[]);
+        assert!(page.contains("<title>x&lt;y</title>") && page.contains("a&amp;b"));
+        assert!(page.contains("id=\"no-swing\""));
+    }
+
+    #[test]
+    fn an_unscored_swing_says_why() {
+        let swing = Swing {
+            heading: "swing 1".into(),
+            outcome: Err("no impact found".into()),
+        };
+        let page = page("t", &[], &[swing]);
+        assert!(page.contains("id=\"swing-1\"") && page.contains("Not scored: no impact found"));
+    }
+}
