@@ -140,7 +140,7 @@ pub fn page(title: &str, notes: &[String], swings: &[Swing]) -> String {
     out
 }
 
-const STYLE: &str = "body{font-family:sans-serif;margin:24px;color:#222;max-width:1200px}\
+const STYLE: &str = "body{font-family:sans-serif;margin:24px;color:#222;max-width:1240px}\
 h2{border-bottom:1px solid #ccc}.note{color:#555;margin:2px 0}.score{font-size:44px;font-weight:bold}\
 .poses{display:flex;flex-wrap:wrap;gap:6px}.pose{text-align:center;font-size:12px;width:146px}\
 svg{background:#fafafa;border:1px solid #ddd}.error{color:#b00}li{margin:4px 0}\

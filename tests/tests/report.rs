@@ -1,0 +1,215 @@
+//! The HTML report: written by `score --report`, `replay --report` and `demo`, complete and
+//! self-contained, and rendered by headless Chromium into a screenshot that shows the student
+//! and the coach.
+
+use clap::Parser;
+use posecoach_cli::{demo, replay, score};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+#[derive(Parser)]
+struct Cli<T: clap::Args> {
+    #[command(flatten)]
+    args: T,
+}
+
+fn parse<T: clap::Args>(args: &[&str]) -> T {
+    Cli::<T>::parse_from(std::iter::once("posecoach").chain(args.iter().copied())).args
+}
+
+/// A folder of its own for a test.
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("posecoach-{test}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn fixture(name: &str) -> String {
+    posecoach_tests::fixture(name).display().to_string()
+}
+
+/// The page `score --report` writes for the iron against the driver.
+fn scored_page(dir: &Path) -> PathBuf {
+    let page = dir.join("report.html");
+    let (coach, student) = (
+        fixture("golf_driver_60hz.csv"),
+        fixture("golf_iron_60hz.csv"),
+    );
+    let out = page.display().to_string();
+    let args: score::Args = parse(&["--coach", &coach, "--student", &student, "--report", &out]);
+    score::run(&args).unwrap();
+    page
+}
+
+/// Every part of swing `n` is on `page`, with a pose drawing per event and view.
+fn check_parts(page: &str, n: usize, events: usize) {
+    for part in ["score", "advice", "poses", "tempo", "dtw", "deviation"] {
+        assert!(page.contains(&format!("id=\"{part}-{n}\"")), "{part}-{n}");
+    }
+    let section = &page[page.find(&format!("id=\"swing-{n}\"")).unwrap()..];
+    let section = &section[..section.find("</section>").unwrap()];
+    assert_eq!(section.matches("class=\"pose-svg\"").count(), 2 * events);
+    assert!(
+        section.contains("data:image/png;base64,"),
+        "the cost matrix"
+    );
+    assert!(section.contains("class=\"path\""), "the warping path");
+}
+
+#[test]
+fn score_writes_a_self_contained_page_with_every_part() {
+    let dir = scratch("report-score");
+    let page = std::fs::read_to_string(scored_page(&dir)).unwrap();
+    check_parts(&page, 1, 8);
+    for external in ["http:", "https:", "<script", "src=\""] {
+        assert!(!page.contains(external), "{external}");
+    }
+    // A JSON name still gets the JSON report.
+    let json = dir.join("report.json").display().to_string();
+    let (coach, student) = (
+        fixture("golf_driver_60hz.csv"),
+        fixture("golf_iron_60hz.csv"),
+    );
+    let args: score::Args = parse(&["--coach", &coach, "--student", &student, "--report", &json]);
+    score::run(&args).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(report["score"].as_f64().is_some());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn replay_and_demo_pages_hold_every_swing_of_the_session() {
+    let dir = scratch("report-replay");
+    let page = dir.join("session.html").display().to_string();
+    let log = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("logs/short_cmu_30hz.pclog");
+    let log = log.display().to_string();
+    let args: replay::Args = parse(&[&log, "--report", &page, "--json"]);
+    let replayed: serde_json::Value = serde_json::from_str(&replay::run(&args).unwrap()).unwrap();
+    let page = std::fs::read_to_string(&page).unwrap();
+    let swings = replayed["swings"].as_array().unwrap();
+    assert!(!swings.is_empty());
+    for (i, swing) in swings.iter().enumerate() {
+        match swing.get("report") {
+            Some(report) => {
+                let events = report["events"]["student"].as_object().unwrap().len();
+                check_parts(&page, i + 1, events);
+            }
+            None => assert!(page.contains("Not scored:")),
+        }
+    }
+    // The demo replays the same bundled session: the same page and the same JSON.
+    let out = dir.join("demo").display().to_string();
+    let text = demo::run(&parse::<demo::Args>(&["--out", &out])).unwrap();
+    assert!(
+        text.contains("advice") && text.contains("report.html"),
+        "{text}"
+    );
+    let demo_json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("demo/report.json")).unwrap())
+            .unwrap();
+    assert_eq!(demo_json, replayed);
+    let demo_page = std::fs::read_to_string(dir.join("demo/report.html")).unwrap();
+    let body = |p: &str| p[p.find("<section").unwrap()..].to_string();
+    assert_eq!(body(&demo_page), body(&page));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Headless Chromium: `$POSECOACH_CHROMIUM`, else the first of the usual names on the path.
+fn chromium() -> Option<PathBuf> {
+    if let Some(path) = std::env::var_os("POSECOACH_CHROMIUM") {
+        return Some(PathBuf::from(path));
+    }
+    ["chromium", "chromium-browser", "google-chrome"]
+        .iter()
+        .find(|name| {
+            Command::new(name)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        })
+        .map(PathBuf::from)
+}
+
+fn headless(browser: &Path, dir: &Path) -> Command {
+    let mut command = Command::new(browser);
+    command.args([
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--no-first-run",
+        "--hide-scrollbars",
+        "--window-size=1280,2400",
+    ]);
+    command.arg(format!("--user-data-dir={}", dir.join("profile").display()));
+    command
+}
+
+/// Pixels of `rgb` within `tolerance` of `colour` on each channel.
+fn count(rgb: &[u8], colour: [u8; 3], tolerance: u8) -> usize {
+    rgb.chunks_exact(3)
+        .filter(|p| (0..3).all(|c| p[c].abs_diff(colour[c]) <= tolerance))
+        .count()
+}
+
+#[test]
+fn chromium_renders_the_report() {
+    let Some(browser) = chromium() else {
+        eprintln!(
+            "chromium_renders_the_report: skipped: no chromium found (install Debian's \
+             `chromium` or set POSECOACH_CHROMIUM); ci.sh installs it where it can"
+        );
+        return;
+    };
+    let dir = scratch("report-chromium");
+    let page = scored_page(&dir);
+    let url = format!("file://{}", page.display());
+    // The DOM as Chromium parsed it: every part is there.
+    let dom = headless(&browser, &dir)
+        .arg("--dump-dom")
+        .arg(&url)
+        .output()
+        .unwrap();
+    assert!(
+        dom.status.success(),
+        "{}",
+        String::from_utf8_lossy(&dom.stderr)
+    );
+    check_parts(&String::from_utf8_lossy(&dom.stdout), 1, 8);
+    // The screenshot: a page with the student in green and the coach in red on it.
+    let shot = dir.join("shot.png");
+    let status = headless(&browser, &dir)
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg(&url)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&shot).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut pixels).unwrap();
+    let channels = info.color_type.samples();
+    let rgb: Vec<u8> = pixels[..info.buffer_size()]
+        .chunks_exact(channels)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect();
+    let total = rgb.len() / 3;
+    let white = count(&rgb, [255, 255, 255], 8);
+    assert!(
+        white < total * 95 / 100,
+        "blank: {white} of {total} pixels white"
+    );
+    let (green, red) = (
+        count(&rgb, [26, 150, 65], 40),
+        count(&rgb, [215, 25, 28], 40),
+    );
+    eprintln!("screenshot {total} pixels: {green} student green, {red} coach red");
+    assert!(green > 500 && red > 500, "green {green}, red {red}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
