@@ -4,8 +4,10 @@
 //! Each command module has clap `Args` and a `run` that returns the text to print.
 
 pub mod bench;
+pub mod bridge;
 pub mod coaches;
 pub mod demo;
+pub mod device_sim;
 pub mod html;
 pub mod inspect;
 pub mod learn;

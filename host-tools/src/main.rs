@@ -3,7 +3,9 @@
 //! Every command returns its output as text (a readable summary, or one JSON object with
 //! `--json`) and `main` prints it.
 
-use posecoach_cli::{bench, demo, inspect, learn, replay, retarget, score, synth, tpose};
+use posecoach_cli::{
+    bench, bridge, demo, device_sim, inspect, learn, replay, retarget, score, synth, tpose,
+};
 
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -38,6 +40,10 @@ enum Command {
     Replay(replay::Args),
     /// Make a realistic recorded session (.pclog and its expected swings) from swing files.
     SynthLog(synth::Args),
+    /// Relay between a device's serial port and phone apps over TCP, one JSON message per line.
+    Bridge(bridge::Args),
+    /// Run the device's pipeline on the host, speaking the wire protocol over a serial port.
+    DeviceSim(device_sim::Args),
     /// Train the learned retargeter (the teacher network) on motion data, unsupervised.
     Train(learn::TrainArgs),
     /// Fine-tune a trained teacher to one student's body.
@@ -62,6 +68,8 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(&args),
         Command::Replay(args) => replay::run(&args),
         Command::SynthLog(args) => synth::run(&args),
+        Command::Bridge(args) => bridge::run(&args),
+        Command::DeviceSim(args) => device_sim::run(&args),
         Command::Train(args) => learn::train(&args),
         Command::Finetune(args) => learn::finetune(&args),
         Command::Eval(args) => learn::eval(&args),

@@ -1,0 +1,407 @@
+//! `posecoach bridge`: relays between a device's serial port and phone apps over TCP.
+//!
+//! Every frame the device sends goes to every connected client as one JSON line; every line a
+//! client sends (one wire message as JSON) goes to the device as one wire frame. Lines:
+//!
+//! | direction | line |
+//! | --- | --- |
+//! | device → clients | `{"device": MESSAGE}` |
+//! | bridge → clients | `{"bridge": {"event": "serial_connected", "port": P}}`, `{"bridge": {"event": "serial_lost", "reason": R}}`, and on connecting `{"bridge": {"event": "hello", "serial": "connected"}}` (or `"disconnected"`) |
+//! | client → device | `MESSAGE` |
+//! | bridge → that client | `{"error": WHY}` for a line that is not a message |
+//!
+//! `MESSAGE` is a [`Message`] as serde writes it: the variant's name holding its fields,
+//! `{"CoachSelect": {"coach": 1}}`, `{"Ack": {"seq": 7}}`, `{"SwingReport": {"swing": 1,
+//! "score_centi": 9570, ...}}`; enums without fields as their name (`"H36m17"`).
+//!
+//! The serial side reconnects with backoff (0.1 s doubling to 2 s) whenever the port fails or
+//! disappears; the decoder starts afresh on each link, and a frame whose write failed is
+//! written again, whole, on the next (the device drops the part it got). Frames from clients wait in a queue of
+//! [`TO_DEVICE_QUEUE`] frames while the port is away; when it is full, the client's reader
+//! waits (TCP pushes back on the phone), nothing is dropped. Each client has a queue of
+//! [`CLIENT_QUEUE`] lines; the serial reader never waits for a client: one whose queue is full
+//! is disconnected and counted, and may reconnect.
+
+use crate::device_sim::{self, transient, Outbox, DEFAULT_BAUD, READ_TIMEOUT};
+use anyhow::{Context, Result};
+use posecoach_core::wire::{Decoder, Message, MAX_FRAME};
+use serde_json::{json, Value};
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{sync_channel, Receiver, SyncSender, TrySendError};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+/// Frames from clients waiting for the device.
+pub const TO_DEVICE_QUEUE: usize = 4096;
+/// Lines waiting for one client.
+pub const CLIENT_QUEUE: usize = 1024;
+/// First wait before reopening a lost port; it doubles up to [`MAX_BACKOFF`].
+const MIN_BACKOFF: Duration = Duration::from_millis(100);
+/// Longest wait between attempts to reopen the port.
+const MAX_BACKOFF: Duration = Duration::from_secs(2);
+/// Frames taken from the queue for the link at a time.
+const OUTBOX_FRAMES: usize = 64;
+/// How often the accept loop looks at the stop flag.
+const ACCEPT_POLL: Duration = Duration::from_millis(20);
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The device's serial port.
+    #[arg(long)]
+    port: PathBuf,
+    /// Speed of the port.
+    #[arg(long, default_value_t = DEFAULT_BAUD)]
+    baud: u32,
+    /// Where phone apps connect, as ADDRESS:PORT.
+    #[arg(long)]
+    listen: SocketAddr,
+}
+
+pub fn run(args: &Args) -> Result<String> {
+    let listener =
+        TcpListener::bind(args.listen).with_context(|| format!("listening on {}", args.listen))?;
+    eprintln!(
+        "bridge: {} <-> {} (one JSON message per line)",
+        args.port.display(),
+        args.listen
+    );
+    let counters = serve(
+        &args.port,
+        args.baud,
+        listener,
+        &Arc::new(AtomicBool::new(false)),
+    )?;
+    Ok(format!("{counters}\n"))
+}
+
+/// What a bridge has relayed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Frames from the device relayed to clients.
+    pub from_device: u64,
+    /// Frames written to the device.
+    pub to_device: u64,
+    /// Serial links opened.
+    pub links: u64,
+    /// Clients disconnected for not keeping up.
+    pub slow_clients: u64,
+    /// Client lines that were not messages.
+    pub bad_lines: u64,
+}
+
+impl std::fmt::Display for Counters {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} frames from the device, {} to it, {} serial links, {} slow clients dropped, {} bad lines",
+            self.from_device, self.to_device, self.links, self.slow_clients, self.bad_lines
+        )
+    }
+}
+
+/// [`Counters`] as the bridge's threads count.
+#[derive(Debug, Default)]
+struct Counting {
+    from_device: AtomicU64,
+    to_device: AtomicU64,
+    links: AtomicU64,
+    slow_clients: AtomicU64,
+    bad_lines: AtomicU64,
+}
+
+impl Counting {
+    fn now(&self) -> Counters {
+        let get = |c: &AtomicU64| c.load(Ordering::Relaxed);
+        Counters {
+            from_device: get(&self.from_device),
+            to_device: get(&self.to_device),
+            links: get(&self.links),
+            slow_clients: get(&self.slow_clients),
+            bad_lines: get(&self.bad_lines),
+        }
+    }
+}
+
+/// A connected client: its queue and its socket (to close it).
+struct Client {
+    lines: SyncSender<String>,
+    stream: TcpStream,
+}
+
+/// The state the bridge's threads share.
+struct Shared {
+    clients: Mutex<Vec<Client>>,
+    connected: AtomicBool,
+    counters: Counting,
+}
+
+impl Shared {
+    /// Queues `line` for every client; drops a client whose queue is full or gone.
+    fn broadcast(&self, line: &str) {
+        let Ok(mut clients) = self.clients.lock() else {
+            return;
+        };
+        clients.retain(|c| match c.lines.try_send(line.to_string()) {
+            Ok(()) => true,
+            Err(TrySendError::Full(_)) => {
+                self.counters.slow_clients.fetch_add(1, Ordering::Relaxed);
+                if let Ok(peer) = c.stream.peer_addr() {
+                    eprintln!("bridge: client {peer} dropped: {CLIENT_QUEUE} lines behind");
+                }
+                let _ = c.stream.shutdown(std::net::Shutdown::Both);
+                false
+            }
+            Err(TrySendError::Disconnected(_)) => false,
+        });
+    }
+
+    /// Tells every client, and the operator on stderr, about the serial port.
+    fn event(&self, event: &str, detail: Value) {
+        let mut body = json!({"event": event});
+        if let (Some(body), Value::Object(more)) = (body.as_object_mut(), detail) {
+            body.extend(more);
+        }
+        let line = json!({ "bridge": body }).to_string();
+        eprintln!("bridge: {line}");
+        self.broadcast(&line);
+    }
+}
+
+/// Relays between `port` and the clients of `listener` until `stop` is set; returns what it
+/// relayed.
+///
+/// # Errors
+/// If the listener cannot be polled.
+pub fn serve(
+    port: &Path,
+    baud: u32,
+    listener: TcpListener,
+    stop: &Arc<AtomicBool>,
+) -> Result<Counters> {
+    let shared = Arc::new(Shared {
+        clients: Mutex::new(Vec::new()),
+        connected: AtomicBool::new(false),
+        counters: Counting::default(),
+    });
+    let (to_device, frames) = sync_channel::<Vec<u8>>(TO_DEVICE_QUEUE);
+    let serial = {
+        let (shared, stop, port) = (shared.clone(), stop.clone(), port.to_path_buf());
+        std::thread::spawn(move || serial_loop(&port, baud, &frames, &shared, &stop))
+    };
+    listener
+        .set_nonblocking(true)
+        .context("setting the listener non-blocking")?;
+    while !stop.load(Ordering::Relaxed) {
+        match listener.accept() {
+            Ok((stream, from)) => {
+                eprintln!("bridge: client {from} connected");
+                add_client(stream, &shared, &to_device);
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                std::thread::sleep(ACCEPT_POLL);
+            }
+            Err(e) => eprintln!("bridge: accepting a client: {e}"),
+        }
+    }
+    if let Ok(clients) = shared.clients.lock() {
+        for c in clients.iter() {
+            let _ = c.stream.shutdown(std::net::Shutdown::Both);
+        }
+    }
+    let _ = serial.join();
+    Ok(shared.counters.now())
+}
+
+/// Registers a client and starts its writer and reader.
+fn add_client(stream: TcpStream, shared: &Arc<Shared>, to_device: &SyncSender<Vec<u8>>) {
+    let _ = stream.set_nonblocking(false);
+    let (Ok(writer), Ok(closer)) = (stream.try_clone(), stream.try_clone()) else {
+        return;
+    };
+    let (lines, queue) = sync_channel::<String>(CLIENT_QUEUE);
+    let serial = match shared.connected.load(Ordering::Relaxed) {
+        true => "connected",
+        false => "disconnected",
+    };
+    let hello = json!({"bridge": {"event": "hello", "serial": serial}}).to_string();
+    let _ = lines.try_send(hello);
+    if let Ok(mut clients) = shared.clients.lock() {
+        clients.push(Client {
+            lines: lines.clone(),
+            stream: closer,
+        });
+    }
+    std::thread::spawn(move || write_lines(writer, &queue));
+    let (shared, to_device) = (shared.clone(), to_device.clone());
+    std::thread::spawn(move || read_lines(stream, &lines, &shared, &to_device));
+}
+
+fn write_lines(mut stream: TcpStream, queue: &Receiver<String>) {
+    for line in queue {
+        if writeln!(stream, "{line}").is_err() {
+            return;
+        }
+    }
+}
+
+/// Each line of a client as a frame for the device; an error line back for one that is not a
+/// message.
+fn read_lines(
+    stream: TcpStream,
+    replies: &SyncSender<String>,
+    shared: &Shared,
+    to_device: &SyncSender<Vec<u8>>,
+) {
+    for (n, line) in BufReader::new(stream).lines().enumerate() {
+        let Ok(line) = line else {
+            return;
+        };
+        if line.trim().is_empty() {
+            continue;
+        }
+        let frame = serde_json::from_str::<Message>(&line)
+            .map_err(|e| format!("line {}: not a message: {e}", n + 1))
+            .and_then(|m| {
+                device_sim::frame(&m)
+                    .ok_or_else(|| format!("line {}: too long for one frame", n + 1))
+            });
+        match frame {
+            Ok(frame) => {
+                if to_device.send(frame).is_err() {
+                    return;
+                }
+            }
+            Err(why) => {
+                shared.counters.bad_lines.fetch_add(1, Ordering::Relaxed);
+                let _ = replies.try_send(json!({ "error": why }).to_string());
+            }
+        }
+    }
+}
+
+/// Opens the port, relays until it fails, and again, until `stop`.
+fn serial_loop(
+    port: &Path,
+    baud: u32,
+    frames: &Receiver<Vec<u8>>,
+    shared: &Shared,
+    stop: &AtomicBool,
+) {
+    let mut backoff = MIN_BACKOFF;
+    let mut outbox = Outbox::default();
+    let mut buf = [0u8; MAX_FRAME];
+    while !stop.load(Ordering::Relaxed) {
+        let opened = serialport::new(port.to_string_lossy(), baud)
+            .timeout(READ_TIMEOUT)
+            .open_native();
+        let mut link = match opened {
+            Ok(link) => link,
+            Err(_) => {
+                std::thread::sleep(backoff);
+                backoff = (backoff * 2).min(MAX_BACKOFF);
+                continue;
+            }
+        };
+        backoff = MIN_BACKOFF;
+        shared.counters.links.fetch_add(1, Ordering::Relaxed);
+        shared.connected.store(true, Ordering::Relaxed);
+        shared.event(
+            "serial_connected",
+            json!({"port": port.display().to_string()}),
+        );
+        let mut decoder = Decoder::new();
+        let lost = loop {
+            if stop.load(Ordering::Relaxed) {
+                return;
+            }
+            while outbox.len() < OUTBOX_FRAMES {
+                match frames.try_recv() {
+                    Ok(frame) => outbox.push(frame),
+                    Err(_) => break,
+                }
+            }
+            let queued = outbox.len();
+            if let Err(e) = outbox.flush(&mut link) {
+                break format!("writing: {e}");
+            }
+            let written = (queued - outbox.len()) as u64;
+            shared
+                .counters
+                .to_device
+                .fetch_add(written, Ordering::Relaxed);
+            match link.read(&mut buf) {
+                Ok(n) => decoder.push_all(&buf[..n], |m| {
+                    shared.counters.from_device.fetch_add(1, Ordering::Relaxed);
+                    shared.broadcast(&json!({ "device": m }).to_string());
+                }),
+                Err(e) if transient(&e) => {}
+                Err(e) => break format!("reading: {e}"),
+            }
+        };
+        shared.connected.store(false, Ordering::Relaxed);
+        shared.event("serial_lost", json!({ "reason": lost }));
+        std::thread::sleep(backoff);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shared() -> Shared {
+        Shared {
+            clients: Mutex::new(Vec::new()),
+            connected: AtomicBool::new(true),
+            counters: Counting::default(),
+        }
+    }
+
+    /// A client socket (its peer is returned too, to keep the connection open).
+    fn socket() -> (TcpStream, TcpStream) {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let near = TcpStream::connect(listener.local_addr().unwrap()).unwrap();
+        (near, listener.accept().unwrap().0)
+    }
+
+    #[test]
+    fn a_client_that_falls_behind_is_dropped_and_counted_without_waiting() {
+        let shared = shared();
+        let (slow_stream, _slow_peer) = socket();
+        let (fast_stream, _fast_peer) = socket();
+        let (slow, _slow_queue) = sync_channel(2);
+        let (fast, fast_queue) = sync_channel(2);
+        if let Ok(mut clients) = shared.clients.lock() {
+            clients.push(Client {
+                lines: slow,
+                stream: slow_stream,
+            });
+            clients.push(Client {
+                lines: fast,
+                stream: fast_stream,
+            });
+        }
+        for n in 0..5 {
+            shared.broadcast(&n.to_string());
+            while fast_queue.try_recv().is_ok() {}
+        }
+        assert_eq!(shared.clients.lock().map(|c| c.len()).ok(), Some(1));
+        assert_eq!(shared.counters.now().slow_clients, 1);
+    }
+
+    #[test]
+    fn a_client_that_left_is_forgotten_without_counting() {
+        let shared = shared();
+        let (stream, _peer) = socket();
+        let (lines, queue) = sync_channel(2);
+        drop(queue);
+        if let Ok(mut clients) = shared.clients.lock() {
+            clients.push(Client { lines, stream });
+        }
+        shared.event("serial_lost", json!({"reason": "test"}));
+        assert_eq!(shared.clients.lock().map(|c| c.len()).ok(), Some(0));
+        assert_eq!(shared.counters.now(), Counters::default());
+    }
+}

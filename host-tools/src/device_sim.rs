@@ -1,0 +1,317 @@
+//! `posecoach device-sim`: the device's pipeline built for the host, speaking the wire protocol
+//! over a serial port, for tests and for phone developers without hardware.
+//!
+//! Every frame read goes through the device's [`Decoder`] into the device's
+//! [`Session`] with the bundled coach references, exactly as `posecoach replay` runs a log.
+//! It answers with wire frames: a `SwingReport` and then a `Status` (the decoder's counters)
+//! per scored swing, and a `Nack` per refused message (the `seq` of the pose frame refused,
+//! else 0). Frames not yet written when the link fails are kept and written, whole, once a
+//! link is back; the session carries on across links.
+
+use crate::coaches;
+use anyhow::Result;
+use posecoach_adapters::session::{
+    BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session, RATES_HZ,
+};
+use posecoach_core::config::MAX_JOINTS;
+use posecoach_core::wire::{encode, Decoder, Message, NackReason, SwingReport, MAX_FRAME};
+use std::collections::VecDeque;
+use std::io::{ErrorKind, Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+/// The serial link's default speed, baud (ignored by pseudo-terminals).
+pub const DEFAULT_BAUD: u32 = 115_200;
+/// How long a read waits for bytes before the loop looks at its other work.
+pub const READ_TIMEOUT: Duration = Duration::from_millis(20);
+/// Wait before trying a port again that could not be opened or failed.
+const RETRY: Duration = Duration::from_millis(200);
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The serial port to serve (a device path, or a pseudo-terminal such as one end of
+    /// `socat -d -d pty,raw,echo=0 pty,raw,echo=0`).
+    #[arg(long)]
+    port: PathBuf,
+    /// Speed of the port.
+    #[arg(long, default_value_t = DEFAULT_BAUD)]
+    baud: u32,
+}
+
+/// What a simulated device did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Totals {
+    /// Links served (the first, then one per reconnection).
+    pub links: u32,
+    /// Swing reports sent.
+    pub reports: u32,
+    /// Messages refused.
+    pub refused: u32,
+}
+
+pub fn run(args: &Args) -> Result<String> {
+    eprintln!("device-sim: serving {}", args.port.display());
+    let totals = simulate(|| open(&args.port, args.baud), &AtomicBool::new(false))?;
+    Ok(format!(
+        "{} links, {} swing reports, {} refused\n",
+        totals.links, totals.reports, totals.refused
+    ))
+}
+
+/// Opens `port` with [`READ_TIMEOUT`], or says on stderr why not.
+pub fn open(port: &Path, baud: u32) -> Option<serialport::TTYPort> {
+    serialport::new(port.to_string_lossy(), baud)
+        .timeout(READ_TIMEOUT)
+        .open_native()
+        .map_err(|e| eprintln!("{}: {e}", port.display()))
+        .ok()
+}
+
+/// Runs the device on the links `connect` gives (`None`: none now, try again later) until
+/// `stop` is set.
+///
+/// # Errors
+/// Only if a bundled coach reference were damaged.
+pub fn simulate<L: Read + Write>(
+    mut connect: impl FnMut() -> Option<L>,
+    stop: &AtomicBool,
+) -> Result<Totals> {
+    let coaches = coaches::all()?;
+    let refs: Vec<Coach<'_>> = coaches
+        .iter()
+        .map(|(_, m)| Coach {
+            skeleton: &m.skeleton,
+            positions: &m.positions,
+            rate_hz: m.rate_hz,
+        })
+        .collect();
+    let longest = coaches.iter().map(|(_, m)| m.frames()).max().unwrap_or(0);
+    let mut buffers = OwnedBuffers::new(BufferLens::new(MAX_JOINTS, longest, RATES_HZ.1));
+    let mut session = Session::new(&refs, buffers.buffers());
+    let mut totals = Totals::default();
+    let mut unsent = Outbox::default();
+    let mut buf = [0u8; MAX_FRAME];
+    while !stop.load(Ordering::Relaxed) {
+        let Some(mut link) = connect() else {
+            std::thread::sleep(RETRY);
+            continue;
+        };
+        totals.links += 1;
+        // A frame cut off on the last link is dropped by this decoder, not joined to the next.
+        let mut decoder = Decoder::new();
+        while !stop.load(Ordering::Relaxed) {
+            if let Err(e) = unsent.flush(&mut link) {
+                eprintln!("device-sim: link lost writing: {e}");
+                break;
+            }
+            let n = match link.read(&mut buf) {
+                Ok(n) => n,
+                Err(e) if transient(&e) => continue,
+                Err(e) => {
+                    eprintln!("device-sim: link lost reading: {e}");
+                    break;
+                }
+            };
+            let mut messages = Vec::new();
+            decoder.push_all(&buf[..n], |m| messages.push(m));
+            for message in &messages {
+                let seq = match message {
+                    Message::PoseFrame(f) => f.seq,
+                    _ => 0,
+                };
+                session.handle(message, |outcome| match outcome {
+                    Outcome::Scored { swing, report, .. } => {
+                        totals.reports += 1;
+                        let report = SwingReport::new(swing.number, report);
+                        let status = Message::Status(decoder.counters());
+                        for m in [Message::SwingReport(report), status] {
+                            unsent.extend(frame(&m));
+                        }
+                    }
+                    Outcome::Unscored { swing, error } => {
+                        eprintln!("device-sim: swing {} not scored: {error}", swing.number);
+                    }
+                    Outcome::Refused(why) => {
+                        totals.refused += 1;
+                        let reason = nack_reason(why);
+                        unsent.extend(frame(&Message::Nack { seq, reason }));
+                    }
+                });
+            }
+        }
+        std::thread::sleep(RETRY);
+    }
+    Ok(totals)
+}
+
+/// A read or write that found the link not ready, rather than failed.
+pub fn transient(e: &std::io::Error) -> bool {
+    matches!(
+        e.kind(),
+        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+    )
+}
+
+/// Frames queued for a link, in order, the first possibly written in part.
+#[derive(Debug, Default)]
+pub struct Outbox {
+    frames: VecDeque<Vec<u8>>,
+    written: usize,
+}
+
+impl Extend<Vec<u8>> for Outbox {
+    fn extend<I: IntoIterator<Item = Vec<u8>>>(&mut self, frames: I) {
+        self.frames.extend(frames);
+    }
+}
+
+impl Outbox {
+    /// Queues a frame.
+    pub fn push(&mut self, frame: Vec<u8>) {
+        self.frames.push_back(frame);
+    }
+
+    /// Frames queued.
+    pub fn len(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// Whether nothing is queued.
+    pub fn is_empty(&self) -> bool {
+        self.frames.is_empty()
+    }
+
+    /// Writes what `link` takes now; returns when it is all written or the link is busy.
+    ///
+    /// # Errors
+    /// When the link fails; the frame it failed in is then written again from its start on
+    /// the next link (whose reader has dropped the part it got).
+    pub fn flush(&mut self, link: &mut impl Write) -> std::io::Result<()> {
+        while let Some(frame) = self.frames.front() {
+            match link.write(&frame[self.written..]) {
+                Ok(0) => {
+                    self.written = 0;
+                    return Err(ErrorKind::WriteZero.into());
+                }
+                Ok(n) => {
+                    self.written += n;
+                    if self.written == frame.len() {
+                        self.frames.pop_front();
+                        self.written = 0;
+                    }
+                }
+                Err(e) if transient(&e) => return Ok(()),
+                Err(e) => {
+                    self.written = 0;
+                    return Err(e);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `message` as one wire frame.
+pub fn frame(message: &Message) -> Option<Vec<u8>> {
+    let mut out = [0u8; MAX_FRAME];
+    let n = encode(message, &mut out).ok()?;
+    Some(out[..n].to_vec())
+}
+
+/// The `Nack` reason a refusal is sent with.
+fn nack_reason(why: Refusal) -> NackReason {
+    match why {
+        Refusal::NoProfile | Refusal::Input => NackReason::Unexpected,
+        Refusal::Buffers => NackReason::Busy,
+        _ => NackReason::Invalid,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Takes up to `chunk` bytes per write, is busy every other call, and fails for good
+    /// after `fail_after` bytes.
+    struct Stingy {
+        got: Vec<u8>,
+        chunk: usize,
+        busy: bool,
+        fail_after: usize,
+    }
+
+    impl Write for Stingy {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            self.busy = !self.busy;
+            if self.busy {
+                return Err(ErrorKind::WouldBlock.into());
+            }
+            if self.got.len() >= self.fail_after {
+                return Err(ErrorKind::BrokenPipe.into());
+            }
+            let n = buf.len().min(self.chunk);
+            self.got.extend_from_slice(&buf[..n]);
+            Ok(n)
+        }
+
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    fn frames() -> Vec<Vec<u8>> {
+        (0..3u32)
+            .map(|seq| frame(&Message::Ack { seq }).unwrap())
+            .collect()
+    }
+
+    #[test]
+    fn a_busy_link_gets_every_frame_whole_and_in_order() {
+        let mut outbox = Outbox::default();
+        outbox.extend(frames());
+        let mut link = Stingy {
+            got: Vec::new(),
+            chunk: 2,
+            busy: false,
+            fail_after: usize::MAX,
+        };
+        let mut calls = 0;
+        while !outbox.is_empty() {
+            outbox.flush(&mut link).unwrap();
+            calls += 1;
+            assert!(calls < 100, "flush makes no progress");
+        }
+        assert_eq!(link.got, frames().concat());
+    }
+
+    #[test]
+    fn a_frame_cut_by_a_failed_link_is_sent_again_whole() {
+        let mut outbox = Outbox::default();
+        outbox.extend(frames());
+        let first = frames()[0].len();
+        let mut broken = Stingy {
+            got: Vec::new(),
+            chunk: 2,
+            busy: false,
+            fail_after: first + 2,
+        };
+        let failed = loop {
+            if let Err(e) = outbox.flush(&mut broken) {
+                break e;
+            }
+        };
+        assert_eq!(failed.kind(), ErrorKind::BrokenPipe);
+        assert_eq!(outbox.len(), 2);
+        let mut next = Stingy {
+            got: Vec::new(),
+            chunk: 64,
+            busy: false,
+            fail_after: usize::MAX,
+        };
+        while !outbox.is_empty() {
+            outbox.flush(&mut next).unwrap();
+        }
+        assert_eq!(next.got, frames()[1..].concat());
+    }
+}
