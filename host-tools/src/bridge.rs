@@ -22,7 +22,7 @@
 //! [`CLIENT_QUEUE`] lines; the serial reader never waits for a client: one whose queue is full
 //! is disconnected and counted, and may reconnect.
 
-use crate::device_sim::{self, transient, Outbox, DEFAULT_BAUD, READ_TIMEOUT};
+use crate::device_sim::{self, transient, until_interrupted, Outbox, DEFAULT_BAUD, READ_TIMEOUT};
 use anyhow::{Context, Result};
 use posecoach_core::wire::{Decoder, Message, MAX_FRAME};
 use serde_json::{json, Value};
@@ -58,23 +58,26 @@ pub struct Args {
     /// Where phone apps connect, as ADDRESS:PORT.
     #[arg(long)]
     listen: SocketAddr,
+    /// On Ctrl-C, print the counters as one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
 }
 
 pub fn run(args: &Args) -> Result<String> {
     let listener =
         TcpListener::bind(args.listen).with_context(|| format!("listening on {}", args.listen))?;
     eprintln!(
-        "bridge: {} <-> {} (one JSON message per line)",
+        "bridge: {} <-> {} (one JSON message per line; Ctrl-C to stop)",
         args.port.display(),
         args.listen
     );
-    let counters = serve(
-        &args.port,
-        args.baud,
-        listener,
-        &Arc::new(AtomicBool::new(false)),
-    )?;
-    Ok(format!("{counters}\n"))
+    let c = serve(&args.port, args.baud, listener, &until_interrupted()?)?;
+    if args.json {
+        let doc = json!({"from_device": c.from_device, "to_device": c.to_device, "links": c.links,
+                         "slow_clients": c.slow_clients, "bad_lines": c.bad_lines});
+        return Ok(format!("{doc}\n"));
+    }
+    Ok(format!("{c}\n"))
 }
 
 /// What a bridge has relayed.

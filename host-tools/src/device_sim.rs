@@ -9,7 +9,7 @@
 //! link is back; the session carries on across links.
 
 use crate::coaches;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use posecoach_adapters::session::{
     BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session, RATES_HZ,
 };
@@ -19,6 +19,7 @@ use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Duration;
 
 /// The serial link's default speed, baud (ignored by pseudo-terminals).
@@ -37,6 +38,9 @@ pub struct Args {
     /// Speed of the port.
     #[arg(long, default_value_t = DEFAULT_BAUD)]
     baud: u32,
+    /// On Ctrl-C, print the totals as one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
 }
 
 /// What a simulated device did.
@@ -51,12 +55,32 @@ pub struct Totals {
 }
 
 pub fn run(args: &Args) -> Result<String> {
-    eprintln!("device-sim: serving {}", args.port.display());
-    let totals = simulate(|| open(&args.port, args.baud), &AtomicBool::new(false))?;
+    eprintln!(
+        "device-sim: serving {} (Ctrl-C to stop)",
+        args.port.display()
+    );
+    let stop = until_interrupted()?;
+    let totals = simulate(|| open(&args.port, args.baud), &stop)?;
+    if args.json {
+        let doc = serde_json::json!({"links": totals.links, "reports": totals.reports, "refused": totals.refused});
+        return Ok(format!("{doc}\n"));
+    }
     Ok(format!(
         "{} links, {} swing reports, {} refused\n",
         totals.links, totals.reports, totals.refused
     ))
+}
+
+/// A flag that Ctrl-C or SIGTERM sets.
+///
+/// # Errors
+/// If a signal handler is already installed.
+pub fn until_interrupted() -> Result<Arc<AtomicBool>> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
+        .context("installing the Ctrl-C handler")?;
+    Ok(stop)
 }
 
 /// Opens `port` with [`READ_TIMEOUT`], or says on stderr why not.

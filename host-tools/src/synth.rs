@@ -84,6 +84,10 @@ pub struct Args {
     /// Where to write the log; the sidecar goes beside it.
     #[arg(long)]
     out: PathBuf,
+    /// Print one JSON object instead of text: the paths, the size, the pose frames or IMU
+    /// samples sent, and the sidecar's content.
+    #[arg(long)]
+    json: bool,
 }
 
 /// A session being laid out on the student's body.
@@ -248,6 +252,11 @@ pub fn run(args: &Args) -> Result<String> {
     });
     std::fs::write(&sidecar, format!("{doc:#}\n"))
         .with_context(|| format!("writing {}", sidecar.display()))?;
+    if args.json {
+        let doc = json!({"log": args.out.display().to_string(), "sidecar": sidecar.display().to_string(),
+                         "bytes": bytes.len(), "sent": sent, "expected": doc});
+        return Ok(format!("{doc}\n"));
+    }
     Ok(format!(
         "wrote {} ({} bytes, {sent} {} over {:.1} s, {} swings) and {}\n",
         args.out.display(),

@@ -17,6 +17,9 @@ pub struct Args {
     /// Where to write it (.csv or .bvh).
     #[arg(long)]
     out: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
 }
 
 pub fn run(args: &Args) -> Result<String> {
@@ -47,6 +50,13 @@ pub fn run(args: &Args) -> Result<String> {
         positions,
     };
     io::save(&motion, &args.out)?;
+    if args.json {
+        let doc = serde_json::json!({
+            "out": args.out.display().to_string(), "format": format.to_string(),
+            "height_m": motion.skeleton.height(), "joints": motion.skeleton.len(),
+        });
+        return Ok(format!("{doc}\n"));
+    }
     Ok(format!(
         "wrote a {} T-pose, {:.3} m tall, to {}\n",
         format,
