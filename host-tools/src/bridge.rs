@@ -22,7 +22,7 @@
 //! [`CLIENT_QUEUE`] lines; the serial reader never waits for a client: one whose queue is full
 //! is disconnected and counted, and may reconnect.
 
-use crate::device_sim::{self, transient, until_interrupted, Outbox, DEFAULT_BAUD, READ_TIMEOUT};
+use crate::device_sim::{self, transient, until_interrupted, Outbox, DEFAULT_BAUD};
 use anyhow::{Context, Result};
 use posecoach_core::wire::{Decoder, Message, MAX_FRAME};
 use serde_json::{json, Value};
@@ -266,7 +266,13 @@ fn read_lines(
             continue;
         }
         let frame = serde_json::from_str::<Message>(&line)
-            .map_err(|e| format!("line {}: not a message: {e}", n + 1))
+            .map_err(|e| {
+                format!(
+                    "line {}: not a message ({e}): send one wire message as JSON per line, such as {}",
+                    n + 1,
+                    r#"{"CoachSelect": {"coach": 0}}"#
+                )
+            })
             .and_then(|m| {
                 device_sim::frame(&m)
                     .ok_or_else(|| format!("line {}: too long for one frame", n + 1))
@@ -297,12 +303,12 @@ fn serial_loop(
     let mut outbox = Outbox::default();
     let mut buf = [0u8; MAX_FRAME];
     while !stop.load(Ordering::Relaxed) {
-        let opened = serialport::new(port.to_string_lossy(), baud)
-            .timeout(READ_TIMEOUT)
-            .open_native();
-        let mut link = match opened {
+        let mut link = match device_sim::open(port, baud) {
             Ok(link) => link,
-            Err(_) => {
+            Err(e) => {
+                if backoff == MIN_BACKOFF {
+                    eprintln!("bridge: {}: {e}; retrying until it opens", port.display());
+                }
                 std::thread::sleep(backoff);
                 backoff = (backoff * 2).min(MAX_BACKOFF);
                 continue;

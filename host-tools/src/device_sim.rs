@@ -60,7 +60,24 @@ pub fn run(args: &Args) -> Result<String> {
         args.port.display()
     );
     let stop = until_interrupted()?;
-    let totals = simulate(|| open(&args.port, args.baud), &stop)?;
+    let mut failing = false;
+    let connect = || match open(&args.port, args.baud) {
+        Ok(port) => {
+            failing = false;
+            Some(port)
+        }
+        Err(e) => {
+            if !failing {
+                eprintln!(
+                    "device-sim: {}: {e}; retrying until it opens",
+                    args.port.display()
+                );
+            }
+            failing = true;
+            None
+        }
+    };
+    let totals = simulate(connect, &stop)?;
     if args.json {
         let doc = serde_json::json!({"links": totals.links, "reports": totals.reports, "refused": totals.refused});
         return Ok(format!("{doc}\n"));
@@ -83,13 +100,14 @@ pub fn until_interrupted() -> Result<Arc<AtomicBool>> {
     Ok(stop)
 }
 
-/// Opens `port` with [`READ_TIMEOUT`], or says on stderr why not.
-pub fn open(port: &Path, baud: u32) -> Option<serialport::TTYPort> {
+/// Opens `port` with [`READ_TIMEOUT`].
+///
+/// # Errors
+/// When the port is absent, busy or not a terminal.
+pub fn open(port: &Path, baud: u32) -> serialport::Result<serialport::TTYPort> {
     serialport::new(port.to_string_lossy(), baud)
         .timeout(READ_TIMEOUT)
         .open_native()
-        .map_err(|e| eprintln!("{}: {e}", port.display()))
-        .ok()
 }
 
 /// Runs the device on the links `connect` gives (`None`: none now, try again later) until
