@@ -2,6 +2,8 @@
 
 use anyhow::{Context, Result};
 use posecoach_adapters::io::{csv, Motion};
+use posecoach_adapters::session::{BufferLens, Coach, OwnedBuffers, Session, RATES_HZ};
+use posecoach_core::config::MAX_JOINTS;
 
 /// Number, name and CSV text of each bundled reference (real swings, see the README).
 const BUNDLED: [(&str, &str); 2] = [
@@ -28,4 +30,24 @@ pub fn all() -> Result<Vec<(&'static str, Motion)>> {
                 .with_context(|| format!("bundled coach `{name}`"))
         })
         .collect()
+}
+
+/// Runs `device` on the device's pipeline: a session with every bundled reference and buffers
+/// for any student and model rate.
+///
+/// # Errors
+/// Only if a bundled file were damaged.
+pub fn session<R>(device: impl FnOnce(&mut Session<'_>) -> R) -> Result<R> {
+    let coaches = all()?;
+    let refs: Vec<Coach<'_>> = coaches
+        .iter()
+        .map(|(_, m)| Coach {
+            skeleton: &m.skeleton,
+            positions: &m.positions,
+            rate_hz: m.rate_hz,
+        })
+        .collect();
+    let longest = coaches.iter().map(|(_, m)| m.frames()).max().unwrap_or(0);
+    let mut buffers = OwnedBuffers::new(BufferLens::new(MAX_JOINTS, longest, RATES_HZ.1));
+    Ok(device(&mut Session::new(&refs, buffers.buffers())))
 }

@@ -10,10 +10,7 @@
 
 use crate::coaches;
 use anyhow::{Context, Result};
-use posecoach_adapters::session::{
-    BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session, RATES_HZ,
-};
-use posecoach_core::config::MAX_JOINTS;
+use posecoach_adapters::session::{Outcome, Refusal, Session};
 use posecoach_core::wire::{encode, Decoder, Message, NackReason, SwingReport, MAX_FRAME};
 use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
@@ -116,21 +113,18 @@ pub fn open(port: &Path, baud: u32) -> serialport::Result<serialport::TTYPort> {
 /// # Errors
 /// Only if a bundled coach reference were damaged.
 pub fn simulate<L: Read + Write>(
-    mut connect: impl FnMut() -> Option<L>,
+    connect: impl FnMut() -> Option<L>,
     stop: &AtomicBool,
 ) -> Result<Totals> {
-    let coaches = coaches::all()?;
-    let refs: Vec<Coach<'_>> = coaches
-        .iter()
-        .map(|(_, m)| Coach {
-            skeleton: &m.skeleton,
-            positions: &m.positions,
-            rate_hz: m.rate_hz,
-        })
-        .collect();
-    let longest = coaches.iter().map(|(_, m)| m.frames()).max().unwrap_or(0);
-    let mut buffers = OwnedBuffers::new(BufferLens::new(MAX_JOINTS, longest, RATES_HZ.1));
-    let mut session = Session::new(&refs, buffers.buffers());
+    coaches::session(|session| serve(session, connect, stop))
+}
+
+/// [`simulate`] on `session`.
+fn serve<L: Read + Write>(
+    session: &mut Session<'_>,
+    mut connect: impl FnMut() -> Option<L>,
+    stop: &AtomicBool,
+) -> Totals {
     let mut totals = Totals::default();
     let mut unsent = Outbox::default();
     let mut buf = [0u8; MAX_FRAME];
@@ -184,7 +178,7 @@ pub fn simulate<L: Read + Write>(
         }
         std::thread::sleep(RETRY);
     }
-    Ok(totals)
+    totals
 }
 
 /// A read or write that found the link not ready, rather than failed.

@@ -3,8 +3,7 @@
 use crate::{coaches, html, score};
 use anyhow::{Context, Result};
 use posecoach_adapters::log::LogReader;
-use posecoach_adapters::session::{BufferLens, Coach, Outcome, OwnedBuffers, Session, RATES_HZ};
-use posecoach_core::config::MAX_JOINTS;
+use posecoach_adapters::session::{Outcome, Session};
 use serde_json::{json, Value};
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -70,18 +69,10 @@ pub fn run(args: &Args) -> Result<String> {
 /// # Errors
 /// If the bytes are not a log.
 pub fn replay(log: &[u8]) -> Result<Replay> {
-    let coaches = coaches::all()?;
-    let refs: Vec<Coach<'_>> = coaches
-        .iter()
-        .map(|(_, m)| Coach {
-            skeleton: &m.skeleton,
-            positions: &m.positions,
-            rate_hz: m.rate_hz,
-        })
-        .collect();
-    let longest = coaches.iter().map(|(_, m)| m.frames()).max().unwrap_or(0);
-    let mut buffers = OwnedBuffers::new(BufferLens::new(MAX_JOINTS, longest, RATES_HZ.1));
-    let mut session = Session::new(&refs, buffers.buffers());
+    coaches::session(|session| replay_on(session, log))?
+}
+
+fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
     let mut reader = LogReader::new(log)?;
     let (mut swings, mut text, mut refused) = (Vec::new(), String::new(), Vec::new());
     let mut pages = Vec::new();
