@@ -460,6 +460,10 @@ fn event_lines(
 }
 
 fn deviation(out: &mut String, n: usize, s: &Scored) {
+    /// Rows for the events' names under the time axis.
+    const LABEL_ROWS: usize = 3;
+    /// Width of one character of a 9-pixel label, pixels (a generous mean).
+    const LABEL_CHAR_WIDTH: f32 = 5.0;
     const WIDTH: f32 = 640.0;
     const HEIGHT: f32 = 220.0;
     const LEFT: f32 = 44.0;
@@ -505,15 +509,24 @@ fn deviation(out: &mut String, n: usize, s: &Scored) {
             y_of(tick)
         );
     }
-    for (row, (event, i)) in s.report.student_events.iter().enumerate() {
+    // Each event's name goes on the highest of the label rows where it overlaps no other.
+    let mut row_ends = [f32::MIN; LABEL_ROWS];
+    for (event, i) in s.report.student_events.iter() {
         let x = x_of(i);
+        let name = event.name().replace('_', " ");
+        let half = name.len() as f32 * LABEL_CHAR_WIDTH / 2.0;
+        let row = (0..LABEL_ROWS)
+            .find(|&r| row_ends[r] < x - half)
+            .unwrap_or_else(|| {
+                (0..LABEL_ROWS).fold(0, |a, r| if row_ends[r] < row_ends[a] { r } else { a })
+            });
+        row_ends[row] = x + half;
         let _ = write!(
             out,
             "<line x1=\"{x:.1}\" y1=\"10\" x2=\"{x:.1}\" y2=\"{:.1}\" stroke=\"#999\" stroke-dasharray=\"3 3\"/>\
-             <text x=\"{x:.1}\" y=\"{:.1}\" font-size=\"9\" text-anchor=\"middle\">{}</text>",
+             <text x=\"{x:.1}\" y=\"{:.1}\" font-size=\"9\" text-anchor=\"middle\">{name}</text>",
             HEIGHT - 30.0,
-            HEIGHT - 18.0 + (row % 2) as f32 * 11.0,
-            event.name().replace('_', " ")
+            HEIGHT - 20.0 + row as f32 * 9.0,
         );
     }
     for (row, ((_, joint), values)) in joints.iter().zip(&series).enumerate() {
