@@ -22,13 +22,13 @@
 //! [`CLIENT_QUEUE`] lines; the serial reader never waits for a client: one whose queue is full
 //! is disconnected and counted, and may reconnect.
 
-use crate::device_sim::{self, transient, until_interrupted, Outbox, DEFAULT_BAUD};
+use crate::device_sim::{self, transient, until_interrupted, Outbox, Serial};
 use anyhow::{Context, Result};
 use posecoach_core::wire::{Decoder, Message, MAX_FRAME};
 use serde_json::{json, Value};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender, TrySendError};
 use std::sync::{Arc, Mutex};
@@ -38,6 +38,8 @@ use std::time::Duration;
 pub const TO_DEVICE_QUEUE: usize = 4096;
 /// Lines waiting for one client.
 pub const CLIENT_QUEUE: usize = 1024;
+/// Longest line a client may send, bytes (the JSON of the largest message is under 4 KB).
+pub const MAX_LINE: usize = 16 * 1024;
 /// First wait before reopening a lost port; it doubles up to [`MAX_BACKOFF`].
 const MIN_BACKOFF: Duration = Duration::from_millis(100);
 /// Longest wait between attempts to reopen the port.
@@ -49,12 +51,8 @@ const ACCEPT_POLL: Duration = Duration::from_millis(20);
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The device's serial port.
-    #[arg(long)]
-    port: PathBuf,
-    /// Speed of the port.
-    #[arg(long, default_value_t = DEFAULT_BAUD)]
-    baud: u32,
+    #[command(flatten)]
+    serial: Serial,
     /// Where phone apps connect, as ADDRESS:PORT.
     #[arg(long)]
     listen: SocketAddr,
@@ -68,10 +66,15 @@ pub fn run(args: &Args) -> Result<String> {
         TcpListener::bind(args.listen).with_context(|| format!("listening on {}", args.listen))?;
     eprintln!(
         "bridge: {} <-> {} (one JSON message per line; Ctrl-C to stop)",
-        args.port.display(),
+        args.serial.port.display(),
         args.listen
     );
-    let c = serve(&args.port, args.baud, listener, &until_interrupted()?)?;
+    let c = serve(
+        &args.serial.port,
+        args.serial.baud,
+        listener,
+        &until_interrupted()?,
+    )?;
     if args.json {
         let doc = json!({"from_device": c.from_device, "to_device": c.to_device, "links": c.links,
                          "slow_clients": c.slow_clients, "bad_lines": c.bad_lines});
@@ -258,25 +261,26 @@ fn read_lines(
     shared: &Shared,
     to_device: &SyncSender<Vec<u8>>,
 ) {
-    for (n, line) in BufReader::new(stream).lines().enumerate() {
-        let Ok(line) = line else {
-            return;
+    let mut reader = BufReader::new(stream);
+    let mut line = Vec::new();
+    for n in 1.. {
+        let frame = match next_line(&mut reader, &mut line) {
+            Ok(None) | Err(_) => return,
+            Ok(Some(_)) if line.trim_ascii().is_empty() => continue,
+            Ok(Some(false)) => Err(format!(
+                "line {n}: longer than {MAX_LINE} bytes, dropped: no message is that long"
+            )),
+            Ok(Some(true)) => serde_json::from_slice::<Message>(&line)
+                .map_err(|e| {
+                    format!(
+                        "line {n}: not a message ({e}): send one wire message as JSON per line, such as {}",
+                        r#"{"CoachSelect": {"coach": 0}}"#
+                    )
+                })
+                .and_then(|m| {
+                    device_sim::frame(&m).ok_or_else(|| format!("line {n}: too long for one frame"))
+                }),
         };
-        if line.trim().is_empty() {
-            continue;
-        }
-        let frame = serde_json::from_str::<Message>(&line)
-            .map_err(|e| {
-                format!(
-                    "line {}: not a message ({e}): send one wire message as JSON per line, such as {}",
-                    n + 1,
-                    r#"{"CoachSelect": {"coach": 0}}"#
-                )
-            })
-            .and_then(|m| {
-                device_sim::frame(&m)
-                    .ok_or_else(|| format!("line {}: too long for one frame", n + 1))
-            });
         match frame {
             Ok(frame) => {
                 if to_device.send(frame).is_err() {
@@ -287,6 +291,35 @@ fn read_lines(
                 shared.counters.bad_lines.fetch_add(1, Ordering::Relaxed);
                 let _ = replies.try_send(json!({ "error": why }).to_string());
             }
+        }
+    }
+}
+
+/// Reads the next line of `reader` into `line`, without its newline: `None` at the end, else
+/// whether it was at most [`MAX_LINE`] bytes. Of a longer line no more than that is kept: the
+/// rest is read and dropped.
+///
+/// # Errors
+/// When reading fails.
+fn next_line(reader: &mut impl BufRead, line: &mut Vec<u8>) -> std::io::Result<Option<bool>> {
+    let limit = MAX_LINE as u64 + 1;
+    line.clear();
+    if reader.by_ref().take(limit).read_until(b'\n', line)? == 0 {
+        return Ok(None);
+    }
+    if line.last() == Some(&b'\n') {
+        line.pop();
+        return Ok(Some(true));
+    }
+    if line.len() <= MAX_LINE {
+        return Ok(Some(true));
+    }
+    loop {
+        line.clear();
+        let n = reader.by_ref().take(limit).read_until(b'\n', line)?;
+        if n == 0 || line.last() == Some(&b'\n') {
+            line.clear();
+            return Ok(Some(false));
         }
     }
 }
@@ -398,6 +431,22 @@ mod tests {
         }
         assert_eq!(shared.clients.lock().map(|c| c.len()).ok(), Some(1));
         assert_eq!(shared.counters.now().slow_clients, 1);
+    }
+
+    #[test]
+    fn an_endless_line_is_dropped_in_bounded_memory_and_reading_goes_on() {
+        let long = "x".repeat(3 * MAX_LINE);
+        let text = format!("a\n{long}\n\nb");
+        let mut reader = std::io::Cursor::new(text.as_bytes());
+        let mut line = Vec::new();
+        let mut got = Vec::new();
+        while let Some(whole) = next_line(&mut reader, &mut line).unwrap() {
+            assert!(line.capacity() <= 2 * (MAX_LINE + 1));
+            got.push((whole, String::from_utf8(line.clone()).unwrap()));
+        }
+        let expected = [(true, "a"), (false, ""), (true, ""), (true, "b")];
+        let expected: Vec<_> = expected.iter().map(|&(w, s)| (w, s.to_string())).collect();
+        assert_eq!(got, expected);
     }
 
     #[test]

@@ -26,15 +26,22 @@ pub const READ_TIMEOUT: Duration = Duration::from_millis(20);
 /// Wait before trying a port again that could not be opened or failed.
 const RETRY: Duration = Duration::from_millis(200);
 
+/// A serial port's arguments, as `device-sim` and `bridge` take them.
+#[derive(clap::Args)]
+pub struct Serial {
+    /// The serial port: a device path, or a pseudo-terminal such as one end of
+    /// `socat -d -d pty,raw,echo=0 pty,raw,echo=0`.
+    #[arg(long)]
+    pub port: PathBuf,
+    /// Speed of the port (pseudo-terminals ignore it).
+    #[arg(long, default_value_t = DEFAULT_BAUD)]
+    pub baud: u32,
+}
+
 #[derive(clap::Args)]
 pub struct Args {
-    /// The serial port to serve (a device path, or a pseudo-terminal such as one end of
-    /// `socat -d -d pty,raw,echo=0 pty,raw,echo=0`).
-    #[arg(long)]
-    port: PathBuf,
-    /// Speed of the port.
-    #[arg(long, default_value_t = DEFAULT_BAUD)]
-    baud: u32,
+    #[command(flatten)]
+    serial: Serial,
     /// On Ctrl-C, print the totals as one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -54,11 +61,11 @@ pub struct Totals {
 pub fn run(args: &Args) -> Result<String> {
     eprintln!(
         "device-sim: serving {} (Ctrl-C to stop)",
-        args.port.display()
+        args.serial.port.display()
     );
     let stop = until_interrupted()?;
     let mut failing = false;
-    let connect = || match open(&args.port, args.baud) {
+    let connect = || match open(&args.serial.port, args.serial.baud) {
         Ok(port) => {
             failing = false;
             Some(port)
@@ -67,7 +74,7 @@ pub fn run(args: &Args) -> Result<String> {
             if !failing {
                 eprintln!(
                     "device-sim: {}: {e}; retrying until it opens",
-                    args.port.display()
+                    args.serial.port.display()
                 );
             }
             failing = true;
