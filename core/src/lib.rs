@@ -24,10 +24,13 @@
 //! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
 //! - [`score`]: the score, tempo, spatial deviations and advice of one swing.
 //! - [`wire`]: the serial protocol: messages, COBS + CRC-32 framing, a streaming decoder.
+//! - [`blob`]: the container of stored assets (header, aligned payload, CRC-32).
+//! - [`reference`]: coach reference swings stored as blobs, read in place.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod blob;
 pub mod config;
 pub mod detector;
 pub mod dtw;
@@ -37,6 +40,7 @@ pub mod joint;
 pub mod kinematics;
 mod math;
 pub mod normalize;
+pub mod reference;
 pub mod retarget;
 pub mod score;
 pub mod skeleton;

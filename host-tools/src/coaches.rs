@@ -1,33 +1,28 @@
-//! The coach reference swings this build carries, numbered as `CoachSelect` numbers them.
+//! The coach reference swings this build carries, numbered as `CoachSelect` numbers them: the
+//! blobs in `coaches/` (real swings, see the README), the same bytes the firmware embeds.
 
 use anyhow::{Context, Result};
-use posecoach_adapters::io::{csv, Motion};
 use posecoach_adapters::session::{BufferLens, Coach, OwnedBuffers, Session, RATES_HZ};
+use posecoach_core::blob::Aligned;
 use posecoach_core::config::MAX_JOINTS;
+use posecoach_core::reference::Reference;
 
-/// Number, name and CSV text of each bundled reference (real swings, see the README).
-const BUNDLED: [(&str, &str); 2] = [
-    (
-        "driver",
-        include_str!("../../tests/fixtures/golf_driver_60hz.csv"),
-    ),
-    (
-        "iron",
-        include_str!("../../tests/fixtures/golf_iron_60hz.csv"),
-    ),
+/// The bundled reference blobs in order: reference `n` is `BUNDLED[n]`.
+static BUNDLED: [&Aligned<[u8]>; 2] = [
+    &Aligned(*include_bytes!("../../coaches/driver.pcr")),
+    &Aligned(*include_bytes!("../../coaches/iron.pcr")),
 ];
 
 /// The bundled references in order: reference `n` is `all()[n]`.
 ///
 /// # Errors
 /// Only if a bundled file were damaged.
-pub fn all() -> Result<Vec<(&'static str, Motion)>> {
+pub fn all() -> Result<Vec<Reference<'static>>> {
     BUNDLED
         .iter()
-        .map(|(name, text)| {
-            csv::read(text)
-                .map(|m| (*name, m))
-                .with_context(|| format!("bundled coach `{name}`"))
+        .enumerate()
+        .map(|(n, blob)| {
+            Reference::from_bytes(&blob.0).with_context(|| format!("bundled coach {n}"))
         })
         .collect()
 }
@@ -41,13 +36,32 @@ pub fn session<R>(device: impl FnOnce(&mut Session<'_>) -> R) -> Result<R> {
     let coaches = all()?;
     let refs: Vec<Coach<'_>> = coaches
         .iter()
-        .map(|(_, m)| Coach {
-            skeleton: &m.skeleton,
-            positions: &m.positions,
-            rate_hz: m.rate_hz,
+        .map(|r| Coach {
+            skeleton: r.skeleton(),
+            positions: r.positions(),
+            rate_hz: r.rate_hz(),
         })
         .collect();
-    let longest = coaches.iter().map(|(_, m)| m.frames()).max().unwrap_or(0);
+    let longest = coaches.iter().map(Reference::frames).max().unwrap_or(0);
     let mut buffers = OwnedBuffers::new(BufferLens::new(MAX_JOINTS, longest, RATES_HZ.1));
     Ok(device(&mut Session::new(&refs, buffers.buffers())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use posecoach_adapters::io;
+    use std::path::Path;
+
+    /// The blobs are what `posecoach reference` makes of the real swings in
+    /// `tests/fixtures` (see `coaches/README.md`), byte for byte.
+    #[test]
+    fn bundled_references_are_the_fixtures_stored() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        for (blob, name) in BUNDLED.iter().zip(["driver", "iron"]) {
+            let file = root.join(format!("tests/fixtures/golf_{name}_60hz.csv"));
+            let motion = io::load(&file).unwrap();
+            assert_eq!(motion.to_reference(name).unwrap(), &blob.0, "{name}");
+        }
+    }
 }

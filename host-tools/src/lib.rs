@@ -11,6 +11,7 @@ pub mod device_sim;
 pub mod html;
 pub mod inspect;
 pub mod learn;
+pub mod reference;
 pub mod replay;
 pub mod retarget;
 pub mod score;

@@ -4,7 +4,8 @@
 //! `--json`) and `main` prints it.
 
 use posecoach_cli::{
-    bench, bridge, demo, device_sim, inspect, learn, replay, retarget, score, synth, tpose,
+    bench, bridge, demo, device_sim, inspect, learn, reference, replay, retarget, score, synth,
+    tpose,
 };
 
 use clap::{Parser, Subcommand};
@@ -32,6 +33,8 @@ enum Command {
     Score(score::Args),
     /// Describe a motion file: format, joints, frames, rate, height, segments, missing data.
     Inspect(inspect::Args),
+    /// Store a coach's swing as the device stores it: a coach reference blob (.pcr).
+    Reference(reference::Args),
     /// Write a keypoint format's standard T-pose scaled to a height, for use as a student.
     Tpose(tpose::Args),
     /// Measure the speed of the core's hot paths.
@@ -64,6 +67,7 @@ fn main() -> ExitCode {
         Command::Retarget(args) => retarget::run(&args),
         Command::Score(args) => score::run(&args),
         Command::Inspect(args) => inspect::run(&args),
+        Command::Reference(args) => reference::run(&args),
         Command::Tpose(args) => tpose::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Replay(args) => replay::run(&args),

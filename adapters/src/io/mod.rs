@@ -1,7 +1,7 @@
 //! Host-side file import and export (the `std` feature).
 //!
 //! [`load`] and [`save`] pick the format from the file extension: `.bvh` and `.csv` in and
-//! out, `.c3d` in.
+//! out, `.c3d` and `.pcr` (a coach reference, [`posecoach_core::reference`]) in.
 pub mod bvh;
 pub mod c3d;
 pub mod csv;
@@ -41,6 +41,8 @@ pub enum FileErrorKind {
     Golf(golf::GolfError),
     /// Joint centres that do not make a skeleton (a bone never measured).
     Skeleton(posecoach_core::skeleton::SkeletonError),
+    /// A coach reference that does not read.
+    Reference(posecoach_core::reference::ReferenceError),
 }
 
 impl fmt::Display for FileError {
@@ -49,7 +51,7 @@ impl fmt::Display for FileError {
         match &self.kind {
             FileErrorKind::Io(e) => e.fmt(f),
             FileErrorKind::UnknownExtension => {
-                f.write_str("unknown extension: expected .bvh, .c3d or .csv")
+                f.write_str("unknown extension: expected .bvh, .c3d, .csv or .pcr")
             }
             FileErrorKind::Csv(e) => e.fmt(f),
             FileErrorKind::Bvh(e) => e.fmt(f),
@@ -60,6 +62,7 @@ impl fmt::Display for FileError {
                 "{e}: C3D files are read as the GearsSports golf marker set (see the README)"
             ),
             FileErrorKind::Skeleton(e) => write!(f, "the joint centres are not a skeleton: {e}"),
+            FileErrorKind::Reference(e) => e.fmt(f),
         }
     }
 }
@@ -94,6 +97,10 @@ pub fn load(path: &Path) -> Result<Motion, FileError> {
             let c3d = c3d::C3d::parse(&bytes).map_err(|e| fail(FileErrorKind::C3d(e)))?;
             let centres = golf::joint_centres(&c3d).map_err(|e| fail(FileErrorKind::Golf(e)))?;
             Motion::from_golf(&centres).map_err(|e| fail(FileErrorKind::Skeleton(e)))
+        }
+        "pcr" => {
+            let bytes = std::fs::read(path).map_err(|e| fail(FileErrorKind::Io(e)))?;
+            Motion::from_reference(&bytes).map_err(|e| fail(FileErrorKind::Reference(e)))
         }
         _ => Err(fail(FileErrorKind::UnknownExtension)),
     }

@@ -5,6 +5,7 @@ use super::bvh::{Bvh, Channel};
 use super::golf::{JointCentres, GOLF_JOINTS};
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
+use posecoach_core::reference::{self, Reference, ReferenceError};
 use posecoach_core::retarget::{Analytic, RetargetError};
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
 use posecoach_core::Vec3;
@@ -266,6 +267,51 @@ impl Motion {
             positions,
             missing,
         })
+    }
+
+    /// A coach reference blob (`.pcr`) as a motion: joints named canonically, nothing missing.
+    ///
+    /// # Errors
+    /// Any [`ReferenceError`] of [`Reference::from_bytes`].
+    pub fn from_reference(bytes: &[u8]) -> Result<Motion, ReferenceError> {
+        // Files are read into unaligned memory; the blob is viewed in place only when aligned.
+        let mut store = vec![0u128; bytes.len().div_ceil(16)];
+        let aligned = &mut bytemuck::cast_slice_mut::<u128, u8>(&mut store)[..bytes.len()];
+        aligned.copy_from_slice(bytes);
+        let reference = Reference::from_bytes(aligned)?;
+        let skeleton = reference.skeleton().clone();
+        let names = (0..skeleton.len())
+            .map(|k| {
+                skeleton
+                    .joint(k)
+                    .map_or(format!("joint_{k}"), |j| j.name().to_string())
+            })
+            .collect();
+        Ok(Motion {
+            names,
+            rate_hz: reference.rate_hz(),
+            positions: reference.positions().to_vec(),
+            missing: vec![false; reference.positions().len()],
+            skeleton,
+        })
+    }
+
+    /// The motion as a coach reference blob named `name`.
+    ///
+    /// # Errors
+    /// As [`reference::write`]: a T-pose (rate 0), a name over
+    /// [`reference::MAX_NAME`] bytes or a non-finite position.
+    pub fn to_reference(&self, name: &str) -> Result<Vec<u8>, ReferenceError> {
+        let mut out = vec![0; reference::max_len(self.skeleton.len(), self.frames())];
+        let n = reference::write(
+            name,
+            &self.skeleton,
+            self.rate_hz,
+            &self.positions,
+            &mut out,
+        )?;
+        out.truncate(n);
+        Ok(out)
     }
 
     /// The motion as BVH in metres: every joint with position and Z-X-Y rotation channels, so

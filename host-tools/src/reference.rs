@@ -1,0 +1,56 @@
+//! `posecoach reference`: a coach's swing stored as the device stores it (a `.pcr` blob).
+
+use anyhow::{bail, Context, Result};
+use posecoach_adapters::io;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The coach's swing (.csv, .bvh or .c3d).
+    coach: PathBuf,
+    /// The name it is stored under (at most 32 bytes); the file's stem by default.
+    #[arg(long)]
+    name: Option<String>,
+    /// Where to write it (.pcr).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(args: &Args) -> Result<String> {
+    let motion = io::load(&args.coach)?;
+    if motion.rate_hz <= 0.0 {
+        bail!(
+            "{} is a single pose; a coach reference is a swing",
+            args.coach.display()
+        );
+    }
+    let name = match &args.name {
+        Some(name) => name.clone(),
+        None => args
+            .coach
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+    };
+    let bytes = motion
+        .to_reference(&name)
+        .with_context(|| format!("storing {}", args.coach.display()))?;
+    std::fs::write(&args.out, &bytes).with_context(|| format!("writing {}", args.out.display()))?;
+    let (joints, frames) = (motion.skeleton.len(), motion.frames());
+    if args.json {
+        let doc = serde_json::json!({
+            "out": args.out.display().to_string(), "name": name, "joints": joints,
+            "frames": frames, "rate_hz": motion.rate_hz, "bytes": bytes.len(),
+        });
+        return Ok(format!("{doc}\n"));
+    }
+    Ok(format!(
+        "wrote coach reference `{name}` ({joints} joints, {frames} frames at {} Hz, {} bytes) to {}\n",
+        motion.rate_hz,
+        bytes.len(),
+        args.out.display()
+    ))
+}
