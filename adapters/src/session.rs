@@ -30,7 +30,9 @@ use posecoach_core::format::Format;
 use posecoach_core::retarget::Analytic;
 use posecoach_core::score::{self, Report, ScoreError};
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
-use posecoach_core::wire::{Config, ImuSample, Message, PoseFrame, SensorLayout, StudentProfile};
+use posecoach_core::wire::{
+    Config, ImuSample, Message, NackReason, PoseFrame, SensorLayout, StudentProfile, SwingReport,
+};
 use posecoach_core::{config::MAX_JOINTS, Vec3};
 
 /// Settings until a `Config` message arrives.
@@ -195,6 +197,27 @@ pub enum Outcome<'r> {
     Refused(Refusal),
 }
 
+impl Outcome<'_> {
+    /// What a device answers to `message` when handling it led to this: a `SwingReport` for
+    /// a scored swing, a `Nack` for a refusal (of the pose frame's `seq`, else 0), nothing for
+    /// a swing that could not be scored.
+    pub fn reply(&self, message: &Message) -> Option<Message> {
+        match self {
+            Outcome::Scored { swing, report, .. } => {
+                Some(Message::SwingReport(SwingReport::new(swing.number, report)))
+            }
+            Outcome::Unscored { .. } => None,
+            Outcome::Refused(why) => Some(Message::Nack {
+                seq: match message {
+                    Message::PoseFrame(f) => f.seq,
+                    _ => 0,
+                },
+                reason: why.nack_reason(),
+            }),
+        }
+    }
+}
+
 /// Why a message was refused.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -223,6 +246,18 @@ pub enum Refusal {
     Input,
     /// The layout does not fit the student, or a sample is degenerate.
     Imu(ImuError),
+}
+
+impl Refusal {
+    /// The reason a `Nack` gives: the message came at the wrong time, did not fit the session
+    /// now, or is wrong in itself.
+    pub fn nack_reason(self) -> NackReason {
+        match self {
+            Refusal::NoProfile | Refusal::Input => NackReason::Unexpected,
+            Refusal::Buffers => NackReason::Busy,
+            _ => NackReason::Invalid,
+        }
+    }
 }
 
 impl core::fmt::Display for Refusal {

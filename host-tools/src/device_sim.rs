@@ -10,8 +10,8 @@
 
 use crate::coaches;
 use anyhow::{Context, Result};
-use posecoach_adapters::session::{Outcome, Refusal, Session};
-use posecoach_core::wire::{encode, Decoder, Message, NackReason, SwingReport, MAX_FRAME};
+use posecoach_adapters::session::{Outcome, Session};
+use posecoach_core::wire::{encode, Decoder, Message, MAX_FRAME};
 use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
@@ -159,26 +159,20 @@ fn serve<L: Read + Write>(
             let mut messages = Vec::new();
             decoder.push_all(&buf[..n], |m| messages.push(m));
             for message in &messages {
-                let seq = match message {
-                    Message::PoseFrame(f) => f.seq,
-                    _ => 0,
-                };
-                session.handle(message, |outcome| match outcome {
-                    Outcome::Scored { swing, report, .. } => {
-                        totals.reports += 1;
-                        let report = SwingReport::new(swing.number, report);
-                        let status = Message::Status(decoder.counters());
-                        for m in [Message::SwingReport(report), status] {
-                            unsent.extend(frame(&m));
+                session.handle(message, |outcome| {
+                    match &outcome {
+                        Outcome::Scored { .. } => totals.reports += 1,
+                        Outcome::Unscored { swing, error } => {
+                            eprintln!("device-sim: swing {} not scored: {error}", swing.number);
                         }
+                        Outcome::Refused(_) => totals.refused += 1,
                     }
-                    Outcome::Unscored { swing, error } => {
-                        eprintln!("device-sim: swing {} not scored: {error}", swing.number);
-                    }
-                    Outcome::Refused(why) => {
-                        totals.refused += 1;
-                        let reason = nack_reason(why);
-                        unsent.extend(frame(&Message::Nack { seq, reason }));
+                    if let Some(reply) = outcome.reply(message) {
+                        let scored = matches!(reply, Message::SwingReport(_));
+                        unsent.extend(frame(&reply));
+                        if scored {
+                            unsent.extend(frame(&Message::Status(decoder.counters())));
+                        }
                     }
                 });
             }
@@ -263,14 +257,6 @@ pub fn frame(message: &Message) -> Option<Vec<u8>> {
 }
 
 /// The `Nack` reason a refusal is sent with.
-fn nack_reason(why: Refusal) -> NackReason {
-    match why {
-        Refusal::NoProfile | Refusal::Input => NackReason::Unexpected,
-        Refusal::Buffers => NackReason::Busy,
-        _ => NackReason::Invalid,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

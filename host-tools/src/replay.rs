@@ -1,6 +1,6 @@
 //! `posecoach replay`: a recorded session through the device's pipeline, swing by swing.
 
-use crate::{coaches, html, score};
+use crate::{coaches, device_sim, html, score};
 use anyhow::{Context, Result};
 use posecoach_adapters::log::LogReader;
 use posecoach_adapters::session::{Outcome, Session};
@@ -19,6 +19,10 @@ pub struct Args {
     /// the JSON.
     #[arg(long)]
     report: Option<PathBuf>,
+    /// Also write the frames the device sends back (a `SwingReport` per scored swing, a
+    /// `Nack` per refused message), COBS-framed exactly as on the serial link.
+    #[arg(long)]
+    wire: Option<PathBuf>,
 }
 
 /// What a replay found.
@@ -33,6 +37,8 @@ pub struct Replay {
     pub counters: Value,
     /// Every swing as the HTML report draws it.
     pub pages: Vec<html::Swing>,
+    /// The frames the device sends back, in order, as on the serial link.
+    pub wire: Vec<u8>,
 }
 
 impl Replay {
@@ -47,6 +53,10 @@ pub fn run(args: &Args) -> Result<String> {
         std::fs::read(&args.log).with_context(|| format!("reading {}", args.log.display()))?;
     let replay = replay(&bytes).with_context(|| format!("replaying {}", args.log.display()))?;
     let json = replay.to_json();
+    if let Some(path) = &args.wire {
+        std::fs::write(path, &replay.wire)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
     if let Some(path) = &args.report {
         let notes = [format!("Recorded session: {}", args.log.display())];
         score::write_report(path, &json, || {
@@ -75,9 +85,12 @@ pub fn replay(log: &[u8]) -> Result<Replay> {
 fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
     let mut reader = LogReader::new(log)?;
     let (mut swings, mut text, mut refused) = (Vec::new(), String::new(), Vec::new());
-    let mut pages = Vec::new();
+    let (mut pages, mut sent) = (Vec::new(), Vec::new());
     for message in reader.by_ref() {
         session.handle(&message, |outcome| {
+            if let Some(frame) = outcome.reply(&message).as_ref().and_then(device_sim::frame) {
+                sent.extend(frame);
+            }
             let (swing, result) = match outcome {
                 Outcome::Scored {
                     swing,
@@ -135,5 +148,6 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
         refused,
         counters,
         pages,
+        wire: sent,
     })
 }

@@ -84,6 +84,19 @@ fn every_log_replays_to_its_swings_and_golden_reports() {
             golden.display(),
             difference.unwrap_or_default()
         );
+        // What the device sends back, byte for byte: the QEMU firmware compares its own
+        // frames with this file.
+        let wire = log.with_extension("device.bin");
+        if std::env::var_os("POSECOACH_BLESS").is_some() {
+            std::fs::write(&wire, &replay.wire).unwrap();
+        }
+        let want = std::fs::read(&wire)
+            .unwrap_or_else(|_| panic!("{}: missing; POSECOACH_BLESS=1 writes it", wire.display()));
+        assert!(
+            replay.wire == want,
+            "{name}: the device's frames differ from {} (POSECOACH_BLESS=1 rewrites it after a deliberate change)",
+            wire.display()
+        );
     }
 }
 
