@@ -16,15 +16,19 @@ cargo fmt --all -- --check
 step "clippy"
 cargo clippy --workspace --all-targets -- -D warnings
 
+# Installs Debian packages when this user may (root or password-less sudo); else says why not.
+apt_install() {
+    if [ "$(id -u)" -eq 0 ]; then sudo=""; elif sudo -n true 2>/dev/null; then sudo="sudo"; else sudo="none"; fi
+    if [ "$sudo" = none ] || ! command -v apt-get >/dev/null 2>&1; then
+        echo "no apt-get or no root: cannot install $*"
+        return 1
+    fi
+    $sudo apt-get update -qq && $sudo apt-get install -y -qq "$@" >/dev/null
+}
+
 step "chromium for the HTML report's rendering test (skipped, with a message, where it cannot be installed)"
 if ! command -v chromium >/dev/null 2>&1; then
-    if [ "$(id -u)" -eq 0 ]; then sudo=""; elif sudo -n true 2>/dev/null; then sudo="sudo"; else sudo="none"; fi
-    if [ "$sudo" != none ] && command -v apt-get >/dev/null 2>&1; then
-        $sudo apt-get update -qq && $sudo apt-get install -y -qq chromium >/dev/null \
-            || echo "could not install chromium: the report rendering test will skip"
-    else
-        echo "no apt-get or no root: the report rendering test will skip"
-    fi
+    apt_install chromium || echo "could not install chromium: the report rendering test will skip"
 fi
 
 step "tests"
@@ -39,6 +43,11 @@ cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabi
 
 step "no alloc: link both crates into a Cortex-M4F static library with no global allocator"
 (cd firmware-examples/no-alloc-check && cargo build --release && cargo build --release --features defmt)
+
+step "Cortex-M4F firmware on QEMU mps2-an386: the whole pipeline on a recorded session, every reply equal to the host's, and its costs"
+command -v qemu-system-arm >/dev/null 2>&1 && command -v size >/dev/null 2>&1 || apt_install qemu-system-arm binutils
+command -v defmt-print >/dev/null 2>&1 || cargo install defmt-print --locked --version 1.2.0
+firmware-examples/qemu-m4f/measure.sh
 
 step "fuzz: every byte parser for 30 s, seeded with the committed fixtures (nightly, cargo-fuzz)"
 rustup toolchain install nightly --profile minimal

@@ -84,10 +84,10 @@ pub struct BufferLens {
 impl BufferLens {
     /// For students of up to `joints` joints, coaches of up to `coach_frames` frames and model
     /// rates up to `rate_hz`.
-    pub fn new(joints: usize, coach_frames: usize, rate_hz: u16) -> BufferLens {
+    pub const fn new(joints: usize, coach_frames: usize, rate_hz: u16) -> BufferLens {
         let scratch = score::scratch_len(joints, MAX_SWING_FRAMES, coach_frames);
         BufferLens {
-            ring: joints * (RING_S * f32::from(rate_hz)) as usize,
+            ring: joints * (RING_S * rate_hz as f32) as usize,
             window: joints * MAX_SWING_FRAMES,
             coach: joints * coach_frames,
             floats: scratch.floats,

@@ -333,7 +333,7 @@ pub struct ScratchLen {
 
 /// Scratch [`score`] needs for swings of `student` and `coach` frames on a skeleton of `joints`
 /// joints, whatever band the events give.
-pub fn scratch_len(joints: usize, student: usize, coach: usize) -> ScratchLen {
+pub const fn scratch_len(joints: usize, student: usize, coach: usize) -> ScratchLen {
     ScratchLen {
         floats: 3 * joints * (student + coach) + 3 * (coach + 2),
         bytes: (student * coach).div_ceil(4),

@@ -140,6 +140,7 @@ pub struct Counters {
 
 /// One joint off at one event, in a compact form.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WireDeviation {
     /// Event index in swing order (address = 0 .. finish = 7).
     pub event: u8,
@@ -153,6 +154,7 @@ pub struct WireDeviation {
 
 /// A swing's report, small enough for one frame (the frame correspondence stays on the device).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SwingReport {
     /// Swing number since start.
     pub swing: u32,

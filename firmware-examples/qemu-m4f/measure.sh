@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Builds the firmware, runs it under QEMU (it exits non-zero unless every reply equals the
+# host's), and prints what the device pipeline costs: flash and static RAM from the ELF's
+# sections, the stack's high-water mark, and instructions per stage. The figures are a report,
+# not a test: only the firmware's own check decides the exit status.
+# Usage: firmware-examples/qemu-m4f/measure.sh   (needs qemu-system-arm, defmt-print, size)
+set -euo pipefail
+cd "$(dirname "$0")"
+cargo build --release
+elf=target/thumbv7em-none-eabihf/release/posecoach-qemu-m4f
+out=$(mktemp)
+trap 'rm -f "$out"' EXIT
+./run.sh "$elf" | tee "$out"
+
+section() { size -A "$elf" | awk -v s="$1" '$1 == s { print $2 }' | grep . || echo 0; }
+field() { grep "^$1 " "$out" | sed -E "s/.* $2 ([0-9]+).*/\1/"; }
+kib() { awk -v b="$1" 'BEGIN { printf "%.1f KiB", b / 1024 }'; }
+minstr() { awk -v n="$1" 'BEGIN { printf "%.3f M", n / 1e6 }'; }
+
+code=$(( $(section .vector_table) + $(section .text) + $(section .rodata) + $(section .data) ))
+log=$(field EMBEDDED log)
+transcript=$(field EMBEDDED transcript)
+static_ram=$(( $(section .data) + $(section .bss) + $(section .uninit) ))
+stack=$(field RAM stack)
+echo
+echo "| what | measured |"
+echo "| --- | --- |"
+echo "| flash: code, constants, both coach references (without the test's log and transcript) | $(kib $((code - log - transcript))) |"
+echo "| static RAM (.data + .bss) | $(kib "$static_ram") |"
+for b in ring window coach floats bytes; do
+    echo "| of which session buffer \`$b\` | $(kib "$(field RAM "$b")") |"
+done
+echo "| stack high-water mark | $(kib "$stack") |"
+echo "| decode one message (mean, $(field 'STAGE decode' calls) messages) | $(minstr "$(field 'STAGE decode' mean)") |"
+echo "| one pose frame: stream, skeleton fit, detector (mean / max) | $(minstr "$(field 'STAGE frame' mean)") / $(minstr "$(field 'STAGE frame' max)") |"
+echo "| the frame that ends a swing: copy, events, DTW, report (mean of $(field 'STAGE swing' calls)) | $(minstr "$(field 'STAGE swing' mean)") |"
+echo "| student profile or coach selection: coach retargeted (analytic), its swing found | $(minstr "$(field 'STAGE setup' mean)") |"

@@ -1,0 +1,195 @@
+//! posecoach's device pipeline on a Cortex-M4F (QEMU `mps2-an386`).
+//!
+//! Replays the recorded session `tests/logs/range_h36m_30hz.pclog` (embedded) through the
+//! device's session with the bundled coach references (embedded `.pcr` blobs): decode → pose
+//! stream → swing detection → retarget (once per student and coach) → events → DTW → report.
+//! Every reply the device would send is encoded as on the serial link and compared with the
+//! host's (`posecoach replay --wire`, committed as `range_h36m_30hz.device.bin`). Prints each
+//! report and the instructions each stage took over defmt; exits 0 only if every byte matched.
+#![no_std]
+#![no_main]
+
+mod count;
+mod stack;
+
+use cortex_m as _;
+use cortex_m_rt::entry;
+use count::Tally;
+use defmt_semihosting as _;
+use posecoach_adapters::log::LogReader;
+use posecoach_adapters::session::{BufferLens, Buffers, Coach, Outcome, Session};
+use posecoach_core::blob::Aligned;
+use posecoach_core::reference::Reference;
+use posecoach_core::wire::{encode, Message, MAX_FRAME};
+use posecoach_core::Vec3;
+use static_cell::ConstStaticCell;
+
+static LOG: &Aligned<[u8]> = &Aligned(*include_bytes!("../../../tests/logs/range_h36m_30hz.pclog"));
+static EXPECTED: &[u8] = include_bytes!("../../../tests/logs/range_h36m_30hz.device.bin");
+static COACHES: [&Aligned<[u8]>; 2] = [
+    &Aligned(*include_bytes!("../../../coaches/driver.pcr")),
+    &Aligned(*include_bytes!("../../../coaches/iron.pcr")),
+];
+
+/// Joints of the log's student (H3.6M-17 keypoints).
+const STUDENT_JOINTS: usize = 17;
+/// Frames of the longest bundled coach reference.
+const COACH_FRAMES: usize = 110;
+/// The model rate the log's `Config` asks for, Hz.
+const MODEL_RATE_HZ: u16 = 60;
+const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RATE_HZ);
+
+static RING: ConstStaticCell<[Vec3; LENS.ring]> =
+    ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.ring]);
+static WINDOW: ConstStaticCell<[Vec3; LENS.window]> =
+    ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.window]);
+static VIRTUAL_COACH: ConstStaticCell<[Vec3; LENS.coach]> =
+    ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.coach]);
+static FLOATS: ConstStaticCell<[f32; LENS.floats]> = ConstStaticCell::new([0.0; LENS.floats]);
+static BYTES: ConstStaticCell<[u8; LENS.bytes]> = ConstStaticCell::new([0; LENS.bytes]);
+
+/// Instructions per kind of work.
+#[derive(Default)]
+struct Stages {
+    /// Reading one message from the log's bytes (COBS, CRC, postcard).
+    decode: Tally,
+    /// A pose frame that did not end a swing: pose stream, skeleton fit, detector.
+    frame: Tally,
+    /// A pose frame that ended a swing: the above, the copy out, events, DTW, report.
+    swing: Tally,
+    /// A profile or coach selection: the coach retargeted onto the student, its events.
+    setup: Tally,
+    /// Encoding a reply for the serial link.
+    reply: Tally,
+}
+
+#[entry]
+fn main() -> ! {
+    let core = cortex_m::Peripherals::take();
+    let status = match core {
+        Some(core) => {
+            count::start(core.SYST);
+            run()
+        }
+        None => Err("core peripherals taken twice"),
+    };
+    match status {
+        Ok(()) => {
+            defmt::println!("PASS: every reply equals the host's");
+            semihosting::process::exit(0)
+        }
+        Err(why) => {
+            defmt::println!("FAIL: {}", why);
+            semihosting::process::exit(1)
+        }
+    }
+}
+
+fn run() -> Result<(), &'static str> {
+    count::check()?;
+    let mut references = [None, None];
+    for (slot, blob) in references.iter_mut().zip(COACHES) {
+        *slot = Some(Reference::from_bytes(&blob.0).map_err(|_| "a coach reference is damaged")?);
+    }
+    let [Some(driver), Some(iron)] = references else {
+        return Err("a coach reference is missing");
+    };
+    let coaches = [coach(&driver), coach(&iron)];
+    let buffers = Buffers {
+        ring: RING.take(),
+        window: WINDOW.take(),
+        coach: VIRTUAL_COACH.take(),
+        floats: FLOATS.take(),
+        bytes: BYTES.take(),
+    };
+    let mut session = Session::new(&coaches, buffers);
+    let mut reader = LogReader::new(&LOG.0).map_err(|_| "the embedded log is not a log")?;
+    let mut stages = Stages::default();
+    let mut expected = EXPECTED;
+    let mut mismatch = false;
+    loop {
+        let start = count::now();
+        let Some(message) = reader.next() else { break };
+        stages.decode.add(count::now() - start);
+        let mut scored = false;
+        let start = count::now();
+        session.handle(&message, |outcome| {
+            let at = count::now();
+            scored |= matches!(outcome, Outcome::Scored { .. });
+            if let Outcome::Scored { report, .. } = &outcome {
+                defmt::println!("swing scored: {}", report.score);
+            }
+            if let Some(reply) = outcome.reply(&message) {
+                let mut frame = [0u8; MAX_FRAME];
+                match encode(&reply, &mut frame) {
+                    Ok(n) if expected.starts_with(&frame[..n]) => expected = &expected[n..],
+                    _ => mismatch = true,
+                }
+                if let Message::SwingReport(report) = &reply {
+                    defmt::println!("{}", report);
+                }
+            }
+            stages.reply.add(count::now() - at);
+        });
+        let spent = count::now() - start;
+        match message {
+            Message::PoseFrame(_) if scored => stages.swing.add(spent),
+            Message::PoseFrame(_) => stages.frame.add(spent),
+            Message::StudentProfile(_) | Message::CoachSelect { .. } => stages.setup.add(spent),
+            _ => {}
+        }
+    }
+    print(&stages);
+    let vec3 = core::mem::size_of::<Vec3>();
+    defmt::println!(
+        "RAM ring {=usize} window {=usize} coach {=usize} floats {=usize} bytes {=usize} stack {=usize}",
+        LENS.ring * vec3,
+        LENS.window * vec3,
+        LENS.coach * vec3,
+        LENS.floats * core::mem::size_of::<f32>(),
+        LENS.bytes,
+        stack::high_water()
+    );
+    defmt::println!(
+        "EMBEDDED log {=usize} transcript {=usize}",
+        LOG.0.len(),
+        EXPECTED.len()
+    );
+    if mismatch || !expected.is_empty() {
+        return Err("a reply differs from the host's");
+    }
+    Ok(())
+}
+
+fn coach<'a>(reference: &'a Reference<'a>) -> Coach<'a> {
+    Coach {
+        skeleton: reference.skeleton(),
+        positions: reference.positions(),
+        rate_hz: reference.rate_hz(),
+    }
+}
+
+fn print(stages: &Stages) {
+    for (name, tally) in [
+        ("decode", &stages.decode),
+        ("frame", &stages.frame),
+        ("swing", &stages.swing),
+        ("setup", &stages.setup),
+        ("reply", &stages.reply),
+    ] {
+        defmt::println!(
+            "STAGE {=str} calls {=u32} mean {=u64} max {=u64} total {=u64}",
+            name,
+            tally.calls,
+            tally.mean(),
+            tally.max,
+            tally.total
+        );
+    }
+}
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    defmt::println!("FAIL: panicked");
+    semihosting::process::exit(101)
+}
