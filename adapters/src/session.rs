@@ -27,6 +27,7 @@ use posecoach_core::config::MAX_SWING_FRAMES;
 use posecoach_core::detector::{DetectorConfig, DetectorError, SwingDetector, SwingWindow};
 use posecoach_core::events::{self, EventError, STILL_S};
 use posecoach_core::format::Format;
+use posecoach_core::math::norm;
 use posecoach_core::retarget::Analytic;
 use posecoach_core::score::{self, Report, ScoreError};
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
@@ -426,7 +427,7 @@ impl<'b> Session<'b> {
             (k < template.len())
                 .then(|| template.parent(k))
                 .flatten()
-                .map_or(0.0, |p| (joints[k] - joints[p]).norm())
+                .map_or(0.0, |p| norm(&(joints[k] - joints[p])))
         });
         let skeleton = template
             .with_bone_lengths(&lengths[..template.len()])

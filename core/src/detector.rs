@@ -22,6 +22,7 @@
 //! ```
 
 use crate::joint::Joint;
+use crate::math::norm;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
 
@@ -279,7 +280,7 @@ impl<'s> SwingDetector<'s> {
         let speed = match activity {
             Some(a) => a,
             None if lag == 0 => 0.0,
-            None => (self.hands(now) - self.hands(now - lag)).norm() * rate / lag as f32,
+            None => norm(&(self.hands(now) - self.hands(now - lag))) * rate / lag as f32,
         };
         let height = self.hands(now).y;
         let c = self.config;

@@ -33,6 +33,7 @@
 //! ```
 
 use crate::joint::Joint;
+use crate::math::norm;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
 
@@ -238,7 +239,7 @@ impl Track<'_> {
             t.saturating_sub(self.half.max(1)),
             (t + self.half.max(1)).min(self.frames - 1),
         );
-        (point(hi) - point(lo)).norm() * self.rate / (hi - lo).max(1) as f32
+        norm(&(point(hi) - point(lo))) * self.rate / (hi - lo).max(1) as f32
     }
 }
 
@@ -396,11 +397,7 @@ pub fn detect(
     let home = probe(address);
     let reach = top + 1 + (libm::roundf(IMPACT_WITHIN_S * rate_hz) as usize).min(frames);
     let impact = (top + 1..reach.min(frames))
-        .min_by(|&a, &b| {
-            (probe(a) - home)
-                .norm()
-                .total_cmp(&(probe(b) - home).norm())
-        })
+        .min_by(|&a, &b| norm(&(probe(a) - home)).total_cmp(&norm(&(probe(b) - home))))
         .filter(|&t| t + 1 < frames)
         .ok_or(EventError::NoSwing)?;
 

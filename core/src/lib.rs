@@ -13,6 +13,7 @@
 //!
 //! Modules, in data-flow order:
 //! - [`config`]: every capacity constant.
+//! - [`math`]: square root and length, on the device's FPU.
 //! - [`joint`]: the canonical joint vocabulary and its parent table.
 //! - [`format`](mod@format): built-in keypoint formats mapped onto the vocabulary.
 //! - [`skeleton`]: joints, parents, rest offsets, body segments, end effectors, height.
@@ -27,7 +28,8 @@
 //! - [`blob`]: the container of stored assets (header, aligned payload, CRC-32).
 //! - [`reference`]: coach reference swings stored as blobs, read in place.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
-#![forbid(unsafe_code)]
+// `deny`, not `forbid`: `math::vsqrt` (one FPU instruction through `asm!`) is the only exception.
+#![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod blob;
@@ -38,7 +40,7 @@ pub mod events;
 pub mod format;
 pub mod joint;
 pub mod kinematics;
-mod math;
+pub mod math;
 pub mod normalize;
 pub mod reference;
 pub mod retarget;

@@ -23,6 +23,7 @@ use crate::config::MAX_SWING_FRAMES;
 use crate::dtw::{self, Band, DtwError, Sequence};
 use crate::events::{self, Event, EventError, Side, SwingEvents};
 use crate::joint::Joint;
+use crate::math::norm;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
 use heapless::Vec as HVec;
@@ -604,7 +605,7 @@ pub fn score(
                 continue;
             };
             let offset = stance_s.local(p) - stance_c.local(fc(k));
-            let distance_m = offset.norm();
+            let distance_m = norm(&offset);
             if distance_m <= SPATIAL_THRESHOLD_M {
                 continue;
             }

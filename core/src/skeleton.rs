@@ -19,6 +19,7 @@
 use crate::config::MAX_JOINTS;
 use crate::format::Format;
 use crate::joint::{Joint, JOINT_COUNT};
+use crate::math::norm;
 use crate::Vec3;
 
 const NO_JOINT: u8 = u8::MAX;
@@ -419,7 +420,7 @@ impl Skeleton {
 
     /// Sum of bone lengths from the root to joint `i`.
     pub fn chain_length(&self, i: usize) -> f32 {
-        self.ancestry(i).map(|k| self.offset(k).norm()).sum()
+        self.ancestry(i).map(|k| norm(&self.offset(k))).sum()
     }
 
     /// Mean chain length from the root to both feet.
