@@ -36,6 +36,7 @@ use crate::joint::Joint;
 use crate::math::norm;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
+use core::cell::Cell;
 
 /// Half-width of the smoothing window, in seconds.
 pub const SMOOTHING_S: f32 = 0.034;
@@ -211,6 +212,37 @@ impl core::fmt::Display for EventError {
 
 impl core::error::Error for EventError {}
 
+/// Frames of a speed [`Memo`] keeps (1 KiB of stack); later frames are computed each time.
+const MEMO_FRAMES: usize = crate::config::MAX_SWING_FRAMES;
+
+/// A function of the frame, each of the first [`MEMO_FRAMES`] values computed once: the
+/// searches ask for the same speeds many times (a still stretch is a maximum over a window at
+/// every frame), and each speed is four smoothed positions.
+struct Memo<F> {
+    f: F,
+    /// NaN until computed (speeds of finite positions are finite).
+    values: [Cell<f32>; MEMO_FRAMES],
+}
+
+impl<F: Fn(usize) -> f32> Memo<F> {
+    fn new(f: F) -> Memo<F> {
+        Memo {
+            f,
+            values: core::array::from_fn(|_| Cell::new(f32::NAN)),
+        }
+    }
+
+    fn get(&self, t: usize) -> f32 {
+        let Some(cell) = self.values.get(t) else {
+            return (self.f)(t);
+        };
+        if cell.get().is_nan() {
+            cell.set((self.f)(t));
+        }
+        cell.get()
+    }
+}
+
 /// Smoothed trajectories of one motion.
 struct Track<'a> {
     positions: &'a [Vec3],
@@ -325,7 +357,8 @@ pub fn detect(
         rate: rate_hz,
     };
     let hands = |t: usize| (track.at(wrists[0], t) + track.at(wrists[1], t)) * 0.5;
-    let hand_speed = |t: usize| track.speed(hands, t);
+    let hand_speeds = Memo::new(|t| track.speed(hands, t));
+    let hand_speed = |t: usize| hand_speeds.get(t);
 
     // The fastest hands of the swing, then back to the first minimum of hand speed where the
     // hands are high (in the upper half of their range): the top. A low minimum (the dip at
@@ -361,12 +394,13 @@ pub fn detect(
         Some((_, head)) => &move |t| track.at(head, t),
         None => &hands,
     };
-    let peak = (0..top).map(|t| track.speed(probe, t)).fold(0.0, f32::max);
+    let probe_speeds = Memo::new(|t| track.speed(probe, t));
+    let peak = (0..top).map(|t| probe_speeds.get(t)).fold(0.0, f32::max);
     let window = (libm::roundf(STILL_S * rate_hz) as usize).max(1);
     // The fastest the hands go in a stretch of `window` frames ending at `t`.
     let stir = |t: usize| {
         (t.saturating_sub(window)..=t)
-            .map(|s| track.speed(probe, s))
+            .map(|s| probe_speeds.get(s))
             .fold(0.0, f32::max)
     };
     // Pose noise makes still hands seem to move: the threshold is at least NOISE_MARGIN times
