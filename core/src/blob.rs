@@ -134,7 +134,7 @@ pub fn write(
 }
 
 /// Length of a blob whose header takes at most `header_len` bytes and whose payload takes
-/// `payload_len`: enough room for [`write`].
+/// `payload_len`: enough room for [`write()`].
 pub const fn max_len(header_len: usize, payload_len: usize) -> usize {
     (PREFIX + header_len).next_multiple_of(ALIGN) + payload_len + CRC_LEN
 }

@@ -26,7 +26,7 @@
 //! - [`score`]: the score, tempo, spatial deviations and advice of one swing.
 //! - [`wire`]: the serial protocol: messages, COBS + CRC-32 framing, a streaming decoder.
 //! - [`blob`]: the container of stored assets (header, aligned payload, CRC-32).
-//! - [`reference`]: coach reference swings stored as blobs, read in place.
+//! - [`reference`](mod@reference): coach reference swings stored as blobs, read in place.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 // `deny`, not `forbid`: `math::vsqrt` (one FPU instruction through `asm!`) is the only exception.
 #![deny(unsafe_code)]

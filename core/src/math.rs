@@ -2,7 +2,7 @@
 //!
 //! With std (the host build and tests) these are std's, which the compiler can vectorize; on
 //! an ARM FPU (the `eabihf` targets: the Cortex-M4F) the square root is the FPU's `VSQRT.F32`
-//! (see [`vsqrt`]); elsewhere libm's (about 90 instructions on a Cortex-M4F, a tenth of all the
+//! (see `vsqrt`); elsewhere libm's (about 90 instructions on a Cortex-M4F, a tenth of all the
 //! device's instructions before this path existed). All three are correctly rounded IEEE
 //! square roots, so results are bit-identical on the host and on the device.
 

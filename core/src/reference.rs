@@ -1,4 +1,4 @@
-//! Coach reference swings as the device stores them: a [`blob`](crate::blob) (`.pcr`) holding
+//! Coach reference swings as the device stores them: a [`blob`] (`.pcr`) holding
 //! the coach's skeleton and frames, read in place.
 //!
 //! Header (postcard): format version, name, frame rate, frame count, and per joint its
@@ -186,7 +186,7 @@ impl<'a> Reference<'a> {
     }
 }
 
-/// Bytes [`write`] may need for a reference of `joints` joints and `frames` frames.
+/// Bytes [`write()`] may need for a reference of `joints` joints and `frames` frames.
 pub const fn max_len(joints: usize, frames: usize) -> usize {
     blob::max_len(MAX_HEADER, joints * frames * POSITION)
 }
