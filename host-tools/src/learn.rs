@@ -1,4 +1,5 @@
-//! `posecoach train`, `posecoach finetune` and `posecoach eval`: the learned retargeter.
+//! `posecoach train`, `posecoach distill`, `posecoach finetune` and `posecoach eval`: the
+//! learned retargeter.
 //!
 //! Training draws every batch at random (clip, window, characters), so an *epoch* is a fixed
 //! [`STEPS_PER_EPOCH`] steps rather than a pass over the data; a checkpoint is written after
@@ -12,6 +13,7 @@ use posecoach_train::dataset::Pool;
 use posecoach_train::infer::Retargeter;
 use posecoach_train::losses::Switches;
 use posecoach_train::metrics::{self, Baseline, Method, Table};
+use posecoach_train::model::TeacherConfig;
 use posecoach_train::train::{StepLosses, TrainConfig, Trainer, BATCH, LEARNING_RATE};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -155,6 +157,100 @@ pub fn train(args: &TrainArgs) -> Result<String> {
     )
 }
 
+/// The distilled network's default sizes: half the teacher's features per segment.
+pub const STUDENT: TeacherConfig = TeacherConfig {
+    features: 16,
+    heads: 2,
+    kernel: 3,
+};
+
+#[derive(clap::Args)]
+pub struct DistillArgs {
+    /// The trained teacher (checkpoint or teacher file).
+    #[arg(long)]
+    teacher: PathBuf,
+    #[command(flatten)]
+    data: Data,
+    /// Epochs of STEPS_PER_EPOCH (1000) steps, counting those a resumed checkpoint has done.
+    #[arg(long, default_value_t = 10)]
+    epochs: usize,
+    /// Seeds the student's weights and every batch.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Features per segment of the student (even, a multiple of `--heads`).
+    #[arg(long, default_value_t = STUDENT.features)]
+    features: usize,
+    /// Attention heads of the student.
+    #[arg(long, default_value_t = STUDENT.heads)]
+    heads: usize,
+    /// Kernel size of the student's temporal convolutions (odd).
+    #[arg(long, default_value_t = STUDENT.kernel)]
+    kernel: usize,
+    /// Windows per batch.
+    #[arg(long, default_value_t = BATCH)]
+    batch: usize,
+    /// Adam's starting learning rate (a third of it after each of 5 000 and 15 000 steps).
+    #[arg(long, default_value_t = LEARNING_RATE)]
+    learning_rate: f64,
+    /// Continue the distillation in this checkpoint (it carries the teacher).
+    #[arg(long)]
+    resume: Option<PathBuf>,
+    /// The checkpoint, rewritten after every epoch.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write the student alone here at the end (what `--weights` and `export` read).
+    #[arg(long)]
+    student: Option<PathBuf>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn distill(args: &DistillArgs) -> Result<String> {
+    let device = Device::flex().autodiff();
+    let sizes = TeacherConfig {
+        features: args.features,
+        heads: args.heads,
+        kernel: args.kernel,
+    };
+    if sizes.heads == 0
+        || !sizes.features.is_multiple_of(2 * sizes.heads)
+        || sizes.kernel.is_multiple_of(2)
+    {
+        bail!(
+            "--features {} must be even and a multiple of --heads {}, and --kernel {} odd",
+            sizes.features,
+            sizes.heads,
+            sizes.kernel
+        );
+    }
+    let trainer = match &args.resume {
+        Some(path) => Trainer::load(path, &device)
+            .with_context(|| format!("resuming from {}", path.display()))?,
+        None => {
+            let config = TrainConfig {
+                teacher: sizes,
+                batch: args.batch,
+                learning_rate: args.learning_rate,
+                seed: args.seed,
+                ..TrainConfig::default()
+            };
+            Trainer::distilling(&args.teacher, config, &device)
+                .with_context(|| format!("loading {}", args.teacher.display()))?
+        }
+    };
+    let pool = args.data.pool(trainer.config().seed)?;
+    let steps = args.epochs * STEPS_PER_EPOCH;
+    run(
+        trainer,
+        &pool,
+        steps,
+        &args.out,
+        args.student.as_deref(),
+        args.json,
+    )
+}
+
 #[derive(clap::Args)]
 pub struct FinetuneArgs {
     /// The trained teacher (checkpoint or teacher file).
@@ -281,11 +377,14 @@ fn losses_json(l: &StepLosses) -> Value {
         "total": l.total, "reconstruction": l.reconstruction, "cycle": l.cycle,
         "effectors": l.effectors, "adversarial": l.adversarial,
         "joint_distances": l.joint_distances, "geometry": l.geometry,
-        "discriminator": l.discriminator,
+        "discriminator": l.discriminator, "distillation": l.distillation,
     })
 }
 
 fn describe(l: &StepLosses) -> String {
+    if l.distillation > 0.0 {
+        return format!("distillation {:.7}", l.distillation);
+    }
     format!(
         "total {:.4}  rec {:.4}  cycle {:.4}  eff {:.5}  adv {:.3}  jdm {:.4}  geo {:.6}  disc {:.3}",
         l.total,

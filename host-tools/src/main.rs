@@ -49,6 +49,8 @@ enum Command {
     DeviceSim(device_sim::Args),
     /// Train the learned retargeter (the teacher network) on motion data, unsupervised.
     Train(learn::TrainArgs),
+    /// Distill a trained teacher into a smaller network (for the device) on the teacher's outputs.
+    Distill(learn::DistillArgs),
     /// Fine-tune a trained teacher to one student's body.
     Finetune(learn::FinetuneArgs),
     /// Evaluate retargeters on held-out characters and motions against the ground truth.
@@ -75,6 +77,7 @@ fn main() -> ExitCode {
         Command::Bridge(args) => bridge::run(&args),
         Command::DeviceSim(args) => device_sim::run(&args),
         Command::Train(args) => learn::train(&args),
+        Command::Distill(args) => learn::distill(&args),
         Command::Finetune(args) => learn::finetune(&args),
         Command::Eval(args) => learn::eval(&args),
     };

@@ -9,6 +9,9 @@
 //! | [`joint_distances`] (SMT) | row-normalized distance matrices of `A → B` and `A` | 10 |
 //! | [`geometry`] (SMT) | arm joints of `A → B` inside the torso capsule | 1000 |
 //!
+//! Distillation ([`distillation`]) replaces them all: a smaller network learns to output what
+//! the trained teacher outputs.
+//!
 //! Each is a mean, so batch size and window length leave the balance alone. The last two
 //! are not in the papers' tables; their weights put them at the size of the reconstruction
 //! loss on an untrained teacher.
@@ -255,6 +258,12 @@ pub fn geometry(predicted: Tensor<4>, target: &Skeletons) -> Tensor<1> {
         .sqrt();
     let depth = relu(radius - distance) * present.clone();
     depth.square().sum() / present.sum().mul_scalar(t as f32).add_scalar(EPSILON)
+}
+
+/// Distillation: the mean squared distance, in target heights, between a student network's
+/// joint positions and the teacher's (both `[B, T, J, 3]`; padded joints are zero in both).
+pub fn distillation(student: Tensor<4>, teacher: Tensor<4>) -> Tensor<1> {
+    (student - teacher).square().mean()
 }
 
 #[cfg(test)]

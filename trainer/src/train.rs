@@ -100,6 +100,8 @@ pub struct StepLosses {
     pub geometry: f32,
     /// The discriminator's loss.
     pub discriminator: f32,
+    /// Distillation (a student network against its teacher).
+    pub distillation: f32,
 }
 
 impl StepLosses {
@@ -123,6 +125,7 @@ impl StepLosses {
             joint_distances: f(self.joint_distances, o.joint_distances),
             geometry: f(self.geometry, o.geometry),
             discriminator: f(self.discriminator, o.discriminator),
+            distillation: f(self.distillation, o.distillation),
         }
     }
 }
@@ -137,6 +140,9 @@ pub struct Trainer {
     step: usize,
     device: Device,
     student: Option<Skeleton>,
+    /// While distilling: the trained teacher whose outputs the network learns, and its file's
+    /// bytes (a checkpoint carries them).
+    reference: Option<(Teacher, Vec<u8>)>,
 }
 
 impl Trainer {
@@ -154,7 +160,41 @@ impl Trainer {
             step: 0,
             device: device.clone(),
             student: None,
+            reference: None,
         }
+    }
+
+    /// A run that distills the teacher in the checkpoint or teacher file `teacher` into a
+    /// fresh network of `config`'s sizes: every step, the network's positions move toward the
+    /// teacher's on the same batch ([`losses::distillation`]); no other loss is computed.
+    ///
+    /// # Errors
+    /// As [`load_teacher`].
+    pub fn distilling(
+        teacher: &Path,
+        config: TrainConfig,
+        device: &Device,
+    ) -> Result<Trainer, Error> {
+        let bytes = std::fs::read(teacher)
+            .map_err(|e| checkpoint(format!("{}: {e}", teacher.display())))?;
+        Trainer::distilling_bytes(bytes, config, device)
+    }
+
+    fn distilling_bytes(
+        bytes: Vec<u8>,
+        config: TrainConfig,
+        device: &Device,
+    ) -> Result<Trainer, Error> {
+        let (header, parts) = decode(&bytes)
+            .ok_or_else(|| checkpoint("the teacher to distill is not a teacher file"))?;
+        let weights = parts
+            .into_iter()
+            .next()
+            .ok_or_else(|| checkpoint("holds no teacher"))?;
+        let reference = load_module(header.config.teacher.init(device), weights)?;
+        let mut trainer = Trainer::new(config, device);
+        trainer.reference = Some((reference, bytes));
+        Ok(trainer)
     }
 
     /// A run that starts from the teacher in a checkpoint or teacher file (fresh optimizers
@@ -261,6 +301,9 @@ impl Trainer {
     /// # Errors
     /// As [`Batch::on`], for the reconstruction and the cycle's way back.
     pub fn step_on(&mut self, parts: &[Batch]) -> Result<StepLosses, Error> {
+        if self.reference.is_some() {
+            return self.distill_on(parts);
+        }
         let switches = self.config.switches;
         let windows: usize = parts.iter().map(Batch::len).sum();
         let shares: Vec<f32> = parts
@@ -320,6 +363,45 @@ impl Trainer {
         Ok(report)
     }
 
+    /// One distillation step on a batch given in parts, one thread each.
+    fn distill_on(&mut self, parts: &[Batch]) -> Result<StepLosses, Error> {
+        let Some((reference, _)) = &self.reference else {
+            return Err(checkpoint("not distilling"));
+        };
+        let windows: usize = parts.iter().map(Batch::len).sum();
+        let student = &self.teacher;
+        let passes: Vec<(GradientsParams, f32)> = std::thread::scope(|scope| {
+            let handles: Vec<_> = parts
+                .iter()
+                .map(|part| {
+                    let (s, r) = (student.valid().train(), reference.valid().train());
+                    let share = part.len() as f32 / windows.max(1) as f32;
+                    scope.spawn(move || {
+                        let target = r.forward(part).positions.detach();
+                        let loss = losses::distillation(s.forward(part).positions, target)
+                            .mul_scalar(share);
+                        let value = scalar(&loss);
+                        (GradientsParams::from_grads(loss.backward(), &s), value)
+                    })
+                })
+                .collect();
+            handles.into_iter().map(joined).collect()
+        });
+        let mut report = StepLosses::default();
+        let mut sum = GradientsAccumulator::<Teacher>::new();
+        for (grads, loss) in passes {
+            sum.accumulate(&self.teacher, grads);
+            report.distillation += loss;
+        }
+        report.total = report.distillation;
+        let lr = self.learning_rate();
+        self.teacher = self
+            .teacher_adam
+            .step(lr, self.teacher.clone(), sum.grads());
+        self.step += 1;
+        Ok(report)
+    }
+
     /// The learning rate of the next step: the configured one, a third of it after each of
     /// [`DECAY_STEPS`].
     pub fn learning_rate(&self) -> f64 {
@@ -332,7 +414,7 @@ impl Trainer {
     /// # Errors
     /// [`Error::Checkpoint`] if a part cannot be encoded or the file written.
     pub fn save(&self, path: &Path) -> Result<(), Error> {
-        let parts = [
+        let mut parts = vec![
             module_bytes(&self.teacher)?,
             module_bytes(&self.discriminator)?,
             self.teacher_adam.into_bytes().map_err(checkpoint)?.to_vec(),
@@ -341,10 +423,14 @@ impl Trainer {
                 .map_err(checkpoint)?
                 .to_vec(),
         ];
+        if let Some((_, teacher_file)) = &self.reference {
+            parts.push(teacher_file.clone());
+        }
         write_file(path, &self.header(), &parts)
     }
 
-    /// Writes the teacher alone to `path`: what `--weights` loads.
+    /// Writes the network alone to `path` (the student, while distilling): what `--weights`
+    /// loads.
     ///
     /// # Errors
     /// As [`Trainer::save`].
@@ -357,11 +443,18 @@ impl Trainer {
     /// # Errors
     /// [`Error::Checkpoint`] if the file cannot be read or is not a full checkpoint.
     pub fn load(path: &Path, device: &Device) -> Result<Trainer, Error> {
-        let (header, parts) = read_file(path)?;
+        let (header, mut parts) = read_file(path)?;
+        let reference = match parts.len() {
+            5 => parts.pop(),
+            _ => None,
+        };
         let [teacher, discriminator, teacher_adam, discriminator_adam] =
             <[Vec<u8>; 4]>::try_from(parts)
                 .map_err(|_| checkpoint("holds the teacher alone, not a training state"))?;
-        let mut trainer = Trainer::new(header.config, device);
+        let mut trainer = match reference {
+            Some(bytes) => Trainer::distilling_bytes(bytes, header.config, device)?,
+            None => Trainer::new(header.config, device),
+        };
         trainer.teacher = load_module(trainer.teacher, teacher)?.train();
         trainer.discriminator = load_module(trainer.discriminator, discriminator)?.train();
         trainer.teacher_adam = trainer
@@ -591,6 +684,14 @@ impl Header {
 
 /// `MAGIC`, the header's words, then each part as a length and its bytes.
 fn write_file(path: &Path, header: &Header, parts: &[Vec<u8>]) -> Result<(), Error> {
+    let out = encode(header, parts);
+    let partial = path.with_extension("partial");
+    std::fs::write(&partial, out)
+        .and_then(|()| std::fs::rename(&partial, path))
+        .map_err(|e| checkpoint(format!("{}: {e}", path.display())))
+}
+
+fn encode(header: &Header, parts: &[Vec<u8>]) -> Vec<u8> {
     let mut out = MAGIC.to_vec();
     out.extend(header.to_words().iter().flat_map(|w| w.to_le_bytes()));
     out.extend((parts.len() as u64).to_le_bytes());
@@ -598,32 +699,32 @@ fn write_file(path: &Path, header: &Header, parts: &[Vec<u8>]) -> Result<(), Err
         out.extend((part.len() as u64).to_le_bytes());
         out.extend(part);
     }
-    let partial = path.with_extension("partial");
-    std::fs::write(&partial, out)
-        .and_then(|()| std::fs::rename(&partial, path))
-        .map_err(|e| checkpoint(format!("{}: {e}", path.display())))
+    out
 }
 
 fn read_file(path: &Path) -> Result<(Header, Vec<Vec<u8>>), Error> {
     let bytes = std::fs::read(path).map_err(|e| checkpoint(format!("{}: {e}", path.display())))?;
-    let bad = || {
+    decode(&bytes).ok_or_else(|| {
         checkpoint(format!(
             "{} is not a posecoach teacher file",
             path.display()
         ))
-    };
-    let mut reader = Reader(bytes.strip_prefix(MAGIC.as_slice()).ok_or_else(bad)?);
+    })
+}
+
+fn decode(bytes: &[u8]) -> Option<(Header, Vec<Vec<u8>>)> {
+    let mut reader = Reader(bytes.strip_prefix(MAGIC.as_slice())?);
     let mut words = [0u64; 8];
     for w in &mut words {
-        *w = reader.word().ok_or_else(bad)?;
+        *w = reader.word()?;
     }
-    let count = reader.word().ok_or_else(bad)?;
+    let count = reader.word()?;
     let mut parts = Vec::new();
     for _ in 0..count {
-        let length = reader.word().ok_or_else(bad)?;
-        parts.push(reader.take(length).ok_or_else(bad)?.to_vec());
+        let length = reader.word()?;
+        parts.push(reader.take(length)?.to_vec());
     }
-    Ok((Header::from_words(words), parts))
+    Some((Header::from_words(words), parts))
 }
 
 /// Reads a checkpoint's bytes front to back.
@@ -707,6 +808,59 @@ mod tests {
         let on = losses[0];
         assert!(on.cycle > 0.0 && on.effectors > 0.0 && on.joint_distances > 0.0);
         assert!(on.adversarial > 0.0 && on.discriminator > 0.0);
+    }
+
+    #[test]
+    fn distillation_moves_a_smaller_network_toward_the_teacher_and_resumes_exactly() {
+        let device = Device::flex().autodiff();
+        let pool = pool();
+        let dir = std::env::temp_dir().join(format!("posecoach-distill-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // A teacher moved off the analytic solution (which an untrained student already is).
+        let mut teacher = Trainer::new(
+            TrainConfig {
+                learning_rate: 1e-2,
+                ..tiny(2)
+            },
+            &device,
+        );
+        let batch = teacher.batch_for(&pool, 0).unwrap();
+        for _ in 0..5 {
+            teacher.step_on(&batch).unwrap();
+        }
+        let teacher_file = dir.join("teacher.pcw");
+        teacher.save_teacher(&teacher_file).unwrap();
+        let student = TrainConfig {
+            teacher: TeacherConfig {
+                features: 4,
+                ..TeacherConfig::TINY
+            },
+            ..tiny(2)
+        };
+        let mut distiller = Trainer::distilling(&teacher_file, student, &device).unwrap();
+        let losses: Vec<f32> = (0..SMOKE_STEPS)
+            .map(|_| distiller.step_on(&batch).unwrap().distillation)
+            .collect();
+        eprintln!("distillation {losses:.6?}");
+        assert!(losses[0] > 0.0);
+        assert!(
+            losses[SMOKE_STEPS - 1] * SMOKE_FACTOR < losses[0],
+            "{losses:?}"
+        );
+        let checkpoint = dir.join("student.pcckpt");
+        distiller.save(&checkpoint).unwrap();
+        let mut resumed = Trainer::load(&checkpoint, &device).unwrap();
+        for _ in 0..2 {
+            assert_eq!(
+                distiller.train_step(&pool).unwrap(),
+                resumed.train_step(&pool).unwrap()
+            );
+        }
+        let student_file = dir.join("student.pcw");
+        resumed.save_teacher(&student_file).unwrap();
+        let (_, config, steps) = load_teacher(&student_file, &Device::flex()).unwrap();
+        assert_eq!((config.teacher.features, steps), (4, SMOKE_STEPS + 2));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
