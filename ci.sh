@@ -49,6 +49,9 @@ command -v qemu-system-arm >/dev/null 2>&1 && command -v size >/dev/null 2>&1 ||
 command -v defmt-print >/dev/null 2>&1 || cargo install defmt-print --locked --version 1.2.0
 firmware-examples/qemu-m4f/measure.sh
 
+step "nRF52840 board example (XIAO nRF52840 Sense: LSM6DS3 IMU over I2C, UART to the phone): builds"
+(cd firmware-examples/nrf52840-imu && cargo build --release && size target/thumbv7em-none-eabihf/release/posecoach-nrf52840-imu)
+
 step "fuzz: every byte parser for 30 s, seeded with the committed fixtures (nightly, cargo-fuzz)"
 rustup toolchain install nightly --profile minimal
 command -v cargo-fuzz >/dev/null 2>&1 || cargo install cargo-fuzz --locked

@@ -10,6 +10,7 @@
 //!
 //! - [`fusion`]: one IMU's attitude.
 //! - [`imu`]: the pose of a skeleton from a layout of IMUs.
+//! - `lsm6ds3` (feature `lsm6ds3`): an IMU chip over any `embedded-hal` I²C bus.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
 
@@ -18,5 +19,7 @@ pub mod imu;
 #[cfg(feature = "std")]
 pub mod io;
 pub mod log;
+#[cfg(any(test, feature = "lsm6ds3"))]
+pub mod lsm6ds3;
 pub mod pose_stream;
 pub mod session;
