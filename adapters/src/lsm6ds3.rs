@@ -94,8 +94,7 @@ impl<B: I2c> Lsm6ds3<B> {
     /// [`Lsm6ds3Error::Bus`] if the bus fails.
     pub fn sample(&mut self, t_us: u64) -> Result<Option<ImuSample>, Lsm6ds3Error<B::Error>> {
         let mut status = [0];
-        self.bus
-            .write_read(self.address, &[STATUS], &mut status)?;
+        self.bus.write_read(self.address, &[STATUS], &mut status)?;
         if status[0] & DATA_READY != DATA_READY {
             return Ok(None);
         }
