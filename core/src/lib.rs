@@ -25,10 +25,12 @@
 //! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
 //! - [`score`]: the score, tempo, spatial deviations and advice of one swing.
 //! - [`wire`]: the serial protocol: messages, COBS + CRC-32 framing, a streaming decoder.
+//! - [`int8`]: int8 arithmetic of the quantized retargeter (requantization, dot products, layers).
 //! - [`blob`]: the container of stored assets (header, aligned payload, CRC-32).
 //! - [`reference`](mod@reference): coach reference swings stored as blobs, read in place.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
-// `deny`, not `forbid`: `math::vsqrt` (one FPU instruction through `asm!`) is the only exception.
+// `deny`, not `forbid`: register-only `asm!` for the FPU's square root (`math`) and, with the
+// `dsp` feature, the int8 dot product's DSP instructions (`int8`) are the exceptions.
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -38,6 +40,7 @@ pub mod detector;
 pub mod dtw;
 pub mod events;
 pub mod format;
+pub mod int8;
 pub mod joint;
 pub mod kinematics;
 pub mod math;
