@@ -46,25 +46,35 @@ impl Requant {
         (f64::from(self.multiplier) * libm::exp2(f64::from(self.shift) - 31.0)) as f32
     }
 
-    /// `round(acc · factor)`, ties toward +∞, saturated to `i32`.
+    /// `acc · factor`, rounded as integer hardware does it cheaply and the same everywhere:
+    /// `acc` shifted left by a positive `shift` (saturating), times the multiplier with the
+    /// product's top 32 bits rounded (ties up), then shifted right by a negative `shift`
+    /// with rounding (ties up). Within one unit of the exact product.
     #[inline]
     pub fn scale(self, acc: i32) -> i32 {
-        self.rounded(acc)
-            .clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+        let shift = i32::from(self.shift);
+        let x = if shift > 0 {
+            (i64::from(acc) << shift).clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+        } else {
+            acc
+        };
+        // One 32 × 32 → 64-bit multiply (SMULL on the M4).
+        let high = ((i64::from(x) * i64::from(self.multiplier) + (1 << 30)) >> 31) as i32;
+        if shift < 0 {
+            let right = -shift;
+            (high >> right) + ((high >> (right - 1)) & 1)
+        } else {
+            high
+        }
     }
 
     /// `acc · factor` rounded as [`Requant::scale`] rounds, as a saturated int8 value.
     #[inline]
     pub fn apply(self, acc: i32) -> i8 {
-        self.rounded(acc).clamp(-i64::from(MAX), i64::from(MAX)) as i8
-    }
-
-    #[inline(always)]
-    fn rounded(self, acc: i32) -> i64 {
-        let right = 31 - i32::from(self.shift);
-        (i64::from(acc) * i64::from(self.multiplier) + (1i64 << (right - 1))) >> right
+        self.scale(acc).clamp(-MAX, MAX) as i8
     }
 }
+
 /// `x = mantissa · 2^exponent` with `mantissa` in `[0.5, 1)`, for a positive normal `x`.
 fn frexp(x: f32) -> (f32, i32) {
     let bits = x.to_bits();
@@ -227,6 +237,40 @@ mod dsp {
 #[cfg(all(feature = "dsp", not(target_arch = "arm")))]
 compile_error!("the `dsp` feature needs an ARM target with the DSP extension (Cortex-M4, M7, M33)");
 
+/// What a layer applies to its rescaled outputs before they saturate to int8.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Activation {
+    /// Nothing.
+    Identity,
+    /// Leaky ReLU of slope [`LEAKY_SLOPE`] (the network's activation), on the rescaled value.
+    Leaky,
+}
+
+/// Largest receptive field of one output channel of [`conv1d`] (kernel × inputs per group).
+pub const MAX_FIELD: usize = 512;
+
+/// Negative slope of the leaky ReLU.
+pub const LEAKY_SLOPE: f32 = 0.2;
+/// [`LEAKY_SLOPE`] as a [`Requant`]: round(0.8 · 2^31) · 2^-33, the exact 0.2 to 10 digits.
+const LEAKY: Requant = Requant {
+    multiplier: 1_717_986_918,
+    shift: -2,
+};
+
+impl Activation {
+    /// `acc` rescaled by `requant`, activated and saturated.
+    #[inline]
+    pub fn apply(self, requant: Requant, acc: i32) -> i8 {
+        let v = requant.scale(acc);
+        let v = match self {
+            Activation::Leaky if v < 0 => LEAKY.scale(v),
+            _ => v,
+        };
+        v.clamp(-MAX, MAX) as i8
+    }
+}
+
 /// Why a layer could not run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -235,19 +279,40 @@ pub enum ShapeError {
     Mismatch,
 }
 
-/// A fully connected layer: `out[c] = requant[c](Σ_k weights[c·n + k] · input[k] + bias[c])`
-/// for `n = input.len()` and `c` over `out`.
+/// A layer's parameters: int8 weights (one row per output channel), int32 biases in the
+/// accumulator's scale, and each output channel's requantization.
+#[derive(Clone, Copy, Debug)]
+pub struct Layer<'w> {
+    /// `outputs × inputs` (for a convolution `outputs × kernel × inputs per group`).
+    pub weights: &'w [i8],
+    /// One per output channel.
+    pub bias: &'w [i32],
+    /// One per output channel: accumulator scale over output scale.
+    pub requant: &'w [Requant],
+    /// Applied after rescaling.
+    pub activation: Activation,
+}
+
+impl Layer<'_> {
+    fn outputs(&self) -> usize {
+        self.bias.len()
+    }
+}
+
+/// A fully connected layer: `out[c] = act(requant[c](Σ_k weights[c·n + k] · input[k] +
+/// bias[c]))` for `n = input.len()` and `c` over `out`.
 ///
 /// # Errors
 /// [`ShapeError::Mismatch`] unless `weights` is `out.len() × input.len()` and `bias` and
 /// `requant` have one entry per output.
-pub fn linear(
-    input: &[i8],
-    weights: &[i8],
-    bias: &[i32],
-    requant: &[Requant],
-    out: &mut [i8],
-) -> Result<(), ShapeError> {
+#[inline]
+pub fn linear(input: &[i8], layer: &Layer<'_>, out: &mut [i8]) -> Result<(), ShapeError> {
+    let Layer {
+        weights,
+        bias,
+        requant,
+        activation,
+    } = *layer;
     let n = input.len();
     if weights.len() != out.len() * n || bias.len() != out.len() || requant.len() != out.len() {
         return Err(ShapeError::Mismatch);
@@ -258,10 +323,111 @@ pub fn linear(
         match outputs.next() {
             Some(((o1, r1), (&b1, &q1))) => {
                 let (s0, s1) = dot2(r0, r1, input);
-                *o0 = q0.apply(s0 + b0);
-                *o1 = q1.apply(s1 + b1);
+                *o0 = activation.apply(q0, s0 + b0);
+                *o1 = activation.apply(q1, s1 + b1);
             }
-            None => *o0 = q0.apply(dot(r0, input) + b0),
+            None => *o0 = activation.apply(q0, dot(r0, input) + b0),
+        }
+    }
+    Ok(())
+}
+
+/// A 1-D convolution over time within channel groups, group-major: `input` is `groups ×
+/// frames × width` (each group's frames together, as the network keeps each body segment's
+/// features), zero-padded by `kernel / 2` each side, so output frame `t` of a group sees its
+/// input frames `t·stride − kernel/2 ..= t·stride + kernel/2`: one contiguous run of the
+/// input, against which each output channel's weights (`[k][i]` for tap `k` and in-group
+/// input `i`) are one row of a linear layer. `out` is `groups × frames.div_ceil(stride) ×
+/// width`; `channels = groups × width`.
+///
+/// # Errors
+/// [`ShapeError::Mismatch`] if the lengths do not fit `channels`, `groups` and `kernel`, or a
+/// channel's field exceeds [`MAX_FIELD`].
+pub fn conv1d(
+    input: &[i8],
+    channels: usize,
+    groups: usize,
+    kernel: usize,
+    stride: usize,
+    layer: &Layer<'_>,
+    out: &mut [i8],
+) -> Result<(), ShapeError> {
+    let width = channels.checked_div(groups).ok_or(ShapeError::Mismatch)?;
+    let frames = input
+        .len()
+        .checked_div(channels)
+        .ok_or(ShapeError::Mismatch)?;
+    let outputs = frames.div_ceil(stride.max(1));
+    if stride == 0
+        || kernel.is_multiple_of(2)
+        || width * groups != channels
+        || frames * channels != input.len()
+        || layer.outputs() != channels
+        || layer.requant.len() != channels
+        || layer.weights.len() != channels * kernel * width
+        || out.len() != outputs * channels
+    {
+        return Err(ShapeError::Mismatch);
+    }
+    let half = kernel / 2;
+    let field = kernel * width;
+    // The field of an output frame near either end, zeros where it overhangs.
+    let mut padded = [0i8; MAX_FIELD];
+    let padded = padded.get_mut(..field).ok_or(ShapeError::Mismatch)?;
+    let segments = input.chunks_exact(frames * width);
+    for (g, (x, y)) in segments
+        .zip(out.chunks_exact_mut(outputs * width))
+        .enumerate()
+    {
+        let span = g * width..(g + 1) * width;
+        let group = Layer {
+            weights: &layer.weights[span.start * field..span.end * field],
+            bias: &layer.bias[span.clone()],
+            requant: &layer.requant[span],
+            activation: layer.activation,
+        };
+        for (t, row) in y.chunks_exact_mut(width).enumerate() {
+            let first = (t * stride) as isize - half as isize;
+            let inside = first >= 0 && first as usize + kernel <= frames;
+            let run = if inside {
+                &x[first as usize * width..(first as usize + kernel) * width]
+            } else {
+                for (k, taps) in padded.chunks_exact_mut(width).enumerate() {
+                    let s = first + k as isize;
+                    match usize::try_from(s).ok().filter(|&s| s < frames) {
+                        Some(s) => taps.copy_from_slice(&x[s * width..(s + 1) * width]),
+                        None => taps.fill(0),
+                    }
+                }
+                &*padded
+            };
+            linear(run, &group, row)?;
+        }
+    }
+    Ok(())
+}
+
+/// Linear upsampling ×2 over time (frames-major, `channels` per frame), as burn's
+/// `Interpolate1d` with `align_corners = false`: output `2i` is `¼ x[i−1] + ¾ x[i]`, output
+/// `2i + 1` is `¾ x[i] + ¼ x[i+1]` (ends held), rounded half up. The scale is unchanged.
+///
+/// # Errors
+/// [`ShapeError::Mismatch`] unless `out` is twice `input` and `input` whole frames.
+pub fn upsample2(input: &[i8], channels: usize, out: &mut [i8]) -> Result<(), ShapeError> {
+    let frames = input
+        .len()
+        .checked_div(channels)
+        .ok_or(ShapeError::Mismatch)?;
+    if frames * channels != input.len() || out.len() != 2 * input.len() || frames == 0 {
+        return Err(ShapeError::Mismatch);
+    }
+    let at = |t: usize, c: usize| i32::from(input[t * channels + c]);
+    for t in 0..frames {
+        let (before, after) = (t.saturating_sub(1), (t + 1).min(frames - 1));
+        for c in 0..channels {
+            let x = 3 * at(t, c);
+            out[2 * t * channels + c] = ((at(before, c) + x + 2) >> 2) as i8;
+            out[(2 * t + 1) * channels + c] = ((x + at(after, c) + 2) >> 2) as i8;
         }
     }
     Ok(())
@@ -284,6 +450,121 @@ mod tests {
     }
 
     #[test]
+    fn the_leaky_constant_is_its_slope_and_negatives_shrink() {
+        // The exact 0.2 (the f32 0.2 is 0.2000000030).
+        assert!((f64::from(LEAKY.multiplier) * libm::exp2(-33.0) - 0.2).abs() < 1e-10);
+        let one = Requant::new(1.0).unwrap();
+        assert_eq!(Activation::Leaky.apply(one, -50), -10);
+        assert_eq!(Activation::Leaky.apply(one, 50), 50);
+        assert_eq!(Activation::Identity.apply(one, -500), -127);
+    }
+
+    /// A float convolution with the same (group-major) layout, for comparison.
+    fn conv_reference(
+        x: &[f32],
+        channels: usize,
+        groups: usize,
+        kernel: usize,
+        stride: usize,
+        w: &[f32],
+        b: &[f32],
+    ) -> Vec<f32> {
+        let (width, frames) = (channels / groups, x.len() / channels);
+        let outputs = frames.div_ceil(stride);
+        let mut out = vec![0.0; outputs * channels];
+        for t in 0..outputs {
+            for c in 0..channels {
+                let mut sum = b[c];
+                for k in 0..kernel {
+                    let s = (t * stride + k) as isize - (kernel / 2) as isize;
+                    if s < 0 || s >= frames as isize {
+                        continue;
+                    }
+                    let g = c / width;
+                    for i in 0..width {
+                        sum += w[(c * kernel + k) * width + i]
+                            * x[(g * frames + s as usize) * width + i];
+                    }
+                }
+                out[(c / width * outputs + t) * width + c % width] = sum;
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn a_grouped_strided_convolution_matches_the_float_one_within_a_step() {
+        let (channels, groups, kernel, frames) = (8, 2, 3, 9);
+        let width = channels / groups;
+        let wave = |k: usize, f: f32| libm::sinf(k as f32 * f);
+        let x: Vec<f32> = (0..frames * channels).map(|k| wave(k, 0.7)).collect();
+        let w: Vec<f32> = (0..channels * kernel * width)
+            .map(|k| 0.3 * wave(k, 1.3))
+            .collect();
+        let b: Vec<f32> = (0..channels).map(|c| 0.05 * c as f32).collect();
+        let (sx, sy) = (1.0 / 127.0, 2.0 / 127.0);
+        let sw: Vec<f32> = (0..channels)
+            .map(|c| {
+                w[c * kernel * width..(c + 1) * kernel * width]
+                    .iter()
+                    .fold(0.0f32, |m, v| m.max(v.abs()))
+                    / 127.0
+            })
+            .collect();
+        let wq: Vec<i8> = w
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| quantize(v, sw[k / (kernel * width)]))
+            .collect();
+        let bq: Vec<i32> = (0..channels)
+            .map(|c| libm::roundf(b[c] / (sx * sw[c])) as i32)
+            .collect();
+        let rq: Vec<Requant> = sw
+            .iter()
+            .map(|&s| Requant::new(sx * s / sy).unwrap())
+            .collect();
+        let xq: Vec<i8> = x.iter().map(|&v| quantize(v, sx)).collect();
+        for stride in [1, 2] {
+            let mut out = vec![0i8; frames.div_ceil(stride) * channels];
+            let layer = Layer {
+                weights: &wq,
+                bias: &bq,
+                requant: &rq,
+                activation: Activation::Identity,
+            };
+            conv1d(&xq, channels, groups, kernel, stride, &layer, &mut out).unwrap();
+            let real = conv_reference(&x, channels, groups, kernel, stride, &w, &b);
+            for (k, (&q, &r)) in out.iter().zip(&real).enumerate() {
+                assert!(
+                    (f32::from(q) * sy - r).abs() <= 2.0 * sy,
+                    "stride {stride} output {k}: {} vs {r}",
+                    f32::from(q) * sy
+                );
+            }
+        }
+        let mut out = vec![0i8; frames * channels];
+        let layer = Layer {
+            weights: &wq,
+            bias: &bq,
+            requant: &rq,
+            activation: Activation::Identity,
+        };
+        assert_eq!(
+            conv1d(&xq, channels, 3, kernel, 1, &layer, &mut out),
+            Err(ShapeError::Mismatch)
+        );
+    }
+
+    #[test]
+    fn upsampling_interpolates_between_neighbours_and_holds_the_ends() {
+        let x = [0i8, 40, -40];
+        let mut out = [0i8; 6];
+        upsample2(&x, 1, &mut out).unwrap();
+        assert_eq!(out, [0, 10, 30, 20, -20, -40]);
+        assert_eq!(upsample2(&x, 2, &mut out), Err(ShapeError::Mismatch));
+    }
+
+    #[test]
     fn requantization_rounds_ties_up_and_saturates() {
         let half = Requant::new(0.5).unwrap();
         assert_eq!([3, -3, 5, -5].map(|a| half.scale(a)), [2, -1, 3, -2]);
@@ -296,7 +577,7 @@ mod tests {
         fn requantization_is_the_rounded_product(acc in -1_000_000i32..1_000_000, factor in 1e-4f32..4.0) {
             let r = Requant::new(factor).unwrap();
             let exact = f64::from(acc) * f64::from(r.factor());
-            prop_assert!((f64::from(r.scale(acc)) - exact).abs() <= 0.5 + 1e-6);
+            prop_assert!((f64::from(r.scale(acc)) - exact).abs() <= 1.0);
         }
 
         #[test]
@@ -337,7 +618,13 @@ mod tests {
             .collect();
         let xq = x.map(|v| quantize(v, sx));
         let mut out = [0i8; 2];
-        linear(&xq, &wq, &bq, &rq, &mut out).unwrap();
+        let layer = Layer {
+            weights: &wq,
+            bias: &bq,
+            requant: &rq,
+            activation: Activation::Identity,
+        };
+        linear(&xq, &layer, &mut out).unwrap();
         for c in 0..2 {
             let real: f32 = w[c].iter().zip(&x).map(|(a, b)| a * b).sum::<f32>() + b[c];
             assert!(
@@ -346,9 +633,10 @@ mod tests {
                 f32::from(out[c]) * sy
             );
         }
-        assert_eq!(
-            linear(&xq, &wq[1..], &bq, &rq, &mut out),
-            Err(ShapeError::Mismatch)
-        );
+        let short = Layer {
+            weights: &wq[1..],
+            ..layer
+        };
+        assert_eq!(linear(&xq, &short, &mut out), Err(ShapeError::Mismatch));
     }
 }

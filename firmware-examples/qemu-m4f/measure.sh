@@ -31,7 +31,9 @@ for b in ring window coach floats bytes; do
     echo "| of which session buffer \`$b\` | $(kib "$(field RAM "$b")") |"
 done
 echo "| stack high-water mark | $(kib "$stack") |"
-echo "| int8 kernel (a 64 x 96 layer, requantization included) | $(grep '^KERNEL int8' "$out" | sed -E 's/.*: ([0-9.]+) instructions per MAC/\1/') instructions per MAC |"
+per_mac() { grep "^KERNEL int8 $1:" "$out" | sed -E 's/.*: ([0-9.]+) instructions per MAC/\1/'; }
+echo "| int8 linear layer (64 x 96, requantization included) | $(per_mac linear) instructions per MAC |"
+echo "| int8 grouped convolution (96 channels in 6 groups, kernel 3, 32 frames) | $(per_mac conv1d) instructions per MAC |"
 echo "| decode one message (mean, $(field 'STAGE decode' calls) messages) | $(minstr "$(field 'STAGE decode' mean)") |"
 echo "| one pose frame: stream, skeleton fit, detector (mean / max) | $(minstr "$(field 'STAGE frame' mean)") / $(minstr "$(field 'STAGE frame' max)") |"
 echo "| the frame that ends a swing: copy, events, DTW, report (mean of $(field 'STAGE swing' calls)) | $(minstr "$(field 'STAGE swing' mean)") |"

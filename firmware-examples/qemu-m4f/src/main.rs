@@ -88,12 +88,17 @@ fn main() -> ! {
 
 fn run() -> Result<(), &'static str> {
     count::check()?;
-    let per_mac = kernels::linear_per_mac_centi()?;
-    defmt::println!(
-        "KERNEL int8 linear: {=u64}.{=u64:02} instructions per MAC",
-        per_mac / 100,
-        per_mac % 100
-    );
+    for (name, per_mac) in [
+        ("linear", kernels::linear_per_mac_centi()?),
+        ("conv1d", kernels::conv_per_mac_centi()?),
+    ] {
+        defmt::println!(
+            "KERNEL int8 {=str}: {=u64}.{=u64:02} instructions per MAC",
+            name,
+            per_mac / 100,
+            per_mac % 100
+        );
+    }
     let mut references = [None, None];
     for (slot, blob) in references.iter_mut().zip(COACHES) {
         *slot = Some(Reference::from_bytes(&blob.0).map_err(|_| "a coach reference is damaged")?);
