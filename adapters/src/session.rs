@@ -6,7 +6,8 @@
 //! settings. Pose frames then go through the [`PoseStream`] onto the model rate's grid, are
 //! put onto the student's skeleton as rigid bones (the analytic retargeter, which also maps a
 //! stream format other than the profile's), and feed the [`SwingDetector`]. Each swing it
-//! closes is copied out (its last [`MAX_SWING_FRAMES`] frames), cut to the swing itself
+//! closes is scored where it lies in the detector's ring (its last [`MAX_SWING_FRAMES`]
+//! frames, [`SwingDetector::with_window`]), cut to the swing itself
 //! (set-up to finish with [`SWING_MARGIN_S`] either side, as is the coach's reference) and
 //! scored against the virtual coach; the caller hears of it as an [`Outcome`]. A break in the stream drops a
 //! swing in progress. Every buffer belongs to the caller ([`Buffers`], sized by
@@ -72,8 +73,6 @@ impl Coach<'_> {
 pub struct BufferLens {
     /// Positions of the detector's history.
     pub ring: usize,
-    /// Positions of one swing.
-    pub window: usize,
     /// Positions of the virtual coach.
     pub coach: usize,
     /// Scoring floats.
@@ -89,7 +88,6 @@ impl BufferLens {
         let scratch = score::scratch_len(joints, MAX_SWING_FRAMES, coach_frames);
         BufferLens {
             ring: joints * (RING_S * rate_hz as f32) as usize,
-            window: joints * MAX_SWING_FRAMES,
             coach: joints * coach_frames,
             floats: scratch.floats,
             bytes: scratch.bytes,
@@ -102,8 +100,6 @@ impl BufferLens {
 pub struct Buffers<'b> {
     /// The detector's history.
     pub ring: &'b mut [Vec3],
-    /// One swing.
-    pub window: &'b mut [Vec3],
     /// The virtual coach.
     pub coach: &'b mut [Vec3],
     /// Scoring floats.
@@ -117,7 +113,6 @@ pub struct Buffers<'b> {
 #[derive(Clone, Debug)]
 pub struct OwnedBuffers {
     ring: std::vec::Vec<Vec3>,
-    window: std::vec::Vec<Vec3>,
     coach: std::vec::Vec<Vec3>,
     floats: std::vec::Vec<f32>,
     bytes: std::vec::Vec<u8>,
@@ -129,7 +124,6 @@ impl OwnedBuffers {
     pub fn new(lens: BufferLens) -> OwnedBuffers {
         OwnedBuffers {
             ring: std::vec![Vec3::zeros(); lens.ring],
-            window: std::vec![Vec3::zeros(); lens.window],
             coach: std::vec![Vec3::zeros(); lens.coach],
             floats: std::vec![0.0; lens.floats],
             bytes: std::vec![0; lens.bytes],
@@ -140,7 +134,6 @@ impl OwnedBuffers {
     pub fn buffers(&mut self) -> Buffers<'_> {
         Buffers {
             ring: &mut self.ring,
-            window: &mut self.window,
             coach: &mut self.coach,
             floats: &mut self.floats,
             bytes: &mut self.bytes,
@@ -317,7 +310,6 @@ pub struct Session<'b> {
     student: Option<Student<'b>>,
     /// The ring while no detector holds it.
     spare: &'b mut [Vec3],
-    window: &'b mut [Vec3],
     virtual_coach: &'b mut [Vec3],
     floats: &'b mut [f32],
     bytes: &'b mut [u8],
@@ -340,7 +332,6 @@ impl<'b> Session<'b> {
             layout: None,
             student: None,
             spare: buffers.ring,
-            window: buffers.window,
             virtual_coach: buffers.coach,
             floats: buffers.floats,
             bytes: buffers.bytes,
@@ -473,7 +464,6 @@ impl<'b> Session<'b> {
             .and_then(|_| {
                 let needed = BufferLens::new(joints, coach.frames(), rate);
                 let fits = ring.len() >= needed.ring
-                    && self.window.len() >= needed.window
                     && self.virtual_coach.len() >= needed.coach
                     && self.floats.len() >= needed.floats
                     && self.bytes.len() >= needed.bytes;
@@ -624,7 +614,7 @@ impl<'b> Session<'b> {
         rate: f32,
         on: &mut impl FnMut(Outcome<'_>),
     ) {
-        let Some(student) = &self.student else {
+        let Some(student) = &mut self.student else {
             return;
         };
         let Some(coach_hz) = self.coaches.get(usize::from(self.coach)).map(|c| c.rate_hz) else {
@@ -635,63 +625,72 @@ impl<'b> Session<'b> {
             start: window.start + cut as u64,
             len: window.len - cut,
         };
-        let joints = student.skeleton.len();
-        let Ok(n) = student.detector.copy_window(&window, self.window) else {
-            return;
-        };
-        self.swings += 1;
-        let frames = &self.window[..n];
-        let at = |frame: u64| t0_us + (frame as f64 * 1e6 / f64::from(rate)) as u64;
-        let span = match swing_span(&student.skeleton, frames, rate) {
-            Ok(span) => span,
-            Err(error) => {
-                let swing = Swing {
-                    number: self.swings,
-                    start_us: at(window.start),
-                    frames: window.len,
-                };
-                let error = ScoreError::Events {
-                    student: true,
-                    error,
-                };
-                return on(Outcome::Unscored { swing, error });
+        let Student {
+            skeleton,
+            detector,
+            coach_swing,
+            ..
+        } = student;
+        let joints = skeleton.len();
+        let (swings, config) = (&mut self.swings, self.config);
+        let (virtual_coach, floats, bytes) =
+            (&*self.virtual_coach, &mut *self.floats, &mut *self.bytes);
+        let last_report = &mut self.report;
+        // The swing is scored where it lies in the detector's ring (a window that has left the
+        // ring is skipped, as a copy of it would fail).
+        let _ = detector.with_window(&window, |frames| {
+            *swings += 1;
+            let at = |frame: u64| t0_us + (frame as f64 * 1e6 / f64::from(rate)) as u64;
+            let span = match swing_span(skeleton, frames, rate) {
+                Ok(span) => span,
+                Err(error) => {
+                    let swing = Swing {
+                        number: *swings,
+                        start_us: at(window.start),
+                        frames: window.len,
+                    };
+                    let error = ScoreError::Events {
+                        student: true,
+                        error,
+                    };
+                    return on(Outcome::Unscored { swing, error });
+                }
+            };
+            let swing = Swing {
+                number: *swings,
+                start_us: at(window.start + span.start as u64),
+                frames: span.len(),
+            };
+            let compared = Compared {
+                skeleton,
+                student: &frames[span.start * joints..span.end * joints],
+                student_hz: rate,
+                coach: &virtual_coach[coach_swing.start * joints..coach_swing.end * joints],
+                coach_hz,
+            };
+            let result = score::score(
+                compared.skeleton,
+                compared.student,
+                rate,
+                compared.coach,
+                coach_hz,
+                config.band_radius,
+                config.anchored,
+                floats,
+                bytes,
+            );
+            match result {
+                Ok(report) => {
+                    let report = &*last_report.insert(report);
+                    on(Outcome::Scored {
+                        swing,
+                        report,
+                        compared,
+                    });
+                }
+                Err(error) => on(Outcome::Unscored { swing, error }),
             }
-        };
-        let swing = Swing {
-            number: self.swings,
-            start_us: at(window.start + span.start as u64),
-            frames: span.len(),
-        };
-        let coach = &student.coach_swing;
-        let compared = Compared {
-            skeleton: &student.skeleton,
-            student: &frames[span.start * joints..span.end * joints],
-            student_hz: rate,
-            coach: &self.virtual_coach[coach.start * joints..coach.end * joints],
-            coach_hz,
-        };
-        let result = score::score(
-            compared.skeleton,
-            compared.student,
-            rate,
-            compared.coach,
-            coach_hz,
-            self.config.band_radius,
-            self.config.anchored,
-            self.floats,
-            self.bytes,
-        );
-        match result {
-            Ok(report) => {
-                let report = &*self.report.insert(report);
-                on(Outcome::Scored {
-                    swing,
-                    report,
-                    compared,
-                });
-            }
-            Err(error) => on(Outcome::Unscored { swing, error }),
-        }
+        });
     }
 }
 

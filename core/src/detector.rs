@@ -5,8 +5,8 @@
 //! `open_speed`, with `pre_s` of history kept before it for the set-up; the candidate closes once
 //! the hands have stayed under `close_speed` for `settle_s`. It is a swing only if the hands
 //! peaked above `min_peak_speed` and rose at least `min_rise`: walking, waggles and practice
-//! half swings open candidates that fail those tests. A swing hands back a [`SwingWindow`] to
-//! copy out with [`SwingDetector::copy_window`] and score.
+//! half swings open candidates that fail those tests. A swing hands back a [`SwingWindow`],
+//! scored where it lies with [`SwingDetector::with_window`].
 //!
 //! ```
 //! use posecoach_core::detector::{DetectorConfig, SwingDetector};
@@ -324,27 +324,29 @@ impl<'s> SwingDetector<'s> {
         }))
     }
 
-    /// Copies `window`'s frames, oldest first, into `out`; returns the number of positions
-    /// written (`window.len` × joints).
+    /// Calls `f` with `window`'s frames, oldest first, contiguous in the detector's own
+    /// storage: the ring is rotated so that the window starts it, and rotated back after `f`
+    /// returns, so a caller scores a swing where it lies instead of copying it out (the
+    /// rotations cost two passes over the ring; a copy would cost a second buffer).
     ///
     /// # Errors
-    /// [`DetectorError::Window`] when the window's oldest frames have been overwritten or `out`
-    /// is too short.
-    pub fn copy_window(
-        &self,
+    /// [`DetectorError::Window`] when the window's oldest frames have been overwritten or it
+    /// has not been seen yet.
+    pub fn with_window<R>(
+        &mut self,
         window: &SwingWindow,
-        out: &mut [Vec3],
-    ) -> Result<usize, DetectorError> {
-        let n = window.len * self.joints;
+        f: impl FnOnce(&[Vec3]) -> R,
+    ) -> Result<R, DetectorError> {
         let end = window.start + window.len as u64;
-        if end > self.seen || self.seen - window.start > self.capacity as u64 || out.len() < n {
+        if end > self.seen || self.seen - window.start > self.capacity as u64 {
             return Err(DetectorError::Window);
         }
-        for (f, chunk) in (window.start..end).zip(out.chunks_exact_mut(self.joints)) {
-            let at = self.slot(f);
-            chunk.copy_from_slice(&self.storage[at..at + self.joints]);
-        }
-        Ok(n)
+        let ring = &mut self.storage[..self.capacity * self.joints];
+        let turn = (window.start % self.capacity as u64) as usize * self.joints;
+        ring.rotate_left(turn);
+        let result = f(&ring[..window.len * self.joints]);
+        ring.rotate_right(turn);
+        Ok(result)
     }
 }
 
@@ -379,10 +381,38 @@ mod tests {
         nan[4].z = f32::INFINITY;
         assert_eq!(d.push(&nan), Err(DetectorError::Frame));
         assert_eq!(d.frames_seen(), 0);
-        let mut out = [Vec3::zeros(); 17];
         assert_eq!(
-            d.copy_window(&SwingWindow { start: 0, len: 1 }, &mut out),
+            d.with_window(&SwingWindow { start: 0, len: 1 }, |_| ()),
             Err(DetectorError::Window)
         );
+    }
+
+    #[test]
+    fn a_window_across_the_ring_s_end_reads_in_order_and_the_ring_is_restored() {
+        let s = Format::H36m17.default_skeleton().unwrap();
+        let capacity = (2.0 * RATE_HZ) as usize;
+        let mut storage = vec![Vec3::zeros(); capacity * 17];
+        let mut d =
+            SwingDetector::new(&s, DetectorConfig::full_swing(RATE_HZ), &mut storage).unwrap();
+        // Still frames, each marked with its number: far more than the ring holds.
+        let frame = |n: usize| [Vec3::new(n as f32, 1.0, 0.0); 17];
+        for n in 0..capacity + capacity / 2 {
+            d.push(&frame(n)).unwrap();
+        }
+        let window = SwingWindow {
+            start: (capacity - 10) as u64,
+            len: 30,
+        };
+        let before = d.storage.to_vec();
+        let seen: Vec<f32> = d
+            .with_window(&window, |frames| {
+                frames.chunks(17).map(|f| f[0].x).collect()
+            })
+            .unwrap();
+        let expected: Vec<f32> = (capacity - 10..capacity + 20).map(|n| n as f32).collect();
+        assert_eq!(seen, expected);
+        assert_eq!(d.storage, &before[..]);
+        let gone = SwingWindow { start: 0, len: 5 };
+        assert_eq!(d.with_window(&gone, |_| ()), Err(DetectorError::Window));
     }
 }

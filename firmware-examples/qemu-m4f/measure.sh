@@ -27,7 +27,7 @@ echo "| what | measured |"
 echo "| --- | --- |"
 echo "| flash: code, constants, both coach references (without the test's log and transcript) | $(kib $((code - log - transcript))) |"
 echo "| static RAM (.data + .bss) | $(kib "$static_ram") |"
-for b in ring window coach floats bytes; do
+for b in ring coach floats bytes; do
     echo "| of which session buffer \`$b\` | $(kib "$(field RAM "$b")") |"
 done
 echo "| stack high-water mark | $(kib "$stack") |"

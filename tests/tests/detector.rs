@@ -92,8 +92,7 @@ fn only_the_real_swings_come_out_of_a_stream() {
     let mut swings = Vec::new();
     for frame in stream.chunks_exact(j) {
         if let Some(window) = detector.push(frame).unwrap() {
-            let mut out = vec![Vec3::zeros(); window.len * j];
-            detector.copy_window(&window, &mut out).unwrap();
+            let out = detector.with_window(&window, <[Vec3]>::to_vec).unwrap();
             swings.push((window, out));
         }
     }

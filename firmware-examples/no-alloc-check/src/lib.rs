@@ -40,14 +40,12 @@ pub extern "C" fn posecoach_no_alloc_replay(log: &[u8; 64]) -> i32 {
     let Ok(reader) = LogReader::new(log) else {
         return -1;
     };
-    let (mut ring, mut window, mut coach) =
-        ([Vec3::zeros(); 8], [Vec3::zeros(); 8], [Vec3::zeros(); 8]);
+    let (mut ring, mut coach) = ([Vec3::zeros(); 8], [Vec3::zeros(); 8]);
     let (mut floats, mut bytes) = ([0.0; 8], [0u8; 8]);
     let mut session = Session::new(
         &[],
         Buffers {
             ring: &mut ring,
-            window: &mut window,
             coach: &mut coach,
             floats: &mut floats,
             bytes: &mut bytes,

@@ -48,8 +48,6 @@ const UART_WAIT_US: u32 = 200;
 
 static RING: ConstStaticCell<[Vec3; LENS.ring]> =
     ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.ring]);
-static WINDOW: ConstStaticCell<[Vec3; LENS.window]> =
-    ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.window]);
 static VIRTUAL_COACH: ConstStaticCell<[Vec3; LENS.coach]> =
     ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.coach]);
 static FLOATS: ConstStaticCell<[f32; LENS.floats]> = ConstStaticCell::new([0.0; LENS.floats]);
@@ -127,7 +125,6 @@ fn main() -> ! {
     let coaches = [coach(&driver), coach(&iron)];
     let buffers = Buffers {
         ring: RING.take(),
-        window: WINDOW.take(),
         coach: VIRTUAL_COACH.take(),
         floats: FLOATS.take(),
         bytes: BYTES.take(),

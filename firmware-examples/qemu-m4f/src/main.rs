@@ -42,8 +42,6 @@ const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RAT
 
 static RING: ConstStaticCell<[Vec3; LENS.ring]> =
     ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.ring]);
-static WINDOW: ConstStaticCell<[Vec3; LENS.window]> =
-    ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.window]);
 static VIRTUAL_COACH: ConstStaticCell<[Vec3; LENS.coach]> =
     ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.coach]);
 static FLOATS: ConstStaticCell<[f32; LENS.floats]> = ConstStaticCell::new([0.0; LENS.floats]);
@@ -109,7 +107,6 @@ fn run() -> Result<(), &'static str> {
     let coaches = [coach(&driver), coach(&iron)];
     let buffers = Buffers {
         ring: RING.take(),
-        window: WINDOW.take(),
         coach: VIRTUAL_COACH.take(),
         floats: FLOATS.take(),
         bytes: BYTES.take(),
@@ -154,9 +151,8 @@ fn run() -> Result<(), &'static str> {
     print(&stages);
     let vec3 = core::mem::size_of::<Vec3>();
     defmt::println!(
-        "RAM ring {=usize} window {=usize} coach {=usize} floats {=usize} bytes {=usize} stack {=usize}",
+        "RAM ring {=usize} coach {=usize} floats {=usize} bytes {=usize} stack {=usize}",
         LENS.ring * vec3,
-        LENS.window * vec3,
         LENS.coach * vec3,
         LENS.floats * core::mem::size_of::<f32>(),
         LENS.bytes,
