@@ -66,6 +66,43 @@ impl Coach<'_> {
     fn frames(&self) -> usize {
         self.positions.len() / self.skeleton.len().max(1)
     }
+
+    /// Its frames at `rate_hz`, as the session keeps the virtual coach
+    /// ([`frames_at`]).
+    pub fn frames_at(&self, rate_hz: u16) -> usize {
+        frames_at(self.frames(), self.rate_hz, rate_hz)
+    }
+
+    /// Where frame `k` at `rate_hz` falls among the coach's own frames: the frame before and
+    /// the fraction of the way to the next. Rates within [`SAME_RATE`] of each other are the
+    /// same rate (a 60.00006 Hz capture is a 60 Hz one): the frames are then used as they are.
+    fn source_of(&self, k: usize, rate_hz: u16) -> (usize, f32) {
+        if same_rate(self.rate_hz, rate_hz) {
+            return (k, 0.0);
+        }
+        let t = k as f32 * self.rate_hz / f32::from(rate_hz);
+        let i = (t as usize).min(self.frames().saturating_sub(1));
+        (i, t - i as f32)
+    }
+}
+
+/// Relative difference under which two frame rates are one.
+pub const SAME_RATE: f32 = 1e-3;
+
+const fn same_rate(coach_hz: f32, rate_hz: u16) -> bool {
+    let ratio = coach_hz / rate_hz as f32;
+    ratio > 1.0 - SAME_RATE && ratio < 1.0 + SAME_RATE
+}
+
+/// Frames a coach reference of `frames` frames at `coach_hz` has at the model rate `rate_hz`:
+/// the session retargets the coach at the model rate (interpolating its frames), so that the
+/// student's and the coach's swings are compared frame for frame; the same frames when the
+/// rates are the same ([`SAME_RATE`]).
+pub const fn frames_at(frames: usize, coach_hz: f32, rate_hz: u16) -> usize {
+    if frames == 0 || same_rate(coach_hz, rate_hz) {
+        return frames;
+    }
+    ((frames - 1) as f32 * rate_hz as f32 / coach_hz) as usize + 1
 }
 
 /// Lengths of the buffers a session needs.
@@ -82,12 +119,19 @@ pub struct BufferLens {
 }
 
 impl BufferLens {
-    /// For students of up to `joints` joints, coaches of up to `coach_frames` frames and model
-    /// rates up to `rate_hz`.
+    /// For students of up to `joints` joints, coaches of up to `coach_frames` frames at the
+    /// model rate ([`frames_at`]) and model rates up to `rate_hz`.
     pub const fn new(joints: usize, coach_frames: usize, rate_hz: u16) -> BufferLens {
-        let scratch = score::scratch_len(joints, MAX_SWING_FRAMES, coach_frames);
+        let ring_frames = (RING_S * rate_hz as f32) as usize;
+        // A swing is scored in the ring, so it is never longer than the ring.
+        let swing = if ring_frames < MAX_SWING_FRAMES {
+            ring_frames
+        } else {
+            MAX_SWING_FRAMES
+        };
+        let scratch = score::scratch_len(joints, swing, coach_frames);
         BufferLens {
-            ring: joints * (RING_S * rate_hz as f32) as usize,
+            ring: joints * ring_frames,
             coach: joints * coach_frames,
             floats: scratch.floats,
             bytes: scratch.bytes,
@@ -322,11 +366,32 @@ pub struct Session<'b> {
 }
 
 impl<'b> Session<'b> {
-    /// A session choosing among `coaches` (reference 0 until a `CoachSelect`).
+    /// A session choosing among `coaches` (reference 0 until a `CoachSelect`), with
+    /// [`DEFAULT_CONFIG`] until a `Config` arrives.
     pub fn new(coaches: &'b [Coach<'b>], buffers: Buffers<'b>) -> Session<'b> {
+        Session::start(coaches, buffers, DEFAULT_CONFIG)
+    }
+
+    /// As [`Session::new`] with the device's own settings until a `Config` arrives: a device
+    /// whose buffers fit only its own model rate takes a profile sent before the settings.
+    ///
+    /// # Errors
+    /// [`Refusal::Config`] for a model rate outside [`RATES_HZ`] or a zero band.
+    pub fn with_config(
+        coaches: &'b [Coach<'b>],
+        buffers: Buffers<'b>,
+        config: Config,
+    ) -> Result<Session<'b>, Refusal> {
+        if !valid(&config) {
+            return Err(Refusal::Config);
+        }
+        Ok(Session::start(coaches, buffers, config))
+    }
+
+    fn start(coaches: &'b [Coach<'b>], buffers: Buffers<'b>, config: Config) -> Session<'b> {
         Session {
             coaches,
-            config: DEFAULT_CONFIG,
+            config,
             coach: 0,
             profile: None,
             layout: None,
@@ -373,11 +438,10 @@ impl<'b> Session<'b> {
         let refusal = match message {
             Message::StudentProfile(p) => self.profile(p).err(),
             Message::Config(c) => {
-                let rates = RATES_HZ.0..=RATES_HZ.1;
-                if !rates.contains(&c.model_rate_hz) || c.band_radius == 0 {
-                    Some(Refusal::Config)
-                } else {
+                if valid(c) {
                     self.reconfigure(|s| &mut s.config, *c).err()
+                } else {
+                    Some(Refusal::Config)
                 }
             }
             Message::CoachSelect { coach } => {
@@ -462,7 +526,7 @@ impl<'b> Session<'b> {
         let checked = SwingDetector::check(&skeleton, detector, ring.len())
             .map_err(Refusal::Detector)
             .and_then(|_| {
-                let needed = BufferLens::new(joints, coach.frames(), rate);
+                let needed = BufferLens::new(joints, coach.frames_at(rate), rate);
                 let fits = ring.len() >= needed.ring
                     && self.virtual_coach.len() >= needed.coach
                     && self.floats.len() >= needed.floats
@@ -472,11 +536,26 @@ impl<'b> Session<'b> {
             .and_then(|()| {
                 let retarget =
                     Analytic::new(coach.skeleton, &skeleton).map_err(|_| Refusal::Retarget)?;
-                for (source, out) in coach
-                    .positions
-                    .chunks_exact(coach.skeleton.len())
-                    .zip(self.virtual_coach.chunks_exact_mut(joints))
+                let n = coach.skeleton.len();
+                let mut between = [Vec3::zeros(); MAX_JOINTS];
+                for (k, out) in self
+                    .virtual_coach
+                    .chunks_exact_mut(joints)
+                    .take(coach.frames_at(rate))
+                    .enumerate()
                 {
+                    let (i, fraction) = coach.source_of(k, rate);
+                    let frame = |i: usize| coach.positions.get(i * n..(i + 1) * n);
+                    let source = match (frame(i), frame(i + 1)) {
+                        (Some(a), Some(b)) if fraction > 0.0 => {
+                            for ((m, p), q) in between.iter_mut().zip(a).zip(b) {
+                                *m = p + (q - p) * fraction;
+                            }
+                            &between[..n]
+                        }
+                        (Some(a), _) => a,
+                        (None, _) => return Err(Refusal::Retarget),
+                    };
                     retarget.frame(source, out).map_err(|_| Refusal::Retarget)?;
                 }
                 Ok(())
@@ -493,7 +572,7 @@ impl<'b> Session<'b> {
                     for frame in self
                         .virtual_coach
                         .chunks_exact_mut(joints)
-                        .take(coach.frames())
+                        .take(coach.frames_at(rate))
                     {
                         let mut seen = [Vec3::zeros(); MAX_JOINTS];
                         imu.view(&skeleton, frame, &mut seen)
@@ -501,9 +580,9 @@ impl<'b> Session<'b> {
                         frame.copy_from_slice(&seen[..joints]);
                     }
                 }
-                let frames = &self.virtual_coach[..coach.frames() * joints];
-                let swing =
-                    swing_span(&skeleton, frames, coach.rate_hz).map_err(Refusal::CoachSwing)?;
+                let frames = &self.virtual_coach[..coach.frames_at(rate) * joints];
+                let coach_hz = coach_rate(coach, rate);
+                let swing = swing_span(&skeleton, frames, coach_hz).map_err(Refusal::CoachSwing)?;
                 let stream = PoseStream::new(StreamConfig::new(rate)).map_err(Refusal::Stream)?;
                 Ok((stream, swing, imu))
             });
@@ -617,7 +696,11 @@ impl<'b> Session<'b> {
         let Some(student) = &mut self.student else {
             return;
         };
-        let Some(coach_hz) = self.coaches.get(usize::from(self.coach)).map(|c| c.rate_hz) else {
+        let Some(coach_hz) = self
+            .coaches
+            .get(usize::from(self.coach))
+            .map(|c| coach_rate(c, self.config.model_rate_hz))
+        else {
             return;
         };
         let cut = window.len.saturating_sub(MAX_SWING_FRAMES);
@@ -694,6 +777,21 @@ impl<'b> Session<'b> {
     }
 }
 
+/// Whether a session can run with `config`.
+fn valid(config: &Config) -> bool {
+    (RATES_HZ.0..=RATES_HZ.1).contains(&config.model_rate_hz) && config.band_radius > 0
+}
+
+/// The rate of the virtual coach: the model rate, or the coach's own where they are the same
+/// rate ([`SAME_RATE`]) and its frames are used as they are.
+fn coach_rate(coach: &Coach<'_>, rate_hz: u16) -> f32 {
+    if same_rate(coach.rate_hz, rate_hz) {
+        coach.rate_hz
+    } else {
+        f32::from(rate_hz)
+    }
+}
+
 /// Frames of `positions` from [`SWING_MARGIN_S`] before the set-up to as long after the finish.
 fn swing_span(
     skeleton: &Skeleton,
@@ -721,4 +819,41 @@ fn stream_skeleton(student: &Skeleton, format: Format) -> Result<Skeleton, Refus
     standard
         .with_bone_lengths(&lengths[..standard.len()])
         .map_err(Refusal::Profile)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_coach_is_kept_at_the_model_rate() {
+        assert_eq!(frames_at(110, 60.000_057, 60), 110);
+        assert_eq!(frames_at(110, 60.000_057, 30), 55);
+        assert_eq!(frames_at(110, 60.0, 120), 219);
+        assert_eq!(frames_at(0, 60.0, 30), 0);
+        let skeleton = Format::H36m17.default_skeleton().unwrap();
+        let positions = [Vec3::zeros(); 17 * 4];
+        let coach = Coach {
+            skeleton: &skeleton,
+            positions: &positions,
+            rate_hz: 60.000_057,
+        };
+        assert_eq!(coach.source_of(3, 60), (3, 0.0));
+        assert_eq!(coach.source_of(1, 30).0, 2);
+        let (i, fraction) = coach.source_of(1, 40);
+        assert_eq!(i, 1);
+        assert!((fraction - 0.5).abs() < 1e-4);
+    }
+
+    #[test]
+    fn the_scoring_scratch_is_sized_for_a_swing_as_long_as_the_ring() {
+        let at_30 = BufferLens::new(17, 55, 30);
+        assert_eq!(at_30.ring, 17 * 180);
+        assert_eq!(at_30.floats, score::scratch_len(17, 180, 55).floats);
+        let at_60 = BufferLens::new(17, 110, 60);
+        assert_eq!(
+            at_60.floats,
+            score::scratch_len(17, MAX_SWING_FRAMES, 110).floats
+        );
+    }
 }

@@ -9,8 +9,8 @@ fn main() {
         "memory.x",
         "../../coaches/driver.pcr",
         "../../coaches/iron.pcr",
-        "../../tests/logs/range_h36m_30hz.pclog",
-        "../../tests/logs/range_h36m_30hz.device.bin",
+        "../../tests/logs/device_h36m_30hz.pclog",
+        "../../tests/logs/device_h36m_30hz.device.bin",
     ] {
         println!("cargo:rerun-if-changed={file}");
     }

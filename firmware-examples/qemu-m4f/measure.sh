@@ -36,5 +36,5 @@ echo "| int8 linear layer (64 x 96, requantization included) | $(per_mac linear)
 echo "| int8 grouped convolution (96 channels in 6 groups, kernel 3, 32 frames) | $(per_mac conv1d) instructions per MAC |"
 echo "| decode one message (mean, $(field 'STAGE decode' calls) messages) | $(minstr "$(field 'STAGE decode' mean)") |"
 echo "| one pose frame: stream, skeleton fit, detector (mean / max) | $(minstr "$(field 'STAGE frame' mean)") / $(minstr "$(field 'STAGE frame' max)") |"
-echo "| the frame that ends a swing: copy, events, DTW, report (mean of $(field 'STAGE swing' calls)) | $(minstr "$(field 'STAGE swing' mean)") |"
+echo "| the frame that ends a swing: events, DTW, report (mean of $(field 'STAGE swing' calls)) | $(minstr "$(field 'STAGE swing' mean)") |"
 echo "| student profile or coach selection: coach retargeted (analytic), its swing found | $(minstr "$(field 'STAGE setup' mean)") |"

@@ -42,7 +42,11 @@ pub fn session<R>(device: impl FnOnce(&mut Session<'_>) -> R) -> Result<R> {
             rate_hz: r.rate_hz(),
         })
         .collect();
-    let longest = coaches.iter().map(Reference::frames).max().unwrap_or(0);
+    let longest = refs
+        .iter()
+        .map(|c| c.frames_at(RATES_HZ.1))
+        .max()
+        .unwrap_or(0);
     let mut buffers = OwnedBuffers::new(BufferLens::new(MAX_JOINTS, longest, RATES_HZ.1));
     Ok(device(&mut Session::new(&refs, buffers.buffers())))
 }

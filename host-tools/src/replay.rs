@@ -87,6 +87,7 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
     let (mut swings, mut text, mut refused) = (Vec::new(), String::new(), Vec::new());
     let (mut pages, mut sent) = (Vec::new(), Vec::new());
     for message in reader.by_ref() {
+        let rate_hz = session.config().model_rate_hz;
         session.handle(&message, |outcome| {
             if let Some(frame) = outcome.reply(&message).as_ref().and_then(device_sim::frame) {
                 sent.extend(frame);
@@ -113,8 +114,9 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
                     Err(error) => Err(error.to_string()),
                 },
             });
-            let mut entry =
-                json!({"swing": swing.number, "start_s": start_s, "frames": swing.frames});
+            let mut entry = json!({
+                "swing": swing.number, "start_s": start_s, "frames": swing.frames, "rate_hz": rate_hz,
+            });
             match result {
                 Ok((report, _)) => {
                     text.push('\n');

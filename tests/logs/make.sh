@@ -13,6 +13,11 @@ trap 'rm -rf "$tmp"' EXIT
 pc synth-log --swing $fx/golf_driver_60hz.csv --swing $fx/golf_iron_60hz.csv \
     --walk $fx/bandai_walk_excerpt.bvh --seed 1 --out tests/logs/range_h36m_30hz.pclog
 
+# The same golfer and swings with the device's own model rate, 30 Hz (the network's rate): the
+# session the QEMU firmware replays.
+pc synth-log --swing $fx/golf_driver_60hz.csv --swing $fx/golf_iron_60hz.csv \
+    --walk $fx/bandai_walk_excerpt.bvh --model-rate 30 --seed 1 --out tests/logs/device_h36m_30hz.pclog
+
 # A 1.60 m amateur (CMU-31 keypoints at 30 Hz, 10 mm noise, 6 ms jitter, 5 % lost) whose
 # backswings take 1.5 times as long as the tour player's: the iron, a practice half swing, the
 # driver.

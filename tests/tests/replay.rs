@@ -39,7 +39,7 @@ fn check_swings(name: &str, replay: &Replay, expected: &Value) {
         let report = &found["report"];
         assert!(report.is_object(), "{name}: not scored: {found}");
         let start = found["start_s"].as_f64().unwrap();
-        let rate = 60.0;
+        let rate = found["rate_hz"].as_f64().unwrap();
         for (event, frame) in report["events"]["student"].as_object().unwrap() {
             let at = start + frame.as_f64().unwrap() / rate;
             let want = truth["events_s"][event].as_f64().unwrap();

@@ -22,10 +22,10 @@ use nrf52840_hal::uarte::{self, Baudrate, Parity, Uarte};
 use nrf52840_hal::Timer;
 use panic_probe as _;
 use posecoach_adapters::lsm6ds3::{Lsm6ds3, ADDRESS};
-use posecoach_adapters::session::{BufferLens, Buffers, Coach, Session};
+use posecoach_adapters::session::{frames_at, BufferLens, Buffers, Coach, Session, DEFAULT_CONFIG};
 use posecoach_core::blob::Aligned;
 use posecoach_core::reference::Reference;
-use posecoach_core::wire::{encode, Decoder, Message, MAX_FRAME};
+use posecoach_core::wire::{encode, Config, Decoder, Message, MAX_FRAME};
 use posecoach_core::Vec3;
 use static_cell::ConstStaticCell;
 
@@ -38,10 +38,10 @@ static COACHES: [&Aligned<[u8]>; 2] = [
 const SENSOR: u8 = 5;
 /// Most joints of a student (H36M-17 keypoints).
 const STUDENT_JOINTS: usize = 17;
-/// Frames of the longest bundled coach reference.
-const COACH_FRAMES: usize = 110;
 /// The model rate this board has buffers for (a phone asking for more gets a `Nack`), Hz.
 const MODEL_RATE_HZ: u16 = 30;
+/// Frames of the longest bundled coach reference (110 at 60 Hz) at the model rate.
+const COACH_FRAMES: usize = frames_at(110, 60.0, MODEL_RATE_HZ);
 const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RATE_HZ);
 /// Microseconds a UART read waits for a byte before the loop polls the IMU again.
 const UART_WAIT_US: u32 = 200;
@@ -129,7 +129,13 @@ fn main() -> ! {
         floats: FLOATS.take(),
         bytes: BYTES.take(),
     };
-    let mut session = Session::new(&coaches, buffers);
+    let own = Config {
+        model_rate_hz: MODEL_RATE_HZ,
+        ..DEFAULT_CONFIG
+    };
+    let Ok(mut session) = Session::with_config(&coaches, buffers, own) else {
+        defmt::panic!("the device's own settings are not valid");
+    };
     let mut decoder = Decoder::new();
     let mut byte = [0u8; 1];
     defmt::info!("posecoach ready: IMU is sensor {}", SENSOR);

@@ -1,10 +1,11 @@
 //! posecoach's device pipeline on a Cortex-M4F (QEMU `mps2-an386`).
 //!
-//! Replays the recorded session `tests/logs/range_h36m_30hz.pclog` (embedded) through the
+//! Replays the recorded session `tests/logs/device_h36m_30hz.pclog` (embedded; a 30 Hz model
+//! rate) through the
 //! device's session with the bundled coach references (embedded `.pcr` blobs): decode → pose
 //! stream → swing detection → retarget (once per student and coach) → events → DTW → report.
 //! Every reply the device would send is encoded as on the serial link and compared with the
-//! host's (`posecoach replay --wire`, committed as `range_h36m_30hz.device.bin`). Prints each
+//! host's (`posecoach replay --wire`, committed as `device_h36m_30hz.device.bin`). Prints each
 //! report and the instructions each stage took over defmt; exits 0 only if every byte matched.
 #![no_std]
 #![no_main]
@@ -18,15 +19,19 @@ use cortex_m_rt::entry;
 use count::Tally;
 use defmt_semihosting as _;
 use posecoach_adapters::log::LogReader;
-use posecoach_adapters::session::{BufferLens, Buffers, Coach, Outcome, Session};
+use posecoach_adapters::session::{
+    frames_at, BufferLens, Buffers, Coach, Outcome, Session, DEFAULT_CONFIG,
+};
 use posecoach_core::blob::Aligned;
 use posecoach_core::reference::Reference;
-use posecoach_core::wire::{encode, Message, MAX_FRAME};
+use posecoach_core::wire::{encode, Config, Message, MAX_FRAME};
 use posecoach_core::Vec3;
 use static_cell::ConstStaticCell;
 
-static LOG: &Aligned<[u8]> = &Aligned(*include_bytes!("../../../tests/logs/range_h36m_30hz.pclog"));
-static EXPECTED: &[u8] = include_bytes!("../../../tests/logs/range_h36m_30hz.device.bin");
+static LOG: &Aligned<[u8]> = &Aligned(*include_bytes!(
+    "../../../tests/logs/device_h36m_30hz.pclog"
+));
+static EXPECTED: &[u8] = include_bytes!("../../../tests/logs/device_h36m_30hz.device.bin");
 static COACHES: [&Aligned<[u8]>; 2] = [
     &Aligned(*include_bytes!("../../../coaches/driver.pcr")),
     &Aligned(*include_bytes!("../../../coaches/iron.pcr")),
@@ -34,10 +39,10 @@ static COACHES: [&Aligned<[u8]>; 2] = [
 
 /// Joints of the log's student (H3.6M-17 keypoints).
 const STUDENT_JOINTS: usize = 17;
-/// Frames of the longest bundled coach reference.
-const COACH_FRAMES: usize = 110;
 /// The model rate the log's `Config` asks for, Hz.
-const MODEL_RATE_HZ: u16 = 60;
+const MODEL_RATE_HZ: u16 = 30;
+/// Frames of the longest bundled coach reference (110 at 60 Hz) at the model rate.
+const COACH_FRAMES: usize = frames_at(110, 60.0, MODEL_RATE_HZ);
 const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RATE_HZ);
 
 static RING: ConstStaticCell<[Vec3; LENS.ring]> =
@@ -111,7 +116,12 @@ fn run() -> Result<(), &'static str> {
         floats: FLOATS.take(),
         bytes: BYTES.take(),
     };
-    let mut session = Session::new(&coaches, buffers);
+    let own = Config {
+        model_rate_hz: MODEL_RATE_HZ,
+        ..DEFAULT_CONFIG
+    };
+    let mut session =
+        Session::with_config(&coaches, buffers, own).map_err(|_| "the device's own settings")?;
     let mut reader = LogReader::new(&LOG.0).map_err(|_| "the embedded log is not a log")?;
     let mut stages = Stages::default();
     let mut expected = EXPECTED;
@@ -125,8 +135,12 @@ fn run() -> Result<(), &'static str> {
         session.handle(&message, |outcome| {
             let at = count::now();
             scored |= matches!(outcome, Outcome::Scored { .. });
-            if let Outcome::Scored { report, .. } = &outcome {
-                defmt::println!("swing scored: {}", report.score);
+            match &outcome {
+                Outcome::Scored { report, .. } => defmt::println!("swing scored: {}", report.score),
+                Outcome::Unscored { swing, error } => {
+                    defmt::println!("swing {} not scored: {}", swing.number, error)
+                }
+                Outcome::Refused(why) => defmt::println!("refused: {}", why),
             }
             if let Some(reply) = outcome.reply(&message) {
                 let mut frame = [0u8; MAX_FRAME];
