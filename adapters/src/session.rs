@@ -129,7 +129,7 @@ impl BufferLens {
         } else {
             MAX_SWING_FRAMES
         };
-        let scratch = score::scratch_len(joints, swing, coach_frames);
+        let scratch = score::scratch_len(swing, coach_frames);
         BufferLens {
             ring: joints * ring_frames,
             coach: joints * coach_frames,
@@ -849,11 +849,11 @@ mod tests {
     fn the_scoring_scratch_is_sized_for_a_swing_as_long_as_the_ring() {
         let at_30 = BufferLens::new(17, 55, 30);
         assert_eq!(at_30.ring, 17 * 180);
-        assert_eq!(at_30.floats, score::scratch_len(17, 180, 55).floats);
+        assert_eq!(at_30.floats, score::scratch_len(180, 55).floats);
         let at_60 = BufferLens::new(17, 110, 60);
         assert_eq!(
             at_60.floats,
-            score::scratch_len(17, MAX_SWING_FRAMES, 110).floats
+            score::scratch_len(MAX_SWING_FRAMES, 110).floats
         );
     }
 }

@@ -35,6 +35,7 @@
 
 use crate::config::MAX_JOINTS;
 use crate::math::sqrt;
+use crate::Vec3;
 
 /// Largest number of anchors a band may have.
 pub const MAX_ANCHORS: usize = 16;
@@ -45,6 +46,8 @@ pub const MAX_ANCHORS: usize = 16;
 pub enum DtwError {
     /// A sequence is empty, longer than `u16::MAX` frames, or not a whole number of frames.
     SequenceShape,
+    /// One sequence is channel-major, the other frame-major ([`Sequence::rooted`]).
+    Layouts,
     /// The two sequences have different joint counts.
     JointMismatch {
         /// Joints in `a`.
@@ -73,6 +76,9 @@ impl core::fmt::Display for DtwError {
             DtwError::SequenceShape => {
                 f.write_str("a sequence is empty, too long or not a whole number of frames")
             }
+            DtwError::Layouts => {
+                f.write_str("one sequence is channel-major and the other frame-major")
+            }
             DtwError::JointMismatch { a, b } => {
                 write!(f, "sequences have {a} and {b} joints; they must match")
             }
@@ -94,11 +100,19 @@ impl core::fmt::Display for DtwError {
 impl core::error::Error for DtwError {}
 
 /// A pose sequence: `3 · joints` channels (x of every joint, then y, then z) of `frames`
-/// floats each.
+/// floats each, or frames of joint positions measured from their root ([`Sequence::rooted`]).
 #[derive(Clone, Copy, Debug)]
 pub struct Sequence<'a> {
-    data: &'a [f32],
+    layout: Layout<'a>,
     joints: usize,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Layout<'a> {
+    /// Channel-major floats, as the caller measured them.
+    Channels(&'a [f32]),
+    /// Frame-major positions, each measured from its frame's first joint when costed.
+    Rooted(&'a [Vec3]),
 }
 
 impl<'a> Sequence<'a> {
@@ -108,21 +122,35 @@ impl<'a> Sequence<'a> {
     /// [`DtwError::SequenceShape`] for no joints or more than [`MAX_JOINTS`], no frames, a
     /// partial frame or more than `u16::MAX` frames.
     pub fn new(data: &'a [f32], joints: usize) -> Result<Self, DtwError> {
-        let dims = 3 * joints;
-        if joints == 0
-            || joints > MAX_JOINTS
-            || data.is_empty()
-            || !data.len().is_multiple_of(dims)
-            || data.len() / dims > u16::MAX as usize
-        {
-            return Err(DtwError::SequenceShape);
-        }
-        Ok(Sequence { data, joints })
+        check_shape(data.len(), 3 * joints, joints)?;
+        Ok(Sequence {
+            layout: Layout::Channels(data),
+            joints,
+        })
+    }
+
+    /// Wraps frame-major `frames` of `joints` positions (a swing as it is stored), each
+    /// measured from its frame's first joint (the root) as it is costed. The costs are those
+    /// of the channel-major sequence of the root-relative positions, to the bit, without the
+    /// copy; cells are costed one at a time (no vectors across columns), which suits a
+    /// microcontroller and is slower on the host.
+    ///
+    /// # Errors
+    /// As [`Sequence::new`].
+    pub fn rooted(frames: &'a [Vec3], joints: usize) -> Result<Self, DtwError> {
+        check_shape(frames.len(), joints, joints)?;
+        Ok(Sequence {
+            layout: Layout::Rooted(frames),
+            joints,
+        })
     }
 
     /// Number of frames.
     pub fn frames(&self) -> usize {
-        self.data.len() / (3 * self.joints)
+        match self.layout {
+            Layout::Channels(data) => data.len() / (3 * self.joints),
+            Layout::Rooted(frames) => frames.len() / self.joints,
+        }
     }
 
     /// Number of joints.
@@ -130,9 +158,13 @@ impl<'a> Sequence<'a> {
         self.joints
     }
 
-    /// Each joint's x, y and z channels.
+    /// Each joint's x, y and z channels (empty for a rooted sequence).
     fn joint_channels(&self) -> impl Iterator<Item = [&'a [f32]; 3]> {
-        let c = self.data.chunks_exact(self.frames());
+        let data = match self.layout {
+            Layout::Channels(data) => data,
+            Layout::Rooted(_) => &[],
+        };
+        let c = data.chunks_exact(self.frames().max(1));
         let (y, z) = (c.clone().skip(self.joints), c.clone().skip(2 * self.joints));
         c.zip(y).zip(z).map(|((x, y), z)| [x, y, z])
     }
@@ -140,8 +172,28 @@ impl<'a> Sequence<'a> {
     /// Value of channel `c` in frame `i`.
     #[cfg(test)]
     fn at(&self, c: usize, i: usize) -> f32 {
-        self.data[c * self.frames() + i]
+        match self.layout {
+            Layout::Channels(data) => data[c * self.frames() + i],
+            Layout::Rooted(frames) => {
+                let (axis, k) = (c / self.joints, c % self.joints);
+                let frame = &frames[i * self.joints..];
+                (frame[k] - frame[0])[axis]
+            }
+        }
     }
+}
+
+/// Checks a sequence of `len` values, `per_frame` to a frame, of `joints` joints.
+fn check_shape(len: usize, per_frame: usize, joints: usize) -> Result<(), DtwError> {
+    if joints == 0
+        || joints > MAX_JOINTS
+        || len == 0
+        || !len.is_multiple_of(per_frame)
+        || len / per_frame > u16::MAX as usize
+    {
+        return Err(DtwError::SequenceShape);
+    }
+    Ok(())
 }
 
 /// A Sakoe-Chiba band around a guide line through anchor cells.
@@ -362,6 +414,9 @@ pub fn align(
     path: &mut [(u16, u16)],
 ) -> Result<Alignment, DtwError> {
     let joints = a.joints();
+    if matches!(a.layout, Layout::Rooted(_)) != matches!(b.layout, Layout::Rooted(_)) {
+        return Err(DtwError::Layouts);
+    }
     if b.joints() != joints {
         return Err(DtwError::JointMismatch {
             a: joints,
@@ -553,6 +608,9 @@ impl CellCost<'_> {
         out: &mut [f32],
         weigh: impl Fn(f32, f32) -> f32,
     ) {
+        if let (Layout::Rooted(fa), Layout::Rooted(fb)) = (a.layout, b.layout) {
+            return self.sum_rooted(fa, i, fb, a.joints, first, out, weigh);
+        }
         for (q, out) in out.chunks_mut(BLOCK).enumerate() {
             let columns = first + q * BLOCK..first + q * BLOCK + out.len();
             let mut sums = [0.0; BLOCK];
@@ -570,6 +628,40 @@ impl CellCost<'_> {
             for (o, &sum) in out.iter_mut().zip(&*sums) {
                 *o = sum * self.scale;
             }
+        }
+    }
+}
+
+impl CellCost<'_> {
+    /// [`CellCost::sum`] of rooted sequences, cell by cell, with the same arithmetic in the
+    /// same order (each joint's root-relative position, the squared distance summed x, y, z,
+    /// joints added in order from zero, then scaled), so the costs equal the channel-major
+    /// ones to the bit.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn sum_rooted(
+        &self,
+        a: &[Vec3],
+        i: usize,
+        b: &[Vec3],
+        joints: usize,
+        first: usize,
+        out: &mut [f32],
+        weigh: impl Fn(f32, f32) -> f32,
+    ) {
+        let frame = &a[i * joints..(i + 1) * joints];
+        let mut here = [Vec3::zeros(); MAX_JOINTS];
+        for (h, p) in here.iter_mut().zip(frame) {
+            *h = p - frame[0];
+        }
+        let frames = b[first * joints..].chunks_exact(joints);
+        for (o, other) in out.iter_mut().zip(frames) {
+            let mut sum = 0.0;
+            for ((&w, h), p) in self.weights.iter().zip(&here).zip(other) {
+                let d = h - (p - other[0]);
+                sum += weigh(w, sqrt(d.x * d.x + d.y * d.y + d.z * d.z));
+            }
+            *o = sum * self.scale;
         }
     }
 }
@@ -721,7 +813,38 @@ mod tests {
         })
     }
 
+    /// Channel-major root-relative features of frame-major positions, as callers make them.
+    fn channels(frames: &[Vec3], joints: usize) -> Vec<f32> {
+        let n = frames.len() / joints;
+        let mut out = vec![0.0; 3 * frames.len()];
+        for (f, frame) in frames.chunks_exact(joints).enumerate() {
+            for (k, p) in frame.iter().enumerate() {
+                let d = p - frame[0];
+                for axis in 0..3 {
+                    out[(axis * joints + k) * n + f] = d[axis];
+                }
+            }
+        }
+        out
+    }
+
     proptest! {
+        #[test]
+        fn rooted_frames_align_as_their_root_relative_channels_to_the_bit(
+            (joints, a, b, w) in sequences(), radius in 0u16..8, weighted in any::<bool>(),
+        ) {
+            // The channel data read as frames of positions (any floats will do).
+            let frames = |c: &[f32]| -> Vec<Vec3> { c.chunks_exact(3).map(|v| Vec3::new(v[0], v[1], v[2])).collect() };
+            let (fa, fb) = (frames(&a), frames(&b));
+            let (ca, cb) = (channels(&fa, joints), channels(&fb, joints));
+            let weights: &[f32] = if weighted && w.iter().sum::<f32>() > 0.0 { &w } else { &[] };
+            let band = Band::global(radius);
+            let rooted = run(&Sequence::rooted(&fa, joints).unwrap(), &Sequence::rooted(&fb, joints).unwrap(), weights, &band);
+            let copied = run(&Sequence::new(&ca, joints).unwrap(), &Sequence::new(&cb, joints).unwrap(), weights, &band);
+            prop_assert_eq!(rooted.0.distance.to_bits(), copied.0.distance.to_bits());
+            prop_assert_eq!(rooted.1, copied.1);
+        }
+
         #[test]
         fn a_band_covering_the_matrix_is_classic_dtw((joints, a, b, w) in sequences(), weighted in any::<bool>()) {
             let (a, b) = (Sequence::new(&a, joints).unwrap(), Sequence::new(&b, joints).unwrap());
@@ -812,6 +935,24 @@ mod tests {
         let (s1, s2) = (Sequence::new(&a, 1).unwrap(), Sequence::new(&a, 2).unwrap());
         let band = Band::global(2);
         let mut path = [(0, 0); 8];
+        let positions = [Vec3::zeros(); 2];
+        let rooted = Sequence::rooted(&positions, 1).unwrap();
+        assert_eq!(
+            align(
+                &s1,
+                &rooted,
+                &[],
+                &band,
+                &mut [0.0; 8],
+                &mut [0; 8],
+                &mut path
+            ),
+            Err(DtwError::Layouts)
+        );
+        assert_eq!(
+            Sequence::rooted(&positions, 3).err(),
+            Some(DtwError::SequenceShape)
+        );
         assert_eq!(
             align(&s1, &s2, &[], &band, &mut [0.0; 8], &mut [0; 8], &mut path),
             Err(DtwError::JointMismatch { a: 1, b: 2 })

@@ -326,17 +326,17 @@ impl From<DtwError> for ScoreError {
 /// Scratch [`score`] needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ScratchLen {
-    /// Floats: both swings' features and the DTW rows.
+    /// Floats: the DTW's rows of accumulated cost.
     pub floats: usize,
     /// Bytes: the DTW path bits.
     pub bytes: usize,
 }
 
-/// Scratch [`score`] needs for swings of `student` and `coach` frames on a skeleton of `joints`
-/// joints, whatever band the events give.
-pub const fn scratch_len(joints: usize, student: usize, coach: usize) -> ScratchLen {
+/// Scratch [`score`] needs for swings of `student` and `coach` frames, whatever band the events
+/// give (the swings themselves are read where they lie).
+pub const fn scratch_len(student: usize, coach: usize) -> ScratchLen {
     ScratchLen {
-        floats: 3 * joints * (student + coach) + 3 * (coach + 2),
+        floats: 3 * (coach + 2),
         bytes: (student * coach).div_ceil(4),
     }
 }
@@ -450,19 +450,6 @@ fn closest_coach_pose<'c>(
 }
 
 /// Writes `swing` root-relative and channel-major into `out` (3 · joints · frames floats).
-fn features(joints: usize, swing: &[Vec3], out: &mut [f32]) {
-    let frames = swing.len() / joints;
-    for (f, frame) in swing.chunks_exact(joints).enumerate() {
-        let root = frame[0];
-        for (k, p) in frame.iter().enumerate() {
-            let d = p - root;
-            for axis in 0..3 {
-                out[(axis * joints + k) * frames + f] = d[axis];
-            }
-        }
-    }
-}
-
 /// Scores `student` (frames × skeleton joints at `student_hz`) against the coach's virtual
 /// swing `coach` (on the same skeleton, at `coach_hz`), with a DTW band of `radius` frames
 /// around the event-anchored guide (`anchored`) or the diagonal.
@@ -502,18 +489,14 @@ pub fn score(
             return Err(ScoreError::TooLong { frames });
         }
     }
-    let needed = scratch_len(joints, n, m);
+    let needed = scratch_len(n, m);
     if floats.len() < needed.floats || bytes.len() < needed.bytes {
         return Err(ScoreError::Scratch {
             needed: needed.floats,
         });
     }
 
-    // Alignment.
-    let (a, rest) = floats.split_at_mut(3 * joints * n);
-    let (b, rest) = rest.split_at_mut(3 * joints * m);
-    features(joints, student, a);
-    features(joints, coach, b);
+    // Alignment, on the swings where they lie (each joint measured from its frame's root).
     let mut anchors: HVec<(u16, u16), 8> = HVec::new();
     if anchored {
         for event in Event::ALL {
@@ -532,12 +515,12 @@ pub fn score(
     }
     let band = Band::anchored(radius, &anchors)?;
     let len = dtw::scratch_len(n, m, &band)?;
-    let cost = &mut rest[..len.cost];
+    let cost = &mut floats[..len.cost];
     let steps = &mut bytes[..len.path_bytes];
     let mut path_buf = [(0u16, 0u16); MAX_PATH];
     let alignment = dtw::align(
-        &Sequence::new(a, joints)?,
-        &Sequence::new(b, joints)?,
+        &Sequence::rooted(student, joints)?,
+        &Sequence::rooted(coach, joints)?,
         &[],
         &band,
         cost,

@@ -126,7 +126,7 @@ pub fn write_report(path: &Path, json: &Value, html: impl FnOnce() -> String) ->
 
 /// Scores `student` against `coach`, both on the student's skeleton.
 pub fn score_swings(student: &Motion, coach: &Motion, band: u16, anchored: bool) -> Result<Report> {
-    let len = score::scratch_len(student.skeleton.len(), student.frames(), coach.frames());
+    let len = score::scratch_len(student.frames(), coach.frames());
     let (mut floats, mut bytes) = (vec![0.0; len.floats], vec![0u8; len.bytes]);
     Ok(score::score(
         &student.skeleton,

@@ -19,8 +19,7 @@ fn driver() -> Motion {
 }
 
 fn run(student: &Motion, coach: &Motion) -> Report {
-    let j = coach.skeleton.len();
-    let len = scratch_len(j, student.frames(), coach.frames());
+    let len = scratch_len(student.frames(), coach.frames());
     let (mut floats, mut bytes) = (vec![0.0; len.floats], vec![0u8; len.bytes]);
     score(
         &coach.skeleton,
@@ -289,8 +288,7 @@ fn putts_are_scored_like_putts() {
     }
     assert!(report.score < 100.0);
     // A putt is not compared with a full swing.
-    let j = coach.skeleton.len();
-    let len = scratch_len(j, student.frames(), golfer.frames());
+    let len = scratch_len(student.frames(), golfer.frames());
     let (mut floats, mut bytes) = (vec![0.0; len.floats], vec![0u8; len.bytes]);
     let mismatch = score(
         &coach.skeleton,
