@@ -29,6 +29,7 @@ use posecoach_core::detector::{DetectorConfig, DetectorError, SwingDetector, Swi
 use posecoach_core::events::{self, EventError, STILL_S};
 use posecoach_core::format::Format;
 use posecoach_core::math::norm;
+use posecoach_core::reference::Reference;
 use posecoach_core::retarget::Analytic;
 use posecoach_core::score::{self, Report, ScoreError};
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
@@ -60,6 +61,17 @@ pub struct Coach<'c> {
     pub positions: &'c [Vec3],
     /// Frame rate, Hz.
     pub rate_hz: f32,
+}
+
+impl<'c> From<&'c Reference<'c>> for Coach<'c> {
+    /// A stored reference ([`posecoach_core::reference`]) as the session takes it.
+    fn from(reference: &'c Reference<'c>) -> Coach<'c> {
+        Coach {
+            skeleton: reference.skeleton(),
+            positions: reference.positions(),
+            rate_hz: reference.rate_hz(),
+        }
+    }
 }
 
 impl Coach<'_> {

@@ -34,14 +34,7 @@ pub fn all() -> Result<Vec<Reference<'static>>> {
 /// Only if a bundled file were damaged.
 pub fn session<R>(device: impl FnOnce(&mut Session<'_>) -> R) -> Result<R> {
     let coaches = all()?;
-    let refs: Vec<Coach<'_>> = coaches
-        .iter()
-        .map(|r| Coach {
-            skeleton: r.skeleton(),
-            positions: r.positions(),
-            rate_hz: r.rate_hz(),
-        })
-        .collect();
+    let refs: Vec<Coach<'_>> = coaches.iter().map(Coach::from).collect();
     let longest = refs
         .iter()
         .map(|c| c.frames_at(RATES_HZ.1))

@@ -122,7 +122,7 @@ fn main() -> ! {
     let [Some(driver), Some(iron)] = references else {
         defmt::panic!("a coach reference is missing");
     };
-    let coaches = [coach(&driver), coach(&iron)];
+    let coaches = [Coach::from(&driver), Coach::from(&iron)];
     let buffers = Buffers {
         ring: RING.take(),
         coach: VIRTUAL_COACH.take(),
@@ -179,12 +179,4 @@ fn handle(session: &mut Session<'_>, uart: &mut Uarte<pac::UARTE0>, message: &Me
             Err(e) => defmt::warn!("reply not encoded: {}", e),
         }
     });
-}
-
-fn coach<'a>(reference: &'a Reference<'a>) -> Coach<'a> {
-    Coach {
-        skeleton: reference.skeleton(),
-        positions: reference.positions(),
-        rate_hz: reference.rate_hz(),
-    }
 }

@@ -109,7 +109,7 @@ fn run() -> Result<(), &'static str> {
     let [Some(driver), Some(iron)] = references else {
         return Err("a coach reference is missing");
     };
-    let coaches = [coach(&driver), coach(&iron)];
+    let coaches = [Coach::from(&driver), Coach::from(&iron)];
     let buffers = Buffers {
         ring: RING.take(),
         coach: VIRTUAL_COACH.take(),
@@ -181,14 +181,6 @@ fn run() -> Result<(), &'static str> {
         return Err("a reply differs from the host's");
     }
     Ok(())
-}
-
-fn coach<'a>(reference: &'a Reference<'a>) -> Coach<'a> {
-    Coach {
-        skeleton: reference.skeleton(),
-        positions: reference.positions(),
-        rate_hz: reference.rate_hz(),
-    }
 }
 
 fn print(stages: &Stages) {
