@@ -107,8 +107,9 @@ pub fn dot(a: &[i8], b: &[i8]) -> i32 {
     tail + dot4s(a4, b4)
 }
 
-/// [`dot`] of two rows with one `x`: `(Σ r0[k] x[k], Σ r1[k] x[k])` over the shortest. On
-/// the DSP path each four bytes of `x` are widened once for both rows.
+/// [`dot`] of two rows with one `x`: `(Σ r0[k] x[k], Σ r1[k] x[k])` over the shortest. With
+/// the `dsp` feature each four bytes of `x` are widened once for both rows (integer sums, so
+/// the result is the plain code's exactly).
 #[inline]
 pub fn dot2(r0: &[i8], r1: &[i8], x: &[i8]) -> (i32, i32) {
     let n = r0.len().min(r1.len()).min(x.len());
@@ -144,8 +145,8 @@ fn dot4s2(a: &[[i8; 4]], b: &[[i8; 4]], x: &[[i8; 4]]) -> (i32, i32) {
     (s0, s1)
 }
 
-/// `Σ` over four-byte groups, four lanes at a time.
-#[cfg(not(all(feature = "dsp", target_arch = "arm")))]
+/// `Σ` over four-byte groups, four lanes at a time (plain code on every target: a single
+/// row is the rare odd row of a layer; the DSP path is [`dot2`]'s).
 #[inline(always)]
 fn dot4s(a: &[[i8; 4]], b: &[[i8; 4]]) -> i32 {
     let mut s = [0i32; 4];
@@ -157,55 +158,17 @@ fn dot4s(a: &[[i8; 4]], b: &[[i8; 4]]) -> i32 {
     s.iter().sum()
 }
 
-/// `Σ` over four-byte groups with the DSP extension: each group one 32-bit load per side,
-/// two `SXTB16` per side (bytes 0, 2 and 1, 3 as 16-bit lanes) and two `SMLAD` (two
-/// 16-bit products added per instruction), as CMSIS-NN's kernels do. Integer arithmetic
-/// throughout, so the sum is the portable version's exactly.
-#[cfg(all(feature = "dsp", target_arch = "arm"))]
-#[inline(always)]
-fn dot4s(a: &[[i8; 4]], b: &[[i8; 4]]) -> i32 {
-    let word = |x: &[i8; 4]| u32::from_le_bytes(x.map(|v| v as u8));
-    let mut acc = 0i32;
-    for (x, y) in a.iter().zip(b) {
-        acc = dsp::dot4(acc, word(x), word(y));
-    }
-    acc
-}
-
 #[cfg(all(feature = "dsp", target_arch = "arm"))]
 #[allow(unsafe_code)]
 mod dsp {
-    /// `acc` plus the four products of the int8 lanes of `a` and `b`.
+    /// `s0` and `s1` plus the four products of the int8 lanes of `x` with those of `w0` and
+    /// of `w1`: `x` widened once (two `SXTB16`: bytes 0, 2 and 1, 3 as 16-bit lanes), each
+    /// weight word widened and added two products per `SMLAD`, as CMSIS-NN's kernels do.
     #[inline(always)]
-    pub(super) fn dot4(mut acc: i32, a: u32, b: u32) -> i32 {
+    pub(super) fn dot4x2(mut s0: i32, mut s1: i32, x: u32, w0: u32, w1: u32) -> (i32, i32) {
         // SAFETY: register-only instructions (SXTB16, SMLAD) of the ARMv7E-M DSP extension,
         // which the `dsp` feature declares the target has: no memory, no stack; SMLAD may set
         // the Q flag on overflow, which nothing reads (`preserves_flags` is not claimed).
-        unsafe {
-            core::arch::asm!(
-                "sxtb16 {ae}, {a}",
-                "sxtb16 {ao}, {a}, ror #8",
-                "sxtb16 {be}, {b}",
-                "sxtb16 {bo}, {b}, ror #8",
-                "smlad {acc}, {ae}, {be}, {acc}",
-                "smlad {acc}, {ao}, {bo}, {acc}",
-                a = in(reg) a,
-                b = in(reg) b,
-                acc = inout(reg) acc,
-                ae = out(reg) _,
-                ao = out(reg) _,
-                be = out(reg) _,
-                bo = out(reg) _,
-                options(pure, nomem, nostack)
-            );
-        }
-        acc
-    }
-
-    /// [`dot4`] of two weight words `w0`, `w1` with one input word `x`, widened once.
-    #[inline(always)]
-    pub(super) fn dot4x2(mut s0: i32, mut s1: i32, x: u32, w0: u32, w1: u32) -> (i32, i32) {
-        // SAFETY: as in `dot4`: register-only DSP instructions, no memory, no stack.
         unsafe {
             core::arch::asm!(
                 "sxtb16 {xe}, {x}",
