@@ -115,19 +115,37 @@ pub fn write(
     payload: &[u8],
     out: &mut [u8],
 ) -> Result<usize, BlobError> {
+    write_with(magic, header, payload.len(), out, |room| {
+        room.copy_from_slice(payload);
+        Ok(())
+    })
+}
+
+/// Writes a blob of `header` and a payload of `payload_len` bytes that `fill` writes in
+/// place (given exactly that many zeroed bytes) into `out`; returns its length.
+///
+/// # Errors
+/// [`BlobError::TooSmall`] if `out` cannot hold it; `fill`'s error.
+pub fn write_with<E: From<BlobError>>(
+    magic: [u8; 4],
+    header: &impl Serialize,
+    payload_len: usize,
+    out: &mut [u8],
+    fill: impl FnOnce(&mut [u8]) -> Result<(), E>,
+) -> Result<usize, E> {
     let room = out.get_mut(PREFIX..).ok_or(BlobError::TooSmall)?;
     let header_len = postcard::to_slice(header, room)
         .map_err(|_| BlobError::TooSmall)?
         .len();
     let payload_at = payload_offset(header_len).ok_or(BlobError::TooSmall)?;
-    let end = payload_at + payload.len();
+    let end = payload_at + payload_len;
     if out.len() < end + CRC_LEN {
-        return Err(BlobError::TooSmall);
+        return Err(BlobError::TooSmall.into());
     }
     out[..4].copy_from_slice(&magic);
     out[4..PREFIX].copy_from_slice(&(header_len as u32).to_le_bytes());
-    out[PREFIX + header_len..payload_at].fill(0);
-    out[payload_at..end].copy_from_slice(payload);
+    out[PREFIX + header_len..end].fill(0);
+    fill(&mut out[payload_at..end])?;
     let crc = CRC.checksum(&out[..end]);
     out[end..end + CRC_LEN].copy_from_slice(&crc.to_le_bytes());
     Ok(end + CRC_LEN)

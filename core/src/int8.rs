@@ -8,11 +8,15 @@
 
 /// A positive real factor as `multiplier · 2^(shift − 31)`, `multiplier` in `[2^30, 2^31)`:
 /// the exact integer form of a rescaling, the same on every machine.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+///
+/// Its bytes are two little-endian `i32`s (multiplier, shift), so a weights blob stores
+/// requantizations as they are used; [`Requant::is_valid`] checks stored ones.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(C)]
 pub struct Requant {
     multiplier: i32,
-    shift: i8,
+    shift: i32,
 }
 
 /// Largest magnitude of a quantized value (−128 is never produced, so negation is exact).
@@ -37,8 +41,14 @@ impl Requant {
         }
         SHIFTS.contains(&shift).then_some(Requant {
             multiplier: multiplier as i32,
-            shift: shift as i8,
+            shift,
         })
+    }
+
+    /// Whether it is one [`Requant::new`] makes: multiplier in `[2^30, 2^31)`, shift within
+    /// `±30`. Only such values are safe to [`Requant::scale`] with.
+    pub fn is_valid(self) -> bool {
+        self.multiplier >= 1 << 30 && SHIFTS.contains(&self.shift)
     }
 
     /// The factor it stands for.
@@ -52,7 +62,7 @@ impl Requant {
     /// with rounding (ties up). Within one unit of the exact product.
     #[inline]
     pub fn scale(self, acc: i32) -> i32 {
-        let shift = i32::from(self.shift);
+        let shift = self.shift;
         let x = if shift > 0 {
             (i64::from(acc) << shift).clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
         } else {
@@ -270,26 +280,54 @@ impl Layer<'_> {
 /// `requant` have one entry per output.
 #[inline]
 pub fn linear(input: &[i8], layer: &Layer<'_>, out: &mut [i8]) -> Result<(), ShapeError> {
-    let Layer {
-        weights,
-        bias,
-        requant,
-        activation,
-    } = *layer;
-    let n = input.len();
-    if weights.len() != out.len() * n || bias.len() != out.len() || requant.len() != out.len() {
+    if layer.requant.len() != out.len() {
         return Err(ShapeError::Mismatch);
     }
-    let rows = weights.chunks_exact(n.max(1));
-    let mut outputs = out.iter_mut().zip(rows).zip(bias.iter().zip(requant));
-    while let Some(((o0, r0), (&b0, &q0))) = outputs.next() {
-        match outputs.next() {
-            Some(((o1, r1), (&b1, &q1))) => {
+    let (requant, activation) = (layer.requant, layer.activation);
+    sums(input, layer.weights, layer.bias, out.len(), |c, acc| {
+        out[c] = activation.apply(requant[c], acc);
+    })
+}
+
+/// The accumulators of a fully connected layer, not requantized: `out[c] = Σ_k
+/// weights[c·n + k] · input[k] + bias[c]`, for a layer whose outputs go on in `f32`.
+///
+/// # Errors
+/// [`ShapeError::Mismatch`] unless `weights` is `out.len() × input.len()` and `bias` has one
+/// entry per output.
+#[inline]
+pub fn accumulate(
+    input: &[i8],
+    weights: &[i8],
+    bias: &[i32],
+    out: &mut [i32],
+) -> Result<(), ShapeError> {
+    sums(input, weights, bias, out.len(), |c, acc| out[c] = acc)
+}
+
+/// Calls `f(c, Σ_k weights[c·n + k] · input[k] + bias[c])` for each of `outputs` rows, two
+/// rows at a time through [`dot2`].
+#[inline]
+fn sums(
+    input: &[i8],
+    weights: &[i8],
+    bias: &[i32],
+    outputs: usize,
+    mut f: impl FnMut(usize, i32),
+) -> Result<(), ShapeError> {
+    let n = input.len();
+    if weights.len() != outputs * n || bias.len() != outputs {
+        return Err(ShapeError::Mismatch);
+    }
+    let mut rows = weights.chunks_exact(n.max(1)).zip(bias).enumerate();
+    while let Some((c, (r0, &b0))) = rows.next() {
+        match rows.next() {
+            Some((_, (r1, &b1))) => {
                 let (s0, s1) = dot2(r0, r1, input);
-                *o0 = activation.apply(q0, s0 + b0);
-                *o1 = activation.apply(q1, s1 + b1);
+                f(c, s0 + b0);
+                f(c + 1, s1 + b1);
             }
-            None => *o0 = activation.apply(q0, dot(r0, input) + b0),
+            None => f(c, dot(r0, input) + b0),
         }
     }
     Ok(())

@@ -28,6 +28,8 @@
 //! - [`int8`]: int8 arithmetic of the quantized retargeter (requantization, dot products, layers).
 //! - [`blob`]: the container of stored assets (header, aligned payload, CRC-32).
 //! - [`reference`](mod@reference): coach reference swings stored as blobs, read in place.
+//! - [`weights`]: the quantized retargeter's weights stored as a blob, checked once.
+//! - [`network`]: the quantized retargeter itself, on those weights.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 // `deny`, not `forbid`: register-only `asm!` for the FPU's square root (`math`) and, with the
 // `dsp` feature, the int8 dot product's DSP instructions (`int8`) are the exceptions.
@@ -44,11 +46,13 @@ pub mod int8;
 pub mod joint;
 pub mod kinematics;
 pub mod math;
+pub mod network;
 pub mod normalize;
 pub mod reference;
 pub mod retarget;
 pub mod score;
 pub mod skeleton;
+pub mod weights;
 pub mod wire;
 
 /// A position or offset in metres (+Y up).

@@ -407,6 +407,20 @@ impl Skeleton {
         i < self.len() && self.segment_mask(segment) & (1 << i) != 0
     }
 
+    /// The segment whose feature decodes the bone into joint `k` (the retargeter's decoder):
+    /// the first that holds both the joint and its parent (a limb's first bone starts at the
+    /// branching joint the limb holds), else the first that holds the joint, else the spine.
+    pub fn bone_segment(&self, k: usize) -> Segment {
+        let parent = self.parent(k).unwrap_or(0);
+        let holds = |s: &&Segment, i: usize| self.segment_contains(**s, i);
+        Segment::ALL
+            .iter()
+            .find(|s| holds(s, k) && holds(s, parent))
+            .or_else(|| Segment::ALL.iter().find(|s| holds(s, k)))
+            .copied()
+            .unwrap_or(Segment::Spine)
+    }
+
     /// The joints of `segment` as a bitset (bit `i` = joint `i`).
     pub fn segment_mask(&self, segment: Segment) -> u64 {
         self.segments[segment as usize]

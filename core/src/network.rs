@@ -1,0 +1,744 @@
+//! The quantized retargeter: the distilled network of ARCHITECTURE.md ("The retargeter") on
+//! int8 [`weights`](crate::weights), on caller-owned scratch, without allocation.
+//!
+//! ```text
+//! student T-pose ─SE (f32, int8 weights)─▶ [S][d] ───────────────────────┐
+//! coach window ─p⊕v─▶ joint MLP ─▶ attention (f32 softmax) ─▶ [S][T][d] ─▶ down_1 ─▶ down_2 (+ pooled)
+//!      │                                                                              │ (+)
+//!      │                           [S][T][d] ◀─ up_2 ◀─ ×2 ◀─ up_1 ◀─ ×2 ◀─ [S][T/4][d] ◀┘
+//!      │                               └─▶ per joint: Δq; all segments: Δroot
+//!      └─analytic prior─▶ q₀, root₀ ──(q₀·Δq, root₀ + Δroot)── FK on the student's skeleton
+//! ```
+//!
+//! Activations are int8, segment-major (`[segment][frame][feature]`), so each convolution
+//! within segments reads one contiguous run per output frame ([`int8::conv1d`]). The segment
+//! tokens' queries, keys and values are constants of the weights; the joints' keys and values,
+//! the softmax, the residual sums, the analytic prior and forward kinematics are `f32` (the
+//! Cortex-M4F has an FPU). Every `f32` operation is IEEE single precision in a fixed order
+//! (square roots correctly rounded, `libm`'s exponential), so the host and the device compute
+//! the same bits.
+//!
+//! A motion longer than a window is cut into consecutive [`WINDOW`]-frame windows, the last
+//! ending at the last frame (its frames replace its overlapping neighbour's); a shorter one
+//! holds its last frame. Each window's root trajectory starts from its first frame, as in
+//! training.
+
+use crate::config::MAX_JOINTS;
+use crate::int8::{self, Activation, Layer, ShapeError};
+use crate::math;
+use crate::retarget::{Analytic, RetargetError};
+use crate::skeleton::{Segment, Skeleton};
+use crate::weights::{
+    Architecture, Dense, Table, Tensors, Weights, MAX_FEATURES, MOTION_CHANNELS, QUATERNION,
+    REST_CHANNELS, SEGMENTS, WINDOW,
+};
+use crate::{Quat, Vec3};
+use nalgebra::Quaternion;
+
+/// Added to a quaternion's squared norm before its square root, as in training.
+const NORM_EPSILON: f32 = 1e-12;
+
+/// Why a motion could not be retargeted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum NetworkError {
+    /// The scratch is shorter than [`scratch_len`] or not 4-byte aligned.
+    Scratch,
+    /// The frames are not whole frames of the source, there are none, or the output is not
+    /// as many frames of the target.
+    Length,
+    /// The analytic prior could not be set up or a position is not finite.
+    Retarget(RetargetError),
+}
+
+impl core::fmt::Display for NetworkError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            NetworkError::Scratch => f.write_str("retargeter scratch too small or misaligned"),
+            NetworkError::Length => f.write_str(
+                "frames are not whole frames of the source, or the output does not match them",
+            ),
+            NetworkError::Retarget(e) => e.fmt(f),
+        }
+    }
+}
+
+impl core::error::Error for NetworkError {}
+
+impl From<RetargetError> for NetworkError {
+    fn from(e: RetargetError) -> Self {
+        NetworkError::Retarget(e)
+    }
+}
+
+impl From<ShapeError> for NetworkError {
+    // Shapes are checked once by `Weights::from_bytes`; a mismatch is a scratch carved wrong.
+    fn from(_: ShapeError) -> Self {
+        NetworkError::Scratch
+    }
+}
+
+/// Bytes of scratch [`retarget`] needs for `a`'s network between skeletons of `source` and
+/// `target` joints.
+pub const fn scratch_len(a: &Architecture, source: usize, target: usize) -> usize {
+    let d = a.features as usize;
+    let words = SEGMENTS * d + (source + target) * d;
+    let bytes = source * d + SEGMENTS * d * (2 * WINDOW + WINDOW / 2 + WINDOW / 4);
+    (4 * words + bytes).next_multiple_of(4)
+}
+
+/// Scratch for any supported network and skeletons: [`MAX_FEATURES`] and [`MAX_JOINTS`].
+pub const MAX_SCRATCH: usize = scratch_len(
+    &Architecture {
+        features: MAX_FEATURES as u16,
+        heads: 1,
+        kernel: 1,
+        window: WINDOW as u16,
+        segments: SEGMENTS as u16,
+        rate_hz: 1.0,
+    },
+    MAX_JOINTS,
+    MAX_JOINTS,
+);
+
+/// The scratch, carved.
+struct Buffers<'s> {
+    /// `[S][d]` the student's skeleton feature.
+    skeleton: &'s mut [f32],
+    /// `[source joint][d]` the motion encoder's first bias, rest features folded in.
+    motion_bias: &'s mut [i32],
+    /// `[target joint][d]` the joint decoder's first bias, rest features folded in.
+    decoder_bias: &'s mut [i32],
+    /// `[source joint][d]` one frame's joint embeddings.
+    joints: &'s mut [i8],
+    /// `[S][T][d]`: the segment tokens after attention, then the last convolution's input.
+    a: &'s mut [i8],
+    /// `[S][T][d]`: the first decoder convolution's output (its first half), then the last's.
+    b: &'s mut [i8],
+    /// `[S][T/2][d]`: the first downsampling's output, then the first decoder input.
+    c: &'s mut [i8],
+    /// `[S][T/4][d]`: the encoder's output, fused.
+    f: &'s mut [i8],
+}
+
+impl<'s> Buffers<'s> {
+    fn carve(scratch: &'s mut [u8], d: usize, source: usize, target: usize) -> Option<Self> {
+        fn words<'s, T: bytemuck::Pod>(rest: &mut &'s mut [u8], n: usize) -> Option<&'s mut [T]> {
+            let (head, tail) = core::mem::take(rest).split_at_mut_checked(4 * n)?;
+            *rest = tail;
+            bytemuck::try_cast_slice_mut(head).ok()
+        }
+        fn bytes<'s>(rest: &mut &'s mut [u8], n: usize) -> Option<&'s mut [i8]> {
+            let (head, tail) = core::mem::take(rest).split_at_mut_checked(n)?;
+            *rest = tail;
+            Some(bytemuck::cast_slice_mut(head))
+        }
+        let mut rest = scratch;
+        Some(Buffers {
+            skeleton: words(&mut rest, SEGMENTS * d)?,
+            motion_bias: words(&mut rest, source * d)?,
+            decoder_bias: words(&mut rest, target * d)?,
+            joints: bytes(&mut rest, source * d)?,
+            a: bytes(&mut rest, SEGMENTS * WINDOW * d)?,
+            b: bytes(&mut rest, SEGMENTS * WINDOW * d)?,
+            c: bytes(&mut rest, SEGMENTS * WINDOW / 2 * d)?,
+            f: bytes(&mut rest, SEGMENTS * WINDOW / 4 * d)?,
+        })
+    }
+}
+
+/// Retargets `frames` (frame-major positions of `source`'s joints, metres, at the network's
+/// rate) onto `target`, writing as many frames of `target`'s joints into `out`.
+///
+/// # Errors
+/// [`NetworkError::Scratch`] if `scratch` is shorter than [`scratch_len`] or not 4-byte
+/// aligned; [`NetworkError::Length`]; [`NetworkError::Retarget`] for a source without legs or
+/// a position that is not finite.
+pub fn retarget(
+    weights: &Weights<'_>,
+    source: &Skeleton,
+    target: &Skeleton,
+    frames: &[Vec3],
+    scratch: &mut [u8],
+    out: &mut [Vec3],
+) -> Result<(), NetworkError> {
+    let (m, n) = (source.len(), target.len());
+    let count = frames.len() / m.max(1);
+    if m == 0 || n == 0 || count == 0 || count * m != frames.len() || out.len() != count * n {
+        return Err(NetworkError::Length);
+    }
+    if let Some(joint) = frames.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+        return Err(RetargetError::NonFinite { joint: joint % m }.into());
+    }
+    let d = weights.architecture().d();
+    let mut buffers = Buffers::carve(scratch, d, m, n).ok_or(NetworkError::Scratch)?;
+    let prior = Analytic::new(source, target)?;
+    let net = Net {
+        weights,
+        source,
+        target,
+        prior,
+        d,
+    };
+    net.skeleton(&mut buffers);
+    net.rest_biases(&mut buffers);
+    let mut start = 0;
+    loop {
+        let last = count.saturating_sub(WINDOW);
+        let window = start.min(last);
+        net.window(frames, count, window, &mut buffers, out)?;
+        if window == last {
+            return Ok(());
+        }
+        start += WINDOW;
+    }
+}
+
+/// One retargeting's fixed parts.
+struct Net<'n, 'w> {
+    weights: &'n Weights<'w>,
+    source: &'n Skeleton,
+    target: &'n Skeleton,
+    prior: Analytic<'n>,
+    d: usize,
+}
+
+/// A skeleton's rest features of joint `k`: offset from the parent and position from the
+/// root, in heights (the root's: zero).
+fn rest_features(skeleton: &Skeleton, rest: &[Vec3], k: usize) -> [f32; REST_CHANNELS] {
+    if k == 0 {
+        return [0.0; REST_CHANNELS];
+    }
+    let h = skeleton.height();
+    let (o, r) = (skeleton.offset(k) / h, (rest[k] - rest[0]) / h);
+    [o.x, o.y, o.z, r.x, r.y, r.z]
+}
+
+/// `out[o] = (Σ_i w[o][i] · x[i] + bias[o]) · scale[o]`: a layer with int8 weights on `f32`
+/// inputs.
+fn dense_f32(t: &Tensors<'_>, x: &[f32], out: &mut [f32]) {
+    let rows = t.weights.chunks_exact(x.len().max(1));
+    for (((y, row), &b), &s) in out.iter_mut().zip(rows).zip(t.bias).zip(t.scale) {
+        let acc = row
+            .iter()
+            .zip(x)
+            .fold(0.0, |acc, (&w, &v)| acc + f32::from(w) * v);
+        *y = (acc + b as f32) * s;
+    }
+}
+
+fn leaky(v: f32) -> f32 {
+    if v < 0.0 {
+        int8::LEAKY_SLOPE * v
+    } else {
+        v
+    }
+}
+
+/// The `f32` accumulator units of a real value, as an `i32` (saturating).
+fn units(real: f32, scale: f32) -> i32 {
+    libm::roundf(real / scale) as i32
+}
+
+impl Net<'_, '_> {
+    fn layer(&self, layer: Dense) -> &Tensors<'_> {
+        self.weights.layer(layer)
+    }
+
+    /// The skeleton encoder on the target: per joint a two-layer MLP over its rest features,
+    /// averaged over each segment's joints, then a linear layer.
+    fn skeleton(&self, buffers: &mut Buffers<'_>) {
+        let d = self.d;
+        let mut rest = [Vec3::zeros(); MAX_JOINTS];
+        self.target.rest_positions(&mut rest);
+        let mut sums = [[0.0f32; MAX_FEATURES]; SEGMENTS];
+        let mut counts = [0u8; SEGMENTS];
+        for k in 0..self.target.len() {
+            let x = rest_features(self.target, &rest, k);
+            let (mut hidden, mut joint) = ([0.0; MAX_FEATURES], [0.0; MAX_FEATURES]);
+            dense_f32(self.layer(Dense::SkeletonHidden), &x, &mut hidden[..d]);
+            hidden.iter_mut().for_each(|v| *v = leaky(*v));
+            dense_f32(
+                self.layer(Dense::SkeletonOutput),
+                &hidden[..d],
+                &mut joint[..d],
+            );
+            for (s, segment) in Segment::ALL.iter().enumerate() {
+                if self.target.segment_contains(*segment, k) {
+                    counts[s] += 1;
+                    for (sum, v) in sums[s].iter_mut().zip(&joint[..d]) {
+                        *sum += leaky(*v);
+                    }
+                }
+            }
+        }
+        let out = buffers.skeleton.chunks_exact_mut(d);
+        for ((sum, &count), out) in sums.iter_mut().zip(&counts).zip(out) {
+            if count > 0 {
+                sum.iter_mut().for_each(|v| *v /= f32::from(count));
+            }
+            dense_f32(self.layer(Dense::SkeletonSegment), &sum[..d], out);
+        }
+    }
+
+    /// The first layers' biases per joint: the stored bias plus the constant rest-feature
+    /// columns' contribution, in the layer's accumulator units.
+    fn rest_biases(&self, buffers: &mut Buffers<'_>) {
+        let sides = [
+            (self.source, Dense::MotionFeatures, Dense::MotionRest),
+            (self.target, Dense::DecoderFeatures, Dense::DecoderRest),
+        ];
+        let outs = [&mut *buffers.motion_bias, &mut *buffers.decoder_bias];
+        for ((skeleton, layer, columns), out) in sides.into_iter().zip(outs) {
+            let mut rest = [Vec3::zeros(); MAX_JOINTS];
+            skeleton.rest_positions(&mut rest);
+            let (layer, columns) = (self.layer(layer), self.layer(columns));
+            for (k, bias) in out.chunks_exact_mut(self.d).enumerate() {
+                let mut real = [0.0; MAX_FEATURES];
+                let x = rest_features(skeleton, &rest, k);
+                dense_f32(columns, &x, &mut real[..self.d]);
+                let stored = layer.bias.iter().zip(layer.scale);
+                for ((b, (&stored, &scale)), real) in bias.iter_mut().zip(stored).zip(real) {
+                    *b = stored.saturating_add(units(real, scale));
+                }
+            }
+        }
+    }
+
+    /// Retargets the window of frames `start..start + WINDOW` (held past `count`) into `out`.
+    fn window(
+        &self,
+        frames: &[Vec3],
+        count: usize,
+        start: usize,
+        buffers: &mut Buffers<'_>,
+        out: &mut [Vec3],
+    ) -> Result<(), NetworkError> {
+        let m = self.source.len();
+        let frame = |t: usize| {
+            let f = (start + t).min(count - 1);
+            &frames[f * m..(f + 1) * m]
+        };
+        let root = frame(0)[0];
+        let origin = Vec3::new(root.x, 0.0, root.z);
+        for t in 0..WINDOW {
+            self.encode_frame(frame, origin, t, buffers)?;
+        }
+        self.convolve(buffers)?;
+        for t in 0..WINDOW.min(count - start) {
+            let pose = &mut out[(start + t) * self.target.len()..][..self.target.len()];
+            self.decode_frame(frame(t), t, buffers, pose)?;
+        }
+        Ok(())
+    }
+
+    /// The motion encoder up to the convolutions, frame `t`: joint embeddings, then attention
+    /// of each segment token over itself, the root and its segment's joints, into
+    /// `buffers.a`.
+    fn encode_frame<'f>(
+        &self,
+        frame: impl Fn(usize) -> &'f [Vec3],
+        origin: Vec3,
+        t: usize,
+        buffers: &mut Buffers<'_>,
+    ) -> Result<(), NetworkError> {
+        let d = self.d;
+        let h = self.source.height();
+        let scales = self.weights.scales();
+        let relative = |t: usize, k: usize| {
+            let p = frame(t);
+            let at = |k: usize| (p[k] - origin) / h;
+            match self.source.parent(k) {
+                Some(parent) if k > 0 => at(k) - at(parent),
+                _ => at(k),
+            }
+        };
+        let (before, after) = (t.max(1) - 1, t.max(1));
+        let features = self.layer(Dense::MotionFeatures);
+        let output = self.layer(Dense::MotionOutput);
+        let embed = Layer {
+            weights: output.weights,
+            bias: output.bias_row(t),
+            requant: output.requant,
+            activation: Activation::Identity,
+        };
+        let rows = buffers.joints.chunks_exact_mut(d);
+        for ((k, joint), bias) in rows.enumerate().zip(buffers.motion_bias.chunks_exact(d)) {
+            let (p, v) = (relative(t, k), relative(after, k) - relative(before, k));
+            let mut x = [0i8; MOTION_CHANNELS];
+            for ((x, real), &scale) in x
+                .iter_mut()
+                .zip(p.iter().chain(v.iter()))
+                .zip(&scales.motion)
+            {
+                *x = int8::quantize(*real, scale);
+            }
+            let mut hidden = [0i8; MAX_FEATURES];
+            let first = Layer {
+                weights: features.weights,
+                bias,
+                requant: features.requant,
+                activation: Activation::Leaky,
+            };
+            int8::linear(&x, &first, &mut hidden[..d])?;
+            int8::linear(&hidden[..d], &embed, joint)?;
+        }
+        let (key, value) = (self.layer(Dense::Key), self.layer(Dense::Value));
+        let mut root = ([0.0; MAX_FEATURES], [0.0; MAX_FEATURES]);
+        project(key, &buffers.joints[..d], &mut root.0[..d])?;
+        project(value, &buffers.joints[..d], &mut root.1[..d])?;
+        let heads = usize::from(self.weights.architecture().heads);
+        let output = self.layer(Dense::Output);
+        for (s, segment) in Segment::ALL.iter().enumerate() {
+            let token = |table: Table| &self.weights.table(table)[s * d..(s + 1) * d];
+            let mut attention = Attention::new(token(Table::Queries), heads);
+            attention.add(token(Table::Keys), token(Table::Values));
+            attention.add(&root.0[..d], &root.1[..d]);
+            for k in (1..self.source.len()).filter(|&k| self.source.segment_contains(*segment, k)) {
+                let joint = &buffers.joints[k * d..(k + 1) * d];
+                let (mut kk, mut vv) = ([0.0; MAX_FEATURES], [0.0; MAX_FEATURES]);
+                project(key, joint, &mut kk[..d])?;
+                project(value, joint, &mut vv[..d])?;
+                attention.add(&kk[..d], &vv[..d]);
+            }
+            let mut context = [0i8; MAX_FEATURES];
+            for (q, v) in context.iter_mut().zip(attention.context()) {
+                *q = int8::quantize(v, scales.context);
+            }
+            let layer = Layer {
+                weights: output.weights,
+                bias: output.bias_row(s),
+                requant: output.requant,
+                activation: Activation::Identity,
+            };
+            let at = (s * WINDOW + t) * d;
+            int8::linear(&context[..d], &layer, &mut buffers.a[at..at + d])?;
+        }
+        Ok(())
+    }
+
+    /// The convolutions: two downsampling ones with the average-pooled residual, fusion with
+    /// the skeleton feature, and the decoder's two upsampling stages, leaving `[S][T][d]` in
+    /// `buffers.b`.
+    fn convolve(&self, buffers: &mut Buffers<'_>) -> Result<(), NetworkError> {
+        let d = self.d;
+        let channels = SEGMENTS * d;
+        let kernel = usize::from(self.weights.architecture().kernel);
+        let conv = |layer: Dense, activation, stride, input: &[i8], out: &mut [i8]| {
+            let t = self.layer(layer);
+            let layer = Layer {
+                weights: t.weights,
+                bias: t.bias,
+                requant: t.requant,
+                activation,
+            };
+            int8::conv1d(input, channels, SEGMENTS, kernel, stride, &layer, out)
+        };
+        conv(Dense::Down1, Activation::Leaky, 2, buffers.a, buffers.c)?;
+        conv(Dense::Down2, Activation::Identity, 2, buffers.c, buffers.f)?;
+        let scales = self.weights.scales();
+        let quarter = WINDOW / 4;
+        for s in 0..SEGMENTS {
+            for t in 0..quarter {
+                for c in 0..d {
+                    let pooled: i32 = (0..4)
+                        .map(|i| i32::from(buffers.a[(s * WINDOW + 4 * t + i) * d + c]))
+                        .sum();
+                    let at = (s * quarter + t) * d + c;
+                    let y = f32::from(buffers.f[at]) * scales.down_2
+                        + pooled as f32 * scales.segments / 4.0;
+                    let fused = leaky(y) + buffers.skeleton[s * d + c];
+                    buffers.f[at] = int8::quantize(fused, scales.fused);
+                }
+            }
+        }
+        let upsample = |input: &[i8], out: &mut [i8], frames: usize| {
+            let mut pairs = input
+                .chunks_exact(frames * d)
+                .zip(out.chunks_exact_mut(2 * frames * d));
+            pairs.try_for_each(|(x, y)| int8::upsample2(x, d, y))
+        };
+        upsample(buffers.f, buffers.c, quarter)?;
+        let half = SEGMENTS * WINDOW / 2 * d;
+        conv(
+            Dense::Up1,
+            Activation::Leaky,
+            1,
+            buffers.c,
+            &mut buffers.b[..half],
+        )?;
+        upsample(&buffers.b[..half], buffers.a, WINDOW / 2)?;
+        conv(Dense::Up2, Activation::Leaky, 1, buffers.a, buffers.b)?;
+        Ok(())
+    }
+
+    /// The decoder's per-frame part, frame `t` of `source` (positions): the root's and each
+    /// bone's correction of the analytic solution, then forward kinematics into `pose`.
+    fn decode_frame(
+        &self,
+        source: &[Vec3],
+        t: usize,
+        buffers: &Buffers<'_>,
+        pose: &mut [Vec3],
+    ) -> Result<(), NetworkError> {
+        let d = self.d;
+        let feature = |s: usize| &buffers.b[(s * WINDOW + t) * d..][..d];
+        let mut all = [0i8; SEGMENTS * MAX_FEATURES];
+        for (s, row) in all.chunks_exact_mut(d).enumerate().take(SEGMENTS) {
+            row.copy_from_slice(feature(s));
+        }
+        let root = self.layer(Dense::Root);
+        let mut acc = [0i32; 3];
+        int8::accumulate(&all[..SEGMENTS * d], root.weights, root.bias, &mut acc)?;
+        let h = self.target.height();
+        let correction = Vec3::new(
+            acc[0] as f32 * root.scale[0],
+            acc[1] as f32 * root.scale[1],
+            acc[2] as f32 * root.scale[2],
+        );
+        let start = source[self.prior.root()];
+        pose[0] = start * self.prior.scale() + correction * h;
+        let hidden_layer = self.layer(Dense::DecoderFeatures);
+        let output = self.layer(Dense::DecoderOutput);
+        let mut prior = [Quat::identity(); MAX_JOINTS];
+        let mut global = [Quat::identity(); MAX_JOINTS];
+        for k in 1..self.target.len() {
+            if let Some(chord) = self.prior.chord(k) {
+                let to = source[chord.to] - source[chord.from];
+                prior[k] = crate::kinematics::swing(chord.rest, to);
+            }
+            let parent = self.target.parent(k).unwrap_or(0);
+            let layer = Layer {
+                weights: hidden_layer.weights,
+                bias: &buffers.decoder_bias[k * d..(k + 1) * d],
+                requant: hidden_layer.requant,
+                activation: Activation::Leaky,
+            };
+            let mut hidden = [0i8; MAX_FEATURES];
+            int8::linear(
+                feature(self.target.bone_segment(k) as usize),
+                &layer,
+                &mut hidden[..d],
+            )?;
+            let mut raw = [0i32; QUATERNION];
+            int8::accumulate(&hidden[..d], output.weights, output.bias, &mut raw)?;
+            let q = |i: usize| raw[i] as f32 * output.scale[i];
+            let raw = Quaternion::new(1.0 + q(0), q(1), q(2), q(3));
+            let norm = math::sqrt(raw.norm_squared() + NORM_EPSILON);
+            let correction = Quat::new_unchecked(raw / norm);
+            let local = prior[parent].inverse() * prior[k] * correction;
+            global[k] = global[parent] * local;
+            pose[k] = pose[parent] + global[k] * self.target.offset(k);
+        }
+        Ok(())
+    }
+}
+
+/// A layer with int8 input and `f32` output: `out[o] = (Σ w x + bias) · scale`.
+fn project(t: &Tensors<'_>, x: &[i8], out: &mut [f32]) -> Result<(), ShapeError> {
+    let mut acc = [0i32; MAX_FEATURES];
+    let acc = acc.get_mut(..out.len()).ok_or(ShapeError::Mismatch)?;
+    int8::accumulate(x, t.weights, t.bias, acc)?;
+    for ((y, &a), &s) in out.iter_mut().zip(acc.iter()).zip(t.scale) {
+        *y = a as f32 * s;
+    }
+    Ok(())
+}
+
+/// One query's attention over keys given one at a time: a softmax per head kept as a
+/// running maximum, sum and weighted sum of values (no key is stored).
+struct Attention<'q> {
+    query: &'q [f32],
+    heads: usize,
+    max: [f32; MAX_FEATURES],
+    sum: [f32; MAX_FEATURES],
+    context: [f32; MAX_FEATURES],
+}
+
+impl<'q> Attention<'q> {
+    fn new(query: &'q [f32], heads: usize) -> Self {
+        Attention {
+            query,
+            heads: heads.clamp(1, query.len().max(1)),
+            max: [f32::NEG_INFINITY; MAX_FEATURES],
+            sum: [0.0; MAX_FEATURES],
+            context: [0.0; MAX_FEATURES],
+        }
+    }
+
+    fn add(&mut self, key: &[f32], value: &[f32]) {
+        let width = self.query.len() / self.heads;
+        for h in 0..self.heads {
+            let span = h * width..(h + 1) * width;
+            let logit = self.query[span.clone()]
+                .iter()
+                .zip(&key[span.clone()])
+                .fold(0.0, |acc, (q, k)| acc + q * k);
+            let (old, new) = if logit > self.max[h] {
+                (libm::expf(self.max[h] - logit), 1.0)
+            } else {
+                (1.0, libm::expf(logit - self.max[h]))
+            };
+            self.max[h] = self.max[h].max(logit);
+            self.sum[h] = self.sum[h] * old + new;
+            for (c, &v) in self.context[span.clone()].iter_mut().zip(&value[span]) {
+                *c = *c * old + new * v;
+            }
+        }
+    }
+
+    fn context(&self) -> impl Iterator<Item = f32> + '_ {
+        let width = self.query.len() / self.heads;
+        (0..self.query.len()).map(move |c| self.context[c] / self.sum[c / width])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::format::Format;
+    use crate::kinematics::testing::pose;
+    use crate::weights::testing::{blob, STUDENT};
+    use std::vec::Vec;
+
+    const TOLERANCE_M: f32 = 1e-5;
+
+    /// `frames` poses of `skeleton` swaying a little from frame to frame.
+    fn motion(skeleton: &Skeleton, frames: usize) -> Vec<Vec3> {
+        (0..frames)
+            .flat_map(|f| {
+                let phase = f as f32 * 0.1;
+                let raw: Vec<[f32; 4]> = (0..skeleton.len())
+                    .map(|k| {
+                        let a = phase + k as f32;
+                        [0.0, 0.3 * libm::sinf(a), 0.2 * libm::cosf(a), 0.1]
+                    })
+                    .collect();
+                pose(skeleton, &raw, [0.01 * f as f32, 0.9, 0.0])
+            })
+            .collect()
+    }
+
+    fn run(
+        bytes: &[u8],
+        source: &Skeleton,
+        target: &Skeleton,
+        frames: &[Vec3],
+    ) -> Result<Vec<Vec3>, NetworkError> {
+        let mut words = std::vec![0u32; bytes.len().div_ceil(4)];
+        bytemuck::cast_slice_mut::<u32, u8>(&mut words)[..bytes.len()].copy_from_slice(bytes);
+        let weights =
+            Weights::from_bytes(&bytemuck::cast_slice::<u32, u8>(&words)[..bytes.len()]).unwrap();
+        let mut scratch = std::vec![0u32; MAX_SCRATCH / 4];
+        let mut out = std::vec![Vec3::zeros(); frames.len() / source.len() * target.len()];
+        let scratch = bytemuck::cast_slice_mut(&mut scratch);
+        retarget(&weights, source, target, frames, scratch, &mut out)?;
+        Ok(out)
+    }
+
+    #[test]
+    fn without_corrections_it_is_the_analytic_retargeter() {
+        let bytes = blob(STUDENT, 5, true);
+        for (from, onto, frames) in [
+            (Format::Cmu31, Format::H36m17, 70),
+            (Format::H36m17, Format::Coco17, 20),
+            (Format::GolfMarkers, Format::Cmu31, 130),
+        ] {
+            let (source, target) = (
+                from.default_skeleton().unwrap(),
+                onto.default_skeleton().unwrap(),
+            );
+            let frames_in = motion(&source, frames);
+            let out = run(&bytes, &source, &target, &frames_in).unwrap();
+            let analytic = Analytic::new(&source, &target).unwrap();
+            let mut expected = std::vec![Vec3::zeros(); target.len()];
+            for (f, pose) in out.chunks_exact(target.len()).enumerate() {
+                let frame = &frames_in[f * source.len()..(f + 1) * source.len()];
+                analytic.frame(frame, &mut expected).unwrap();
+                for (k, (p, e)) in pose.iter().zip(&expected).enumerate() {
+                    assert!(
+                        (p - e).norm() < TOLERANCE_M,
+                        "{from}→{onto} frame {f} joint {k}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn corrections_keep_the_targets_bones_and_move_the_pose() {
+        let bytes = blob(STUDENT, 6, false);
+        let (source, target) = (
+            Format::Cmu31.default_skeleton().unwrap(),
+            Format::H36m17.default_skeleton().unwrap(),
+        );
+        let frames = motion(&source, 64);
+        let out = run(&bytes, &source, &target, &frames).unwrap();
+        let same = run(&bytes, &source, &target, &frames).unwrap();
+        assert_eq!(out, same);
+        let analytic = run(&blob(STUDENT, 6, true), &source, &target, &frames).unwrap();
+        let moved = out
+            .iter()
+            .zip(&analytic)
+            .map(|(a, b)| (a - b).norm())
+            .fold(0.0, f32::max);
+        assert!(moved > 0.01, "{moved}");
+        // Made-up weights put the root hundreds of metres away: bones are exact to its ulps.
+        for pose in out.chunks_exact(target.len()) {
+            let tolerance = 1e-6 * (1.0 + pose[0].norm());
+            for k in 1..target.len() {
+                let bone = (pose[k] - pose[target.parent(k).unwrap()]).norm();
+                assert!(
+                    (bone - target.offset(k).norm()).abs() < tolerance,
+                    "joint {k}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn bad_buffers_and_inputs_are_typed_errors() {
+        let bytes = blob(STUDENT, 7, false);
+        let mut words = std::vec![0u32; bytes.len().div_ceil(4)];
+        bytemuck::cast_slice_mut::<u32, u8>(&mut words)[..bytes.len()].copy_from_slice(&bytes);
+        let weights =
+            Weights::from_bytes(&bytemuck::cast_slice::<u32, u8>(&words)[..bytes.len()]).unwrap();
+        let (source, target) = (
+            Format::H36m17.default_skeleton().unwrap(),
+            Format::H36m17.default_skeleton().unwrap(),
+        );
+        let mut frames = motion(&source, 10);
+        let need = scratch_len(weights.architecture(), 17, 17);
+        let mut scratch = std::vec![0u32; need / 4];
+        let scratch = bytemuck::cast_slice_mut::<u32, u8>(&mut scratch);
+        let mut out = std::vec![Vec3::zeros(); 10 * 17];
+        let call = |frames: &[Vec3], scratch: &mut [u8], out: &mut [Vec3]| {
+            retarget(&weights, &source, &target, frames, scratch, out)
+        };
+        assert_eq!(call(&frames, scratch, &mut out), Ok(()));
+        assert_eq!(
+            call(&frames, &mut scratch[..need - 4], &mut out),
+            Err(NetworkError::Scratch)
+        );
+        assert_eq!(
+            call(&frames, &mut scratch[1..], &mut out),
+            Err(NetworkError::Scratch)
+        );
+        assert_eq!(
+            call(&frames[1..], scratch, &mut out),
+            Err(NetworkError::Length)
+        );
+        assert_eq!(
+            call(&frames, scratch, &mut out[1..]),
+            Err(NetworkError::Length)
+        );
+        assert_eq!(call(&[], scratch, &mut []), Err(NetworkError::Length));
+        frames[20].y = f32::NAN;
+        assert_eq!(
+            call(&frames, scratch, &mut out),
+            Err(NetworkError::Retarget(RetargetError::NonFinite {
+                joint: 3
+            }))
+        );
+    }
+}
