@@ -1,14 +1,15 @@
-//! `posecoach inspect`: what a motion file holds.
+//! `posecoach inspect`: what a motion file or a weights blob holds.
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use posecoach_adapters::io::{self, Motion};
 use posecoach_core::skeleton::Segment;
+use posecoach_core::weights::{self, Dense, Table, Weights};
 use serde_json::{json, Value};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// A .bvh, .c3d or .csv file.
+    /// A motion file (.bvh, .c3d, .csv, .pcr) or int8 weights (.pcw from `posecoach export`).
     file: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -16,6 +17,16 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<String> {
+    let bytes =
+        std::fs::read(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
+    if bytes.starts_with(&weights::MAGIC) {
+        let header =
+            weights_header(&bytes).with_context(|| format!("reading {}", args.file.display()))?;
+        return Ok(match args.json {
+            true => format!("{header}\n"),
+            false => weights_text(&header),
+        });
+    }
     let motion = io::load(&args.file)?;
     let report = describe(&args.file, &motion);
     Ok(if args.json {
@@ -127,6 +138,92 @@ fn text(r: &Value) -> String {
                 }
             }
         }
+    }
+    out
+}
+
+/// The header of a weights blob and its layers' shapes, as JSON.
+///
+/// # Errors
+/// If the blob is not sound ([`posecoach_core::weights::WeightsError`]).
+pub fn weights_header(bytes: &[u8]) -> Result<Value> {
+    let mut words = vec![0u32; bytes.len().div_ceil(4)];
+    bytemuck::cast_slice_mut::<u32, u8>(&mut words)[..bytes.len()].copy_from_slice(bytes);
+    let w = Weights::from_bytes(&bytemuck::cast_slice::<u32, u8>(&words)[..bytes.len()])?;
+    let (h, a) = (w.header(), w.architecture());
+    let layers: Vec<Value> = Dense::ALL
+        .iter()
+        .map(|&l| {
+            json!({"name": l.name(), "outputs": l.outputs(a), "inputs": l.inputs(a),
+                   "bias_rows": l.bias_rows()})
+        })
+        .collect();
+    let tables: Vec<&str> = Table::ALL.iter().map(|t| t.name()).collect();
+    let s = &h.scales;
+    Ok(json!({
+        "kind": "int8 weights",
+        "bytes": bytes.len(),
+        "version": h.version,
+        "architecture": {"features": a.features, "heads": a.heads, "kernel": a.kernel,
+                          "window": a.window, "segments": a.segments, "rate_hz": a.rate_hz},
+        "scales": {"motion": s.motion, "hidden": s.hidden, "joints": s.joints,
+                   "context": s.context, "segments": s.segments, "down_1": s.down_1,
+                   "down_2": s.down_2, "fused": s.fused, "up_1": s.up_1, "up_2": s.up_2,
+                   "decoder": s.decoder},
+        "training": {"name": h.training.name.as_str(), "steps": h.training.steps,
+                     "seed": h.training.seed, "calibration_windows": h.training.calibration_windows,
+                     "formats": h.training.formats.iter().map(|f| f.name()).collect::<Vec<_>>()},
+        "layers": layers,
+        "tables": tables,
+        "parameters": Dense::ALL.iter().map(|l| l.outputs(a) * l.inputs(a)).sum::<usize>(),
+    }))
+}
+
+/// [`weights_header`] as text.
+pub fn weights_text(h: &Value) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let a = &h["architecture"];
+    _ = writeln!(
+        out,
+        "kind:     int8 weights, format version {}, {} bytes",
+        h["version"], h["bytes"]
+    );
+    _ = writeln!(
+        out,
+        "network:  d = {} per segment, {} heads, kernel {}, {}-frame windows at {} Hz, {} segments",
+        a["features"], a["heads"], a["kernel"], a["window"], a["rate_hz"], a["segments"]
+    );
+    let t = &h["training"];
+    _ = writeln!(
+        out,
+        "training: {} ({} steps, seed {}), scales from {} golf windows, formats {}",
+        t["name"].as_str().unwrap_or(""),
+        t["steps"],
+        t["seed"],
+        t["calibration_windows"],
+        t["formats"].as_array().map_or(String::new(), |f| f
+            .iter()
+            .filter_map(Value::as_str)
+            .collect::<Vec<_>>()
+            .join(", "))
+    );
+    _ = writeln!(out, "scales:");
+    if let Some(scales) = h["scales"].as_object() {
+        for (name, v) in scales {
+            _ = writeln!(out, "  {name:<9} {v}");
+        }
+    }
+    _ = writeln!(out, "layers:   {} int8 weights", h["parameters"]);
+    for l in h["layers"].as_array().map(Vec::as_slice).unwrap_or(&[]) {
+        _ = writeln!(
+            out,
+            "  {:<17} {:>3} x {:<3} bias rows {}",
+            l["name"].as_str().unwrap_or(""),
+            l["outputs"],
+            l["inputs"],
+            l["bias_rows"]
+        );
     }
     out
 }

@@ -5,15 +5,19 @@
 //! [`STEPS_PER_EPOCH`] steps rather than a pass over the data; a checkpoint is written after
 //! each, and a run resumed from one continues exactly as if it had not stopped.
 
+use crate::inspect;
 use anyhow::{bail, Context, Result};
 use burn::prelude::Device;
 use indicatif::{ProgressBar, ProgressStyle};
 use posecoach_adapters::io;
+use posecoach_core::network;
+use posecoach_core::weights::{self, Training, Weights};
 use posecoach_train::dataset::Pool;
 use posecoach_train::infer::Retargeter;
 use posecoach_train::losses::Switches;
 use posecoach_train::metrics::{self, Baseline, Method, Table};
 use posecoach_train::model::TeacherConfig;
+use posecoach_train::quantize;
 use posecoach_train::train::{StepLosses, TrainConfig, Trainer, BATCH, LEARNING_RATE};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -479,4 +483,170 @@ fn table_json(table: &Table, paths: &[PathBuf], teachers: &[Retargeter]) -> Valu
         "clips": table.clips.iter().map(|(n, f)| json!({"name": n, "frames": f})).collect::<Vec<_>>(),
         "rows": rows,
     })
+}
+
+/// Golf windows the activation scales are calibrated on by default.
+pub const CALIBRATION_WINDOWS: usize = 512;
+/// Windows per calibration batch.
+const CALIBRATION_BATCH: usize = 32;
+/// Height of the default golden student, metres.
+const GOLDEN_HEIGHT_M: f32 = 1.70;
+
+#[derive(clap::Args)]
+pub struct ExportArgs {
+    /// The trained network to quantize: a distilled student (teacher file or checkpoint).
+    #[arg(long)]
+    model: PathBuf,
+    /// Golf windows the activation scales are calibrated on.
+    #[arg(long, default_value_t = CALIBRATION_WINDOWS)]
+    windows: usize,
+    #[command(flatten)]
+    data: Data,
+    /// Seeds the calibration windows.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Where to write the weights blob (.pcw).
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write golden vectors: this coach swing at the network's rate (OUT with
+    /// `.golden-in.pcr`) and the int8 network's retargeting of it (`.golden-out.pcr`).
+    #[arg(long)]
+    golden: Option<PathBuf>,
+    /// The golden retargeting's student (a T-pose file); H36M-17 at 1.70 m by default.
+    #[arg(long)]
+    golden_student: Option<PathBuf>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn export(args: &ExportArgs) -> Result<String> {
+    let device = Device::flex();
+    let (model, config, steps) = posecoach_train::train::load_teacher(&args.model, &device)
+        .with_context(|| format!("loading {}", args.model.display()))?;
+    if args.windows == 0 {
+        bail!("--windows must be at least 1");
+    }
+    let pool = args.data.pool(args.seed)?;
+    let bar = ProgressBar::new(args.windows as u64);
+    bar.set_message("calibrating");
+    let calibration = quantize::calibrate(
+        &model,
+        &pool,
+        args.windows,
+        CALIBRATION_BATCH,
+        args.seed,
+        &device,
+    )?;
+    bar.finish_and_clear();
+    let name: String = args
+        .model
+        .file_stem()
+        .map_or("model".into(), |s| s.to_string_lossy().into_owned());
+    let training = Training {
+        name: truncated(&name),
+        steps: steps as u32,
+        seed: config.seed,
+        calibration_windows: calibration.windows as u32,
+        formats: quantize::trained_formats(),
+    };
+    let scales = calibration.scales();
+    let bytes = quantize::export(&model, &config.teacher, &scales, training)?;
+    std::fs::write(&args.out, &bytes).with_context(|| format!("writing {}", args.out.display()))?;
+    let golden = match &args.golden {
+        Some(coach) => Some(write_golden(
+            &bytes,
+            coach,
+            args.golden_student.as_deref(),
+            &args.out,
+        )?),
+        None => None,
+    };
+    let header = inspect::weights_header(&bytes)?;
+    if args.json {
+        let doc = json!({"out": args.out.display().to_string(), "bytes": bytes.len(),
+            "header": header, "golden": golden.map(|(i, o)| [i.display().to_string(), o.display().to_string()])});
+        return Ok(format!("{doc}\n"));
+    }
+    let mut text = format!(
+        "wrote int8 weights ({} bytes, scales from {} golf windows) to {}\n",
+        bytes.len(),
+        calibration.windows,
+        args.out.display()
+    );
+    if let Some((i, o)) = golden {
+        text += &format!("golden vectors: {} -> {}\n", i.display(), o.display());
+    }
+    Ok(text + &inspect::weights_text(&header))
+}
+
+/// Writes the golden vectors of `bytes` next to `out`; returns their paths.
+fn write_golden(
+    bytes: &[u8],
+    coach: &Path,
+    student: Option<&Path>,
+    out: &Path,
+) -> Result<(PathBuf, PathBuf)> {
+    let mut words = vec![0u32; bytes.len().div_ceil(4)];
+    bytemuck::cast_slice_mut::<u32, u8>(&mut words)[..bytes.len()].copy_from_slice(bytes);
+    let weights = Weights::from_bytes(&bytemuck::cast_slice::<u32, u8>(&words)[..bytes.len()])?;
+    let rate = weights.architecture().rate_hz;
+    let source = io::load(coach)?.resampled(rate);
+    if source.frames() == 0 {
+        bail!("{} holds no frames", coach.display());
+    }
+    let student = match student {
+        Some(path) => io::load(path)?.skeleton,
+        None => {
+            let standard = posecoach_core::format::Format::H36m17.default_skeleton()?;
+            let scale = GOLDEN_HEIGHT_M / standard.height();
+            let offsets: Vec<_> = standard.offsets().iter().map(|o| o * scale).collect();
+            let parents: Vec<_> = (0..standard.len()).map(|k| standard.parent(k)).collect();
+            posecoach_core::skeleton::Skeleton::new(
+                standard.format(),
+                &parents,
+                &offsets,
+                standard.joints(),
+            )?
+        }
+    };
+    let mut scratch = vec![0u32; network::MAX_SCRATCH.div_ceil(4)];
+    let mut positions = vec![posecoach_core::Vec3::zeros(); source.frames() * student.len()];
+    network::retarget(
+        &weights,
+        &source.skeleton,
+        &student,
+        &source.positions,
+        bytemuck::cast_slice_mut(&mut scratch),
+        &mut positions,
+    )?;
+    let result = io::Motion {
+        missing: vec![false; positions.len()],
+        names: (0..student.len())
+            .map(|k| {
+                student
+                    .joint(k)
+                    .map_or(String::new(), |j| j.name().to_string())
+            })
+            .collect(),
+        skeleton: student,
+        rate_hz: rate,
+        positions,
+    };
+    let path = |suffix: &str| out.with_extension(suffix);
+    let (input, output) = (path("golden-in.pcr"), path("golden-out.pcr"));
+    std::fs::write(&input, source.to_reference("golden-in")?)?;
+    std::fs::write(&output, result.to_reference("golden-out")?)?;
+    Ok((input, output))
+}
+
+/// `name` cut to the header's [`weights::MAX_NAME`] bytes at a character boundary.
+fn truncated(name: &str) -> heapless::String<{ weights::MAX_NAME }> {
+    let mut out = heapless::String::new();
+    for c in name.chars() {
+        if out.push(c).is_err() {
+            break;
+        }
+    }
+    out
 }

@@ -51,6 +51,8 @@ enum Command {
     Train(learn::TrainArgs),
     /// Distill a trained teacher into a smaller network (for the device) on the teacher's outputs.
     Distill(learn::DistillArgs),
+    /// Quantize a distilled network to int8 and write the device's weights blob (.pcw).
+    Export(learn::ExportArgs),
     /// Fine-tune a trained teacher to one student's body.
     Finetune(learn::FinetuneArgs),
     /// Evaluate retargeters on held-out characters and motions against the ground truth.
@@ -78,6 +80,7 @@ fn main() -> ExitCode {
         Command::DeviceSim(args) => device_sim::run(&args),
         Command::Train(args) => learn::train(&args),
         Command::Distill(args) => learn::distill(&args),
+        Command::Export(args) => learn::export(&args),
         Command::Finetune(args) => learn::finetune(&args),
         Command::Eval(args) => learn::eval(&args),
     };

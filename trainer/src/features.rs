@@ -332,18 +332,6 @@ fn push_attention(skeleton: &Skeleton, joints: usize, out: &mut Vec<bool>) {
     }
 }
 
-/// The segment whose feature decodes the bone into joint `k`: the first that holds both the
-/// joint and its parent (a limb's first bone starts at the branching joint the limb holds).
-pub fn bone_segment(skeleton: &Skeleton, k: usize) -> usize {
-    let parent = skeleton.parent(k).unwrap_or(0);
-    let holds = |s: Segment, i: usize| skeleton.segment_contains(s, i);
-    Segment::ALL
-        .iter()
-        .position(|&s| holds(s, k) && holds(s, parent))
-        .or_else(|| Segment::ALL.iter().position(|&s| holds(s, k)))
-        .unwrap_or(Segment::Spine as usize)
-}
-
 /// Target skeleton rows accumulated on the host.
 #[derive(Default)]
 struct SkeletonRows {
@@ -390,7 +378,7 @@ impl SkeletonRows {
             self.rest.extend(from_root.iter());
             parents[k] = parent.unwrap_or(0);
             let segment = match k < n {
-                true => bone_segment(skeleton, k),
+                true => skeleton.bone_segment(k) as usize,
                 false => Segment::Spine as usize,
             };
             self.segment
@@ -556,7 +544,7 @@ mod tests {
         for (seed, format) in FORMATS.into_iter().enumerate() {
             let skeleton = character(format, seed as u64).skeleton;
             for k in 1..skeleton.len() {
-                let s = Segment::ALL[bone_segment(&skeleton, k)];
+                let s = skeleton.bone_segment(k);
                 let p = skeleton.parent(k).unwrap();
                 assert!(
                     skeleton.segment_contains(s, k) && skeleton.segment_contains(s, p),

@@ -10,27 +10,42 @@
 //! neighbour, whose frames it replaces); a motion shorter than a window holds its last frame.
 //! Each window's root trajectory starts at its first frame ([`crate::features`]), so the
 //! source's root there, scaled as the analytic retargeter scales it, is added back.
+//!
+//! A weights blob ([`posecoach_core::weights`]) runs the same way through the core's int8
+//! network ([`posecoach_core::network`]), which cuts and holds windows as this module does.
 
 use crate::clip::motion;
 use crate::error::Error;
 use crate::features::{Batch, Window, RATE_HZ, WINDOW};
-use crate::model::Teacher;
+use crate::model::{Teacher, TeacherConfig};
 use crate::train::{load_teacher, TrainConfig};
 use burn::prelude::Device;
 use posecoach_adapters::io::Motion;
+use posecoach_core::network;
 use posecoach_core::retarget::Analytic;
 use posecoach_core::skeleton::Skeleton;
+use posecoach_core::weights::{self, Weights};
 use posecoach_core::Vec3;
 use std::path::Path;
 
 /// Most interleaved streams a motion is split into (a 240 Hz capture: 8).
 const MAX_PHASES: usize = 8;
 
-/// A trained teacher on an inference device.
+/// A trained network: a float teacher (or distilled student) or its int8 export.
+#[derive(Clone, Debug)]
+enum Model {
+    Float {
+        teacher: Box<Teacher>,
+        device: Device,
+    },
+    /// A weights blob, in words so that it is aligned for the core's in-place view.
+    Int8 { words: Vec<u32>, len: usize },
+}
+
+/// A trained network ready to retarget.
 #[derive(Clone, Debug)]
 pub struct Retargeter {
-    teacher: Teacher,
-    device: Device,
+    model: Model,
     /// What tables call it: its file's stem.
     pub name: String,
     /// How it was trained.
@@ -40,23 +55,66 @@ pub struct Retargeter {
 }
 
 impl Retargeter {
-    /// The teacher in a checkpoint or teacher file ([`crate::train`]).
+    /// The network in a checkpoint or teacher file ([`crate::train`]) or a weights blob.
     ///
     /// # Errors
     /// [`Error::Checkpoint`] if the file cannot be read.
     pub fn load(path: &Path) -> Result<Retargeter, Error> {
-        let device = Device::flex();
-        let (teacher, config, steps) = load_teacher(path, &device)?;
         let name = path
             .file_stem()
             .map_or("teacher".into(), |s| s.to_string_lossy().into_owned());
+        let bytes = std::fs::read(path).map_err(|e| Error::Checkpoint(e.to_string()))?;
+        if bytes.starts_with(&weights::MAGIC) {
+            return Retargeter::int8(name, &bytes);
+        }
+        let device = Device::flex();
+        let (teacher, config, steps) = load_teacher(path, &device)?;
         Ok(Retargeter {
             name,
-            teacher,
-            device,
+            model: Model::Float {
+                teacher: Box::new(teacher),
+                device,
+            },
             config,
             steps,
         })
+    }
+
+    /// The int8 network of a weights blob, called `name`.
+    ///
+    /// # Errors
+    /// [`Error::Checkpoint`] if the blob is not sound.
+    pub fn int8(name: String, bytes: &[u8]) -> Result<Retargeter, Error> {
+        let mut words = vec![0u32; bytes.len().div_ceil(4)];
+        bytes_mut(&mut words)[..bytes.len()].copy_from_slice(bytes);
+        let header = Weights::from_bytes(bytes_of(&words, bytes.len()))
+            .map_err(|e| Error::Checkpoint(e.to_string()))?
+            .header()
+            .clone();
+        let a = header.architecture;
+        let config = TrainConfig {
+            teacher: TeacherConfig {
+                features: a.d(),
+                heads: usize::from(a.heads),
+                kernel: usize::from(a.kernel),
+            },
+            seed: header.training.seed,
+            ..TrainConfig::default()
+        };
+        Ok(Retargeter {
+            name,
+            model: Model::Int8 {
+                words,
+                len: bytes.len(),
+            },
+            config,
+            steps: header.training.steps as usize,
+        })
+    }
+
+    /// Whether it runs the core's int8 network.
+    pub fn is_int8(&self) -> bool {
+        matches!(self.model, Model::Int8 { .. })
     }
 
     /// `source` retargeted onto `target`, at the source's rate and length.
@@ -100,6 +158,25 @@ impl Retargeter {
         target: &Skeleton,
         scale: f32,
     ) -> Result<Vec<Vec3>, Error> {
+        let (teacher, device) = match &self.model {
+            Model::Float { teacher, device } => (teacher, device),
+            Model::Int8 { words, len } => {
+                let weights = Weights::from_bytes(bytes_of(words, *len))
+                    .map_err(|e| Error::Checkpoint(e.to_string()))?;
+                let mut scratch = vec![0u32; network::MAX_SCRATCH.div_ceil(4)];
+                let mut out = vec![Vec3::zeros(); slow.frames() * target.len()];
+                network::retarget(
+                    &weights,
+                    &slow.skeleton,
+                    target,
+                    &slow.positions,
+                    bytes_mut(&mut scratch),
+                    &mut out,
+                )
+                .map_err(|e| Error::Checkpoint(e.to_string()))?;
+                return Ok(out);
+            }
+        };
         let length = slow.frames();
         let mut starts: Vec<usize> = (0..=length - WINDOW).step_by(WINDOW).collect();
         if starts.last() != Some(&(length - WINDOW)) {
@@ -110,9 +187,8 @@ impl Retargeter {
             .map(|&s| Window::new(slow, s))
             .collect::<Result<Vec<_>, _>>()?;
         let targets = vec![target; windows.len()];
-        let batch = Batch::new(&windows, &targets, &self.device)?;
-        let values: Vec<f32> = self
-            .teacher
+        let batch = Batch::new(&windows, &targets, device)?;
+        let values: Vec<f32> = teacher
             .forward(&batch)
             .positions
             .into_data()
@@ -130,6 +206,16 @@ impl Retargeter {
         }
         Ok(positions)
     }
+}
+
+/// The first `len` bytes of `words`.
+fn bytes_of(words: &[u32], len: usize) -> &[u8] {
+    &bytemuck::cast_slice(words)[..len]
+}
+
+/// `words` as bytes, to write.
+fn bytes_mut(words: &mut [u32]) -> &mut [u8] {
+    bytemuck::cast_slice_mut(words)
 }
 
 /// `m` with its last frame repeated up to `frames` frames.
@@ -155,7 +241,6 @@ mod tests {
     use super::*;
     use crate::clip::testing::wave_frames;
     use crate::features::testing::character;
-    use crate::model::TeacherConfig;
     use posecoach_core::format::Format;
 
     #[test]
@@ -163,8 +248,10 @@ mod tests {
         let device = Device::flex();
         device.seed(4);
         let retargeter = Retargeter {
-            teacher: TeacherConfig::TINY.init(&device),
-            device,
+            model: Model::Float {
+                teacher: Box::new(TeacherConfig::TINY.init(&device)),
+                device,
+            },
             name: "untrained".into(),
             config: TrainConfig::default(),
             steps: 0,
@@ -193,8 +280,10 @@ mod tests {
         let device = Device::flex();
         device.seed(1);
         let retargeter = Retargeter {
-            teacher: TeacherConfig::TINY.init(&device),
-            device,
+            model: Model::Float {
+                teacher: Box::new(TeacherConfig::TINY.init(&device)),
+                device,
+            },
             name: "tiny".into(),
             config: TrainConfig::default(),
             steps: 0,

@@ -22,6 +22,7 @@
 //! - [`discriminator`]: the adversarial loss's discriminator.
 //! - [`train`]: training steps and checkpoints.
 //! - [`infer`]: a trained teacher retargeting whole motions.
+//! - [`quantize`]: int8 quantization and export of a trained network as a weights blob.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -38,6 +39,7 @@ pub mod losses;
 pub mod metrics;
 pub mod model;
 pub mod prior;
+pub mod quantize;
 pub mod train;
 
 pub use error::Error;

@@ -19,6 +19,7 @@
 
 use crate::features::{Batch, Skeletons, MOTION_CHANNELS, REST_CHANNELS, SEGMENTS, WINDOW};
 use crate::fk;
+use crate::quantize::{Calibration, Point};
 use burn::module::Param;
 use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig};
 use burn::nn::conv::{Conv1d, Conv1dConfig};
@@ -127,11 +128,26 @@ pub struct Teacher {
 impl Teacher {
     /// The batch's motions retargeted onto its targets.
     pub fn forward(&self, batch: &Batch) -> Retargeted {
-        let features = self.motion.forward(batch.motion.clone(), &batch.source);
+        self.forward_observed(batch, None)
+    }
+
+    /// [`Teacher::forward`], recording into `calibration` the magnitudes of the activations
+    /// the quantized network keeps in int8.
+    pub fn forward_observed(
+        &self,
+        batch: &Batch,
+        mut calibration: Option<&mut Calibration>,
+    ) -> Retargeted {
+        let cal = &mut calibration;
+        observe(cal, Point::Motion, &batch.motion);
+        let features = self
+            .motion
+            .forward(batch.motion.clone(), &batch.source, cal);
         let skeleton = self.skeleton.forward(&batch.target);
         let [b, channels, _] = features.dims();
         let fused = features.clone() + skeleton.reshape([b, channels, 1]);
-        let (raw, correction) = self.decoder.forward(fused, &batch.target);
+        observe(cal, Point::Fused, &fused);
+        let (raw, correction) = self.decoder.forward(fused, &batch.target, cal);
         let (prior, root) = batch.prior.solve(batch.positions.clone(), &batch.target);
         let root = root + correction;
         let rotations = fk::multiply(prior, fk::normalize(raw));
@@ -145,8 +161,144 @@ impl Teacher {
     }
 }
 
+/// A layer's parameters as plain arrays, for export.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Dense {
+    /// `[outputs][inputs]` row-major; a convolution's row is `[tap][input of its group]`.
+    pub weight: Vec<f32>,
+    /// One per output.
+    pub bias: Vec<f32>,
+    /// Inputs per output (a convolution's: kernel × inputs per group).
+    pub inputs: usize,
+}
+
+impl Dense {
+    /// Outputs.
+    pub fn outputs(&self) -> usize {
+        self.bias.len()
+    }
+
+    /// Columns `range` of every row: the layer seen by those inputs only.
+    pub fn columns(&self, range: std::ops::Range<usize>) -> Dense {
+        Dense {
+            weight: self
+                .weight
+                .chunks_exact(self.inputs)
+                .flat_map(|row| row[range.clone()].iter().copied())
+                .collect(),
+            bias: self.bias.clone(),
+            inputs: range.len(),
+        }
+    }
+
+    fn linear(layer: &Linear) -> Dense {
+        let [inputs, outputs] = layer.weight.dims();
+        let weight = floats(layer.weight.val().transpose());
+        let bias = layer
+            .bias
+            .as_ref()
+            .map_or(vec![0.0; outputs], |b| floats(b.val()));
+        Dense {
+            weight,
+            bias,
+            inputs,
+        }
+    }
+
+    fn conv(layer: &Conv1d) -> Dense {
+        let [outputs, width, kernel] = layer.weight.dims();
+        Dense {
+            weight: floats(layer.weight.val().swap_dims(1, 2)),
+            bias: layer
+                .bias
+                .as_ref()
+                .map_or(vec![0.0; outputs], |b| floats(b.val())),
+            inputs: kernel * width,
+        }
+    }
+}
+
+/// Every parameter of a teacher as plain arrays, in the layers' order of use.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Parameters {
+    /// Skeleton encoder: per joint hidden, per joint output, per segment.
+    pub skeleton: [Dense; 3],
+    /// Motion encoder's joint MLP: hidden (motion then rest features in), output.
+    pub motion: [Dense; 2],
+    /// `[T][d]` the time encoding added to the joint MLP's output.
+    pub time: Vec<f32>,
+    /// `[S][d]` the segment tokens.
+    pub tokens: Vec<f32>,
+    /// Attention: query, key, value, output.
+    pub attention: [Dense; 4],
+    /// Attention heads.
+    pub heads: usize,
+    /// The convolutions: down_1, down_2, up_1, up_2.
+    pub convolutions: [Dense; 4],
+    /// Joint decoder: hidden (segment feature then rest features in), output.
+    pub decoder: [Dense; 2],
+    /// The root's correction.
+    pub root: Dense,
+}
+
+fn floats<const D: usize>(t: Tensor<D>) -> Vec<f32> {
+    t.into_data().try_to_vec::<f32>().unwrap_or_default()
+}
+
+impl Teacher {
+    /// Its parameters, for export.
+    pub fn parameters(&self) -> Parameters {
+        let (m, d) = (&self.motion, &self.decoder);
+        let [_, width] = m.tokens.dims();
+        Parameters {
+            skeleton: [
+                Dense::linear(&self.skeleton.joint.hidden),
+                Dense::linear(&self.skeleton.joint.output),
+                Dense::linear(&self.skeleton.segment),
+            ],
+            motion: [
+                Dense::linear(&m.joint.hidden),
+                Dense::linear(&m.joint.output),
+            ],
+            time: floats(
+                m.time
+                    .sinusoids
+                    .clone()
+                    .narrow(1, 0, WINDOW)
+                    .reshape([WINDOW * width]),
+            ),
+            tokens: floats(m.tokens.val()),
+            attention: [
+                Dense::linear(&m.attention.query),
+                Dense::linear(&m.attention.key),
+                Dense::linear(&m.attention.value),
+                Dense::linear(&m.attention.output),
+            ],
+            heads: m.attention.n_heads,
+            convolutions: [
+                Dense::conv(&m.down_1),
+                Dense::conv(&m.down_2),
+                Dense::conv(&d.up_1),
+                Dense::conv(&d.up_2),
+            ],
+            decoder: [
+                Dense::linear(&d.joint.hidden),
+                Dense::linear(&d.joint.output),
+            ],
+            root: Dense::linear(&d.root),
+        }
+    }
+}
+
 fn act<const D: usize>(x: Tensor<D>) -> Tensor<D> {
     leaky_relu(x, LEAKY_SLOPE)
+}
+
+/// Records `x` at `point` when calibrating.
+fn observe<const D: usize>(cal: &mut Option<&mut Calibration>, point: Point, x: &Tensor<D>) {
+    if let Some(cal) = cal {
+        cal.see(point, x);
+    }
 }
 
 /// A linear layer that outputs zeros until trained: an untrained correction changes nothing.
@@ -173,6 +325,18 @@ impl Mlp {
 
     fn forward<const D: usize>(&self, x: Tensor<D>) -> Tensor<D> {
         self.output.forward(act(self.hidden.forward(x)))
+    }
+
+    /// [`Mlp::forward`], recording the hidden layer at `point`.
+    fn forward_observed<const D: usize>(
+        &self,
+        x: Tensor<D>,
+        cal: &mut Option<&mut Calibration>,
+        point: Point,
+    ) -> Tensor<D> {
+        let hidden = act(self.hidden.forward(x));
+        observe(cal, point, &hidden);
+        self.output.forward(hidden)
     }
 }
 
@@ -236,7 +400,12 @@ impl MotionEncoder {
         }
     }
 
-    fn forward(&self, motion: Tensor<4>, source: &Skeletons) -> Tensor<3> {
+    fn forward(
+        &self,
+        motion: Tensor<4>,
+        source: &Skeletons,
+        cal: &mut Option<&mut Calibration>,
+    ) -> Tensor<3> {
         let [b, t, j, _] = motion.dims();
         let rest = source
             .rest_features()
@@ -251,7 +420,9 @@ impl MotionEncoder {
             .clone()
             .narrow(1, 0, t)
             .reshape([1, t, 1, d]);
-        let joints = (self.joint.forward(motion) + time).reshape([b * t, j, d]);
+        let joints =
+            (self.joint.forward_observed(motion, cal, Point::Hidden) + time).reshape([b * t, j, d]);
+        observe(cal, Point::Joints, &joints);
         let segments = self
             .tokens
             .val()
@@ -264,13 +435,28 @@ impl MotionEncoder {
             .reshape([b, 1, SEGMENTS, keys])
             .expand([b, t, SEGMENTS, keys])
             .reshape([b * t, SEGMENTS, keys]);
-        let context = self
+        let attended = self
             .attention
-            .forward(MhaInput::new(segments.clone(), x.clone(), x).mask_attn(mask))
-            .context;
-        let segments = segments + context;
+            .forward(MhaInput::new(segments.clone(), x.clone(), x.clone()).mask_attn(mask));
+        if cal.is_some() {
+            // The context before the output layer: the weights times the heads' values.
+            let (heads, width) = (self.attention.n_heads, self.attention.d_k);
+            let values = self
+                .attention
+                .value
+                .forward(x)
+                .reshape([b * t, keys, heads, width])
+                .swap_dims(1, 2);
+            let context = attended.weights.matmul(values).swap_dims(1, 2);
+            observe(cal, Point::Context, &context);
+        }
+        let segments = segments + attended.context;
+        observe(cal, Point::Segments, &segments);
         let x = segments.reshape([b, t, SEGMENTS * d]).swap_dims(1, 2);
-        let y = self.down_2.forward(act(self.down_1.forward(x.clone())));
+        let down = act(self.down_1.forward(x.clone()));
+        observe(cal, Point::Down1, &down);
+        let y = self.down_2.forward(down);
+        observe(cal, Point::Down2, &y);
         let skip = x
             .reshape([b, SEGMENTS * d, t / DOWNSAMPLING, DOWNSAMPLING])
             .mean_dim(3)
@@ -315,9 +501,16 @@ impl Decoder {
     }
 
     /// Raw quaternions `[B, J, T, 4]` and the root's correction `[B, T, 3]`.
-    fn forward(&self, x: Tensor<3>, target: &Skeletons) -> (Tensor<4>, Tensor<3>) {
+    fn forward(
+        &self,
+        x: Tensor<3>,
+        target: &Skeletons,
+        cal: &mut Option<&mut Calibration>,
+    ) -> (Tensor<4>, Tensor<3>) {
         let x = act(self.up_1.forward(self.upsample.forward(x)));
+        observe(cal, Point::Up1, &x);
         let x = act(self.up_2.forward(self.upsample.forward(x)));
+        observe(cal, Point::Up2, &x);
         let [b, channels, t] = x.dims();
         let d = channels / SEGMENTS;
         let root = self.root.forward(x.clone().swap_dims(1, 2));
@@ -334,7 +527,10 @@ impl Decoder {
             .expand([b, j, t, REST_CHANNELS]);
         let identity =
             Tensor::<1>::from_floats(fk::IDENTITY, &root.device()).reshape([1, 1, 1, QUATERNION]);
-        let raw = self.joint.forward(Tensor::cat(vec![joints, rest], 3)) + identity;
+        let raw =
+            self.joint
+                .forward_observed(Tensor::cat(vec![joints, rest], 3), cal, Point::Decoder)
+                + identity;
         (raw, root)
     }
 }
