@@ -6,14 +6,16 @@ cd "$(dirname "$0")"
 seconds="${1:-30}"
 mkdir -p logs
 # Seeds: the committed fixtures of each format; for the wire decoder, the pinned message stream;
-# for the log reader and session, the committed recordings; for references, the bundled coaches.
-for target in bvh c3d csv wire log reference; do
+# for the log reader and session, the committed recordings; for references, the bundled coaches;
+# for weights, the committed int8 weights.
+for target in bvh c3d csv wire log reference weights; do
     corpus="corpus/$target"
     mkdir -p "$corpus"
     case "$target" in
         wire) cp ../tests/fixtures/wire_messages.bin "$corpus/" ;;
         log) cp ../tests/logs/*.pclog "$corpus/" ;;
         reference) cp ../coaches/*.pcr "$corpus/" ;;
+        weights) cp ../weights/student-int8.pcw "$corpus/" ;;
         *) find ../tests/fixtures -name "*.$target" -exec cp {} "$corpus/" \; ;;
     esac
     log="logs/$target.txt"

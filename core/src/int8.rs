@@ -306,7 +306,8 @@ pub fn accumulate(
 }
 
 /// Calls `f(c, Σ_k weights[c·n + k] · input[k] + bias[c])` for each of `outputs` rows, two
-/// rows at a time through [`dot2`].
+/// rows at a time through [`dot2`]. The sum cannot overflow (127² · [`MAX_FIELD`] is far
+/// below `i32::MAX`); adding the bias saturates.
 #[inline]
 fn sums(
     input: &[i8],
@@ -324,10 +325,10 @@ fn sums(
         match rows.next() {
             Some((_, (r1, &b1))) => {
                 let (s0, s1) = dot2(r0, r1, input);
-                f(c, s0 + b0);
-                f(c + 1, s1 + b1);
+                f(c, s0.saturating_add(b0));
+                f(c + 1, s1.saturating_add(b1));
             }
-            None => f(c, dot(r0, input) + b0),
+            None => f(c, dot(r0, input).saturating_add(b0)),
         }
     }
     Ok(())
