@@ -2,8 +2,10 @@
 //!
 //! [`Session::handle`] takes each decoded message. A `StudentProfile` gives the student's body
 //! (bone lengths measured from the T-pose, directions from the format's standard T-pose) and
-//! retargets the selected coach reference onto it once; `Config` and `CoachSelect` change the
-//! settings. Pose frames then go through the [`PoseStream`] onto the model rate's grid, are
+//! retargets the selected coach reference onto it once: with the int8 network
+//! ([`Session::with_network`]) when the model rate is the network's, else with the analytic
+//! retargeter; the network's scratch is the detector's ring, free while the session is set
+//! up. `Config` and `CoachSelect` change the settings. Pose frames then go through the [`PoseStream`] onto the model rate's grid, are
 //! put onto the student's skeleton as rigid bones (the analytic retargeter, which also maps a
 //! stream format other than the profile's), and feed the [`SwingDetector`]. Each swing it
 //! closes is scored where it lies in the detector's ring (its last [`MAX_SWING_FRAMES`]
@@ -29,10 +31,12 @@ use posecoach_core::detector::{DetectorConfig, DetectorError, SwingDetector, Swi
 use posecoach_core::events::{self, EventError, STILL_S};
 use posecoach_core::format::Format;
 use posecoach_core::math::norm;
+use posecoach_core::network::{self, NetworkError};
 use posecoach_core::reference::Reference;
 use posecoach_core::retarget::Analytic;
 use posecoach_core::score::{self, Report, ScoreError};
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
+use posecoach_core::weights::{Architecture, Weights};
 use posecoach_core::wire::{
     Config, ImuSample, Message, NackReason, PoseFrame, SensorLayout, StudentProfile, SwingReport,
 };
@@ -147,6 +151,24 @@ impl BufferLens {
             coach: joints * coach_frames,
             floats: scratch.floats,
             bytes: scratch.bytes,
+        }
+    }
+
+    /// These lengths with a ring that also holds, while the session is set up, the int8
+    /// network `a`'s input (`coach_frames` frames of a coach of `coach_joints` joints) and
+    /// its scratch, for students of up to `joints` joints.
+    pub const fn with_network(
+        self,
+        a: &Architecture,
+        joints: usize,
+        coach_joints: usize,
+        coach_frames: usize,
+    ) -> BufferLens {
+        let bytes = network::scratch_len(a, coach_joints, joints);
+        let ring = coach_frames * coach_joints + bytes.div_ceil(core::mem::size_of::<Vec3>());
+        BufferLens {
+            ring: if ring > self.ring { ring } else { self.ring },
+            ..self
         }
     }
 }
@@ -359,6 +381,7 @@ struct Student<'b> {
 #[derive(Debug)]
 pub struct Session<'b> {
     coaches: &'b [Coach<'b>],
+    network: Option<&'b Weights<'b>>,
     config: Config,
     coach: u16,
     profile: Option<Skeleton>,
@@ -400,9 +423,18 @@ impl<'b> Session<'b> {
         Ok(Session::start(coaches, buffers, config))
     }
 
+    /// This session retargeting coaches with the int8 network of `weights` whenever the model
+    /// rate is the network's ([`Architecture::rate_hz`]); its ring must then be as long as
+    /// [`BufferLens::with_network`] says. Set it before the profile arrives.
+    pub fn with_network(mut self, weights: &'b Weights<'b>) -> Session<'b> {
+        self.network = Some(weights);
+        self
+    }
+
     fn start(coaches: &'b [Coach<'b>], buffers: Buffers<'b>, config: Config) -> Session<'b> {
         Session {
             coaches,
+            network: None,
             config,
             coach: 0,
             profile: None,
@@ -538,39 +570,25 @@ impl<'b> Session<'b> {
         let checked = SwingDetector::check(&skeleton, detector, ring.len())
             .map_err(Refusal::Detector)
             .and_then(|_| {
-                let needed = BufferLens::new(joints, coach.frames_at(rate), rate);
+                let frames = coach.frames_at(rate);
+                let network = self
+                    .network
+                    .filter(|w| same_rate(w.architecture().rate_hz, rate));
+                let mut needed = BufferLens::new(joints, frames, rate);
+                if let Some(w) = network {
+                    let n = coach.skeleton.len();
+                    needed = needed.with_network(w.architecture(), joints, n, frames);
+                }
                 let fits = ring.len() >= needed.ring
                     && self.virtual_coach.len() >= needed.coach
                     && self.floats.len() >= needed.floats
                     && self.bytes.len() >= needed.bytes;
-                fits.then_some(()).ok_or(Refusal::Buffers)
-            })
-            .and_then(|()| {
-                let retarget =
-                    Analytic::new(coach.skeleton, &skeleton).map_err(|_| Refusal::Retarget)?;
-                let n = coach.skeleton.len();
-                let mut between = [Vec3::zeros(); MAX_JOINTS];
-                for (k, out) in self
-                    .virtual_coach
-                    .chunks_exact_mut(joints)
-                    .take(coach.frames_at(rate))
-                    .enumerate()
-                {
-                    let (i, fraction) = coach.source_of(k, rate);
-                    let frame = |i: usize| coach.positions.get(i * n..(i + 1) * n);
-                    let source = match (frame(i), frame(i + 1)) {
-                        (Some(a), Some(b)) if fraction > 0.0 => {
-                            for ((m, p), q) in between.iter_mut().zip(a).zip(b) {
-                                *m = p + (q - p) * fraction;
-                            }
-                            &between[..n]
-                        }
-                        (Some(a), _) => a,
-                        (None, _) => return Err(Refusal::Retarget),
-                    };
-                    retarget.frame(source, out).map_err(|_| Refusal::Retarget)?;
+                fits.then_some(()).ok_or(Refusal::Buffers)?;
+                let out = &mut self.virtual_coach[..frames * joints];
+                match network {
+                    Some(w) => retarget_network(w, coach, &skeleton, rate, ring, out),
+                    None => retarget_analytic(coach, &skeleton, rate, out),
                 }
-                Ok(())
             })
             .and_then(|()| {
                 let imu = self
@@ -796,6 +814,75 @@ fn valid(config: &Config) -> bool {
 
 /// The rate of the virtual coach: the model rate, or the coach's own where they are the same
 /// rate ([`SAME_RATE`]) and its frames are used as they are.
+/// Frame `k` of `coach` at `rate_hz`, interpolated into `between` when it falls between two
+/// of its own frames.
+fn coach_frame<'a>(
+    coach: &'a Coach<'_>,
+    k: usize,
+    rate_hz: u16,
+    between: &'a mut [Vec3; MAX_JOINTS],
+) -> Option<&'a [Vec3]> {
+    let n = coach.skeleton.len();
+    let (i, fraction) = coach.source_of(k, rate_hz);
+    let frame = |i: usize| coach.positions.get(i * n..(i + 1) * n);
+    match (frame(i), frame(i + 1)) {
+        (Some(a), Some(b)) if fraction > 0.0 => {
+            for ((m, p), q) in between.iter_mut().zip(a).zip(b) {
+                *m = p + (q - p) * fraction;
+            }
+            Some(&between[..n])
+        }
+        (Some(a), _) => Some(a),
+        (None, _) => None,
+    }
+}
+
+/// `coach` at `rate_hz` retargeted onto `student` frame by frame with the analytic
+/// retargeter, into `out` (whole frames of the student).
+fn retarget_analytic(
+    coach: &Coach<'_>,
+    student: &Skeleton,
+    rate_hz: u16,
+    out: &mut [Vec3],
+) -> Result<(), Refusal> {
+    let retarget = Analytic::new(coach.skeleton, student).map_err(|_| Refusal::Retarget)?;
+    let mut between = [Vec3::zeros(); MAX_JOINTS];
+    for (k, pose) in out.chunks_exact_mut(student.len()).enumerate() {
+        let source = coach_frame(coach, k, rate_hz, &mut between).ok_or(Refusal::Retarget)?;
+        retarget
+            .frame(source, pose)
+            .map_err(|_| Refusal::Retarget)?;
+    }
+    Ok(())
+}
+
+/// `coach` at `rate_hz` retargeted onto `student` by the int8 network of `weights`, into
+/// `out` (whole frames of the student); its input and scratch are carved from `ring`.
+fn retarget_network(
+    weights: &Weights<'_>,
+    coach: &Coach<'_>,
+    student: &Skeleton,
+    rate_hz: u16,
+    ring: &mut [Vec3],
+    out: &mut [Vec3],
+) -> Result<(), Refusal> {
+    let n = coach.skeleton.len();
+    let frames = out.len() / student.len().max(1);
+    let (source, rest) = ring
+        .split_at_mut_checked(frames * n)
+        .ok_or(Refusal::Buffers)?;
+    let mut between = [Vec3::zeros(); MAX_JOINTS];
+    for (k, pose) in source.chunks_exact_mut(n).enumerate() {
+        let frame = coach_frame(coach, k, rate_hz, &mut between).ok_or(Refusal::Retarget)?;
+        pose.copy_from_slice(frame);
+    }
+    let scratch: &mut [u8] = bytemuck::cast_slice_mut(rest);
+    network::retarget(weights, coach.skeleton, student, source, scratch, out).map_err(|e| match e {
+        NetworkError::Scratch => Refusal::Buffers,
+        _ => Refusal::Retarget,
+    })
+}
+
 fn coach_rate(coach: &Coach<'_>, rate_hz: u16) -> f32 {
     if same_rate(coach.rate_hz, rate_hz) {
         coach.rate_hz

@@ -1,11 +1,14 @@
-//! The coach reference swings this build carries, numbered as `CoachSelect` numbers them: the
-//! blobs in `coaches/` (real swings, see the README), the same bytes the firmware embeds.
+//! What the device carries: the coach reference swings, numbered as `CoachSelect` numbers
+//! them (the blobs in `coaches/`, real swings, see the README; the same bytes the firmware
+//! embeds), and optionally the int8 network's weights.
 
 use anyhow::{Context, Result};
 use posecoach_adapters::session::{BufferLens, Coach, OwnedBuffers, Session, RATES_HZ};
 use posecoach_core::blob::Aligned;
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::reference::Reference;
+use posecoach_core::weights::Weights;
+use std::path::Path;
 
 /// The bundled reference blobs in order: reference `n` is `BUNDLED[n]`.
 static BUNDLED: [&Aligned<[u8]>; 2] = [
@@ -27,12 +30,52 @@ pub fn all() -> Result<Vec<Reference<'static>>> {
         .collect()
 }
 
-/// Runs `device` on the device's pipeline: a session with every bundled reference and buffers
-/// for any student and model rate.
+/// A weights blob read from a file, kept aligned for the core's in-place view.
+#[derive(Clone, Debug)]
+pub struct Network {
+    words: Vec<u32>,
+    len: usize,
+}
+
+impl Network {
+    /// The int8 weights in `path` (a `.pcw` from `posecoach export`).
+    ///
+    /// # Errors
+    /// If the file cannot be read or is not sound weights.
+    pub fn load(path: &Path) -> Result<Network> {
+        let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+        let mut words = vec![0u32; bytes.len().div_ceil(4)];
+        bytemuck::cast_slice_mut::<u32, u8>(&mut words)[..bytes.len()].copy_from_slice(&bytes);
+        let network = Network {
+            words,
+            len: bytes.len(),
+        };
+        network
+            .weights()
+            .with_context(|| format!("reading {}", path.display()))?;
+        Ok(network)
+    }
+
+    /// The checked view.
+    ///
+    /// # Errors
+    /// Never after [`Network::load`] succeeded.
+    pub fn weights(&self) -> Result<Weights<'_>> {
+        Ok(Weights::from_bytes(
+            &bytemuck::cast_slice(&self.words)[..self.len],
+        )?)
+    }
+}
+
+/// Runs `device` on the device's pipeline: a session with every bundled reference, the int8
+/// `network` if given, and buffers for any student and model rate.
 ///
 /// # Errors
 /// Only if a bundled file were damaged.
-pub fn session<R>(device: impl FnOnce(&mut Session<'_>) -> R) -> Result<R> {
+pub fn session<R>(
+    network: Option<&Weights<'_>>,
+    device: impl FnOnce(&mut Session<'_>) -> R,
+) -> Result<R> {
     let coaches = all()?;
     let refs: Vec<Coach<'_>> = coaches.iter().map(Coach::from).collect();
     let longest = refs
@@ -40,8 +83,16 @@ pub fn session<R>(device: impl FnOnce(&mut Session<'_>) -> R) -> Result<R> {
         .map(|c| c.frames_at(RATES_HZ.1))
         .max()
         .unwrap_or(0);
-    let mut buffers = OwnedBuffers::new(BufferLens::new(MAX_JOINTS, longest, RATES_HZ.1));
-    Ok(device(&mut Session::new(&refs, buffers.buffers())))
+    let mut lens = BufferLens::new(MAX_JOINTS, longest, RATES_HZ.1);
+    if let Some(w) = network {
+        lens = lens.with_network(w.architecture(), MAX_JOINTS, MAX_JOINTS, longest);
+    }
+    let mut buffers = OwnedBuffers::new(lens);
+    let session = Session::new(&refs, buffers.buffers());
+    Ok(device(&mut match network {
+        Some(w) => session.with_network(w),
+        None => session,
+    }))
 }
 
 #[cfg(test)]

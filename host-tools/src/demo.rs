@@ -29,7 +29,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<String> {
-    let replay = replay::replay(SESSION).context("replaying the bundled session")?;
+    let replay = replay::replay(SESSION, None).context("replaying the bundled session")?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let json = replay.to_json();

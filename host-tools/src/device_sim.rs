@@ -11,6 +11,7 @@
 use crate::coaches;
 use anyhow::{Context, Result};
 use posecoach_adapters::session::{Outcome, Session};
+use posecoach_core::weights::Weights;
 use posecoach_core::wire::{encode, Decoder, Message, MAX_FRAME};
 use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
@@ -45,6 +46,10 @@ pub struct Args {
     /// On Ctrl-C, print the totals as one JSON object instead of text.
     #[arg(long)]
     json: bool,
+    /// Carry these int8 weights (.pcw) as a device would: coaches are retargeted with them
+    /// when the model rate is the network's.
+    #[arg(long)]
+    weights: Option<PathBuf>,
 }
 
 /// What a simulated device did.
@@ -63,6 +68,15 @@ pub fn run(args: &Args) -> Result<String> {
         "device-sim: serving {} (Ctrl-C to stop)",
         args.serial.port.display()
     );
+    let network = args
+        .weights
+        .as_deref()
+        .map(coaches::Network::load)
+        .transpose()?;
+    let weights = network
+        .as_ref()
+        .map(coaches::Network::weights)
+        .transpose()?;
     let stop = until_interrupted()?;
     let mut failing = false;
     let connect = || match open(&args.serial.port, args.serial.baud) {
@@ -81,7 +95,7 @@ pub fn run(args: &Args) -> Result<String> {
             None
         }
     };
-    let totals = simulate(connect, &stop)?;
+    let totals = simulate(connect, &stop, weights.as_ref())?;
     if args.json {
         let doc = serde_json::json!({"links": totals.links, "reports": totals.reports, "refused": totals.refused});
         return Ok(format!("{doc}\n"));
@@ -114,16 +128,17 @@ pub fn open(port: &Path, baud: u32) -> serialport::Result<serialport::TTYPort> {
         .open_native()
 }
 
-/// Runs the device on the links `connect` gives (`None`: none now, try again later) until
-/// `stop` is set.
+/// Runs the device (with the int8 `network` if given) on the links `connect` gives (`None`:
+/// none now, try again later) until `stop` is set.
 ///
 /// # Errors
 /// Only if a bundled coach reference were damaged.
 pub fn simulate<L: Read + Write>(
     connect: impl FnMut() -> Option<L>,
     stop: &AtomicBool,
+    network: Option<&Weights<'_>>,
 ) -> Result<Totals> {
-    coaches::session(|session| serve(session, connect, stop))
+    coaches::session(network, |session| serve(session, connect, stop))
 }
 
 /// [`simulate`] on `session`.

@@ -4,6 +4,7 @@ use crate::{coaches, device_sim, html, score};
 use anyhow::{Context, Result};
 use posecoach_adapters::log::LogReader;
 use posecoach_adapters::session::{Outcome, Session};
+use posecoach_core::weights::Weights;
 use serde_json::{json, Value};
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -23,6 +24,11 @@ pub struct Args {
     /// `Nack` per refused message), COBS-framed exactly as on the serial link.
     #[arg(long)]
     wire: Option<PathBuf>,
+    /// Retarget coaches with these int8 weights (.pcw from `posecoach export`) as a device
+    /// carrying them does (when the session's model rate is the network's); the analytic
+    /// retargeter otherwise.
+    #[arg(long)]
+    weights: Option<PathBuf>,
 }
 
 /// What a replay found.
@@ -51,7 +57,17 @@ impl Replay {
 pub fn run(args: &Args) -> Result<String> {
     let bytes =
         std::fs::read(&args.log).with_context(|| format!("reading {}", args.log.display()))?;
-    let replay = replay(&bytes).with_context(|| format!("replaying {}", args.log.display()))?;
+    let network = args
+        .weights
+        .as_deref()
+        .map(coaches::Network::load)
+        .transpose()?;
+    let weights = network
+        .as_ref()
+        .map(coaches::Network::weights)
+        .transpose()?;
+    let replay = replay(&bytes, weights.as_ref())
+        .with_context(|| format!("replaying {}", args.log.display()))?;
     let json = replay.to_json();
     if let Some(path) = &args.wire {
         std::fs::write(path, &replay.wire)
@@ -74,12 +90,12 @@ pub fn run(args: &Args) -> Result<String> {
     Ok(out)
 }
 
-/// Replays `log` (a whole .pclog file) as a device would.
+/// Replays `log` (a whole .pclog file) as a device would, with the int8 `network` if given.
 ///
 /// # Errors
 /// If the bytes are not a log.
-pub fn replay(log: &[u8]) -> Result<Replay> {
-    coaches::session(|session| replay_on(session, log))?
+pub fn replay(log: &[u8], network: Option<&Weights<'_>>) -> Result<Replay> {
+    coaches::session(network, |session| replay_on(session, log))?
 }
 
 fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {

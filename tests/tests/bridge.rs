@@ -118,7 +118,7 @@ impl Rig {
                         bytes_read: bytes_read.clone(),
                     })
                 };
-                simulate(connect, &stop).unwrap()
+                simulate(connect, &stop, None).unwrap()
             })
         };
         // The bridge finds no port at first and retries until `plug` makes one.
@@ -302,7 +302,7 @@ fn same_report(wire: &Value, replayed: &Value) {
 
 /// The replay's scored swings, checked to be the ones the phone got, once each and in order.
 fn check_reports(phone: &Phone) {
-    let replayed = replay(LOG).unwrap();
+    let replayed = replay(LOG, None).unwrap();
     let scored: Vec<&Value> = replayed
         .swings
         .iter()
@@ -331,7 +331,7 @@ fn the_phone_gets_the_reports_replay_gives() {
     let mut phone = Phone::connect(rig.addr);
     phone.expect("hello", |seen| bridge_events(seen, "hello") == 1);
     phone.send(&messages());
-    let swings = replay(LOG).unwrap().swings.len();
+    let swings = replay(LOG, None).unwrap().swings.len();
     phone.expect("reports", |seen| reports(seen).len() >= swings);
     phone.wait(AFTERWARDS, |_| false);
     check_reports(&phone);

@@ -3,6 +3,7 @@
 //! seeded fault injector then damages the bytes the way a bad serial link does.
 
 use posecoach_cli::replay::{replay, Replay};
+use posecoach_core::weights::Weights;
 use posecoach_core::wire::{Decoder, Message};
 use posecoach_tests::{files, json_difference};
 use rand::{Rng, SeedableRng};
@@ -60,44 +61,70 @@ fn check_swings(name: &str, replay: &Replay, expected: &Value) {
     }
 }
 
+/// Logs also replayed with the committed int8 weights: the firmware's (its model rate is the
+/// network's, so the coach is retargeted by the network).
+const INT8_LOGS: [&str; 1] = ["device_h36m_30hz.pclog"];
+
 #[test]
 fn every_log_replays_to_its_swings_and_golden_reports() {
     for log in logs() {
-        let name = log.file_name().unwrap().to_string_lossy().into_owned();
-        let bytes = std::fs::read(&log).unwrap();
-        let replay = replay(&bytes).unwrap();
-        assert!(replay.refused.is_empty(), "{name}: {:?}", replay.refused);
-        check_swings(&name, &replay, &sidecar(&log));
-        let golden = log.with_extension("replay.json");
-        let got = format!("{:#}\n", serde_json::Value::Array(replay.swings.clone()));
-        if std::env::var_os("POSECOACH_BLESS").is_some() {
-            std::fs::write(&golden, &got).unwrap();
-        }
-        let want = std::fs::read_to_string(&golden).unwrap_or_else(|_| {
-            panic!("{}: missing; POSECOACH_BLESS=1 writes it", golden.display())
-        });
-        let want: Value = serde_json::from_str(&want).unwrap();
-        let difference = json_difference(&Value::Array(replay.swings.clone()), &want, 1e-5);
-        assert!(
-            difference.is_none(),
-            "{name}: the reports differ from {} at {} (POSECOACH_BLESS=1 rewrites it after a deliberate change)",
-            golden.display(),
-            difference.unwrap_or_default()
-        );
-        // What the device sends back, byte for byte: the QEMU firmware compares its own
-        // frames with this file.
-        let wire = log.with_extension("device.bin");
-        if std::env::var_os("POSECOACH_BLESS").is_some() {
-            std::fs::write(&wire, &replay.wire).unwrap();
-        }
-        let want = std::fs::read(&wire)
-            .unwrap_or_else(|_| panic!("{}: missing; POSECOACH_BLESS=1 writes it", wire.display()));
-        assert!(
-            replay.wire == want,
-            "{name}: the device's frames differ from {} (POSECOACH_BLESS=1 rewrites it after a deliberate change)",
-            wire.display()
-        );
+        check_log(&log, None, "");
     }
+}
+
+#[test]
+fn the_firmwares_log_replays_with_the_int8_network_to_its_goldens() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../weights/student-int8.pcw");
+    let network = posecoach_cli::coaches::Network::load(&path).unwrap();
+    let weights = network.weights().unwrap();
+    for name in INT8_LOGS {
+        let log = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("logs")
+            .join(name);
+        let analytic = replay(&std::fs::read(&log).unwrap(), None).unwrap();
+        let int8 = check_log(&log, Some(&weights), "int8.");
+        // The network did retarget the coach: the reports are not the analytic ones.
+        assert_ne!(int8.swings, analytic.swings, "{name}");
+    }
+}
+
+/// Replays `log` with `network`, checks its swings against the sidecar and its reports and
+/// device frames against the goldens (`<log>.<prefix>replay.json`, `<log>.<prefix>device.bin`).
+fn check_log(log: &Path, network: Option<&Weights<'_>>, prefix: &str) -> Replay {
+    let name = log.file_name().unwrap().to_string_lossy().into_owned();
+    let bytes = std::fs::read(log).unwrap();
+    let replay = replay(&bytes, network).unwrap();
+    assert!(replay.refused.is_empty(), "{name}: {:?}", replay.refused);
+    check_swings(&name, &replay, &sidecar(log));
+    let golden = log.with_extension(format!("{prefix}replay.json"));
+    let got = format!("{:#}\n", serde_json::Value::Array(replay.swings.clone()));
+    if std::env::var_os("POSECOACH_BLESS").is_some() {
+        std::fs::write(&golden, &got).unwrap();
+    }
+    let want = std::fs::read_to_string(&golden)
+        .unwrap_or_else(|_| panic!("{}: missing; POSECOACH_BLESS=1 writes it", golden.display()));
+    let want: Value = serde_json::from_str(&want).unwrap();
+    let difference = json_difference(&Value::Array(replay.swings.clone()), &want, 1e-5);
+    assert!(
+        difference.is_none(),
+        "{name}: the reports differ from {} at {} (POSECOACH_BLESS=1 rewrites it after a deliberate change)",
+        golden.display(),
+        difference.unwrap_or_default()
+    );
+    // What the device sends back, byte for byte: the QEMU firmware compares its own
+    // frames with this file.
+    let wire = log.with_extension(format!("{prefix}device.bin"));
+    if std::env::var_os("POSECOACH_BLESS").is_some() {
+        std::fs::write(&wire, &replay.wire).unwrap();
+    }
+    let want = std::fs::read(&wire)
+        .unwrap_or_else(|_| panic!("{}: missing; POSECOACH_BLESS=1 writes it", wire.display()));
+    assert!(
+        replay.wire == want,
+        "{name}: the device's frames differ from {} (POSECOACH_BLESS=1 rewrites it after a deliberate change)",
+        wire.display()
+    );
+    replay
 }
 
 /// The wire frames of a log after its header, each with its delimiter.
@@ -205,7 +232,7 @@ fn every_swing_survives_a_noisy_link() {
         let imu = sidecar(&log)["kind"] == "imu";
         let flip = if imu { 0.01 } else { 0.001 };
         let faults = inject(&bytes, 7, flip, 0.05, 0.02, 4);
-        let replay = replay(&faults.bytes).unwrap();
+        let replay = replay(&faults.bytes, None).unwrap();
         eprintln!(
             "{name}: {} frames damaged, {} dropped, {} duplicated; counters {}",
             faults.damaged, faults.dropped, faults.duplicated, replay.counters

@@ -205,3 +205,45 @@ fn a_stream_in_another_format_is_mapped_onto_the_profile() {
         assert!(a.abs_diff(*b) <= 1);
     }
 }
+
+/// With int8 weights the session asks for a ring that also holds the network's input and
+/// scratch (at the device's 30 Hz the detector's own ring is already longer), and works at the
+/// network's rate and, with the analytic retargeter, at others.
+#[test]
+fn a_network_borrows_the_ring_at_its_rate() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../weights/student-int8.pcw");
+    let network = posecoach_cli::coaches::Network::load(&path).unwrap();
+    let weights = network.weights().unwrap();
+    let a = weights.architecture();
+    let coach = io::load(&fixture("golf_driver_60hz.csv")).unwrap();
+    let coaches = [Coach {
+        skeleton: &coach.skeleton,
+        positions: &coach.positions,
+        rate_hz: coach.rate_hz,
+    }];
+    let (n, frames) = (coach.skeleton.len(), coaches[0].frames_at(30));
+    let plain = BufferLens::new(17, frames, 30);
+    let need = |joints, coach_joints, frames| {
+        let scratch = posecoach_core::network::scratch_len(a, coach_joints, joints);
+        frames * coach_joints + scratch.div_ceil(12)
+    };
+    let lens = plain.with_network(a, 17, n, frames);
+    assert_eq!(lens.ring, plain.ring.max(need(17, n, frames)));
+    let big = plain.with_network(a, 40, 40, 256);
+    assert_eq!(big.ring, need(40, 40, 256));
+    assert!(big.ring > plain.ring);
+    for rate in [30, 60] {
+        let config = Config {
+            model_rate_hz: rate,
+            band_radius: 10,
+            anchored: true,
+        };
+        let frames = coaches[0].frames_at(rate);
+        let lens = BufferLens::new(17, frames, rate).with_network(a, 17, n, frames);
+        let mut buffers = OwnedBuffers::new(lens);
+        let mut session = Session::with_config(&coaches, buffers.buffers(), config)
+            .unwrap()
+            .with_network(&weights);
+        assert_eq!(outcomes(&mut session, &profile(1.75)), [], "{rate} Hz");
+    }
+}
