@@ -29,8 +29,8 @@ use crate::math;
 use crate::retarget::{Analytic, RetargetError};
 use crate::skeleton::{Segment, Skeleton};
 use crate::weights::{
-    Architecture, Dense, Table, Tensors, Weights, MAX_FEATURES, MOTION_CHANNELS, QUATERNION,
-    REST_CHANNELS, SEGMENTS, WINDOW,
+    Architecture, Dense, Table, Tensors, Weights, MAX_FEATURES, MAX_HEADS, MOTION_CHANNELS,
+    QUATERNION, REST_CHANNELS, SEGMENTS, WINDOW,
 };
 use crate::{Quat, Vec3};
 use nalgebra::Quaternion;
@@ -383,27 +383,57 @@ impl Net<'_, '_> {
             int8::linear(&x, &first, &mut hidden[..d])?;
             int8::linear(&hidden[..d], &embed, joint)?;
         }
-        let (key, value) = (self.layer(Dense::Key), self.layer(Dense::Value));
-        let mut root = ([0.0; MAX_FEATURES], [0.0; MAX_FEATURES]);
-        project(key, &buffers.joints[..d], &mut root.0[..d])?;
-        project(value, &buffers.joints[..d], &mut root.1[..d])?;
         let heads = usize::from(self.weights.architecture().heads);
+        let width = d / heads;
         let output = self.layer(Dense::Output);
+        let value = self.layer(Dense::Value);
+        let [logits, offsets, token_logits, token_values] =
+            Table::ALL.map(|t| self.weights.table(t));
         for (s, segment) in Segment::ALL.iter().enumerate() {
-            let token = |table: Table| &self.weights.table(table)[s * d..(s + 1) * d];
-            let mut attention = Attention::new(token(Table::Queries), heads);
-            attention.add(token(Table::Keys), token(Table::Values));
-            attention.add(&root.0[..d], &root.1[..d]);
-            for k in (1..self.source.len()).filter(|&k| self.source.segment_contains(*segment, k)) {
+            let row = s * heads..(s + 1) * heads;
+            let mut attention = Attention::new(&token_logits[row.clone()]);
+            let seen = (0..self.source.len())
+                .filter(|&k| k == 0 || self.source.segment_contains(*segment, k));
+            for k in seen {
                 let joint = &buffers.joints[k * d..(k + 1) * d];
-                let (mut kk, mut vv) = ([0.0; MAX_FEATURES], [0.0; MAX_FEATURES]);
-                project(key, joint, &mut kk[..d])?;
-                project(value, joint, &mut vv[..d])?;
-                attention.add(&kk[..d], &vv[..d]);
+                let mut logit = [0.0; MAX_HEADS];
+                for ((l, u), &offset) in logit
+                    .iter_mut()
+                    .zip(logits[s * heads * d..].chunks_exact(d))
+                    .zip(&offsets[row.clone()])
+                {
+                    *l = u
+                        .iter()
+                        .zip(joint)
+                        .fold(offset, |acc, (&u, &x)| acc + u * f32::from(x));
+                }
+                attention.add(&logit[..heads], joint);
             }
+            // Per head: the token's value and the joints' values, the latter as the value
+            // layer of the joints' weighted mean embedding.
             let mut context = [0i8; MAX_FEATURES];
-            for (q, v) in context.iter_mut().zip(attention.context()) {
-                *q = int8::quantize(v, scales.context);
+            for h in 0..heads {
+                let span = h * width..(h + 1) * width;
+                let mut mean = [0i8; MAX_FEATURES];
+                for (m, &x) in mean.iter_mut().zip(&attention.sums[h][..d]) {
+                    *m = int8::quantize(x, attention.joints[h].max(f32::MIN_POSITIVE));
+                }
+                let mut acc = [0i32; MAX_FEATURES];
+                let rows = span.start * d..span.end * d;
+                let (weights, bias) = (&value.weights[rows], &value.bias[span.clone()]);
+                int8::accumulate(&mean[..d], weights, bias, &mut acc[..width])?;
+                let total = attention.token[h] + attention.joints[h];
+                for (c, (q, &a)) in context[span.clone()]
+                    .iter_mut()
+                    .zip(&acc[..width])
+                    .enumerate()
+                {
+                    let at = span.start + c;
+                    let joints = a as f32 * value.scale[at];
+                    let token = token_values[s * d + at];
+                    let real = (attention.token[h] * token + attention.joints[h] * joints) / total;
+                    *q = int8::quantize(real, scales.context);
+                }
             }
             let layer = Layer {
                 weights: output.weights,
@@ -534,62 +564,47 @@ impl Net<'_, '_> {
     }
 }
 
-/// A layer with int8 input and `f32` output: `out[o] = (Σ w x + bias) · scale`.
-fn project(t: &Tensors<'_>, x: &[i8], out: &mut [f32]) -> Result<(), ShapeError> {
-    let mut acc = [0i32; MAX_FEATURES];
-    let acc = acc.get_mut(..out.len()).ok_or(ShapeError::Mismatch)?;
-    int8::accumulate(x, t.weights, t.bias, acc)?;
-    for ((y, &a), &s) in out.iter_mut().zip(acc.iter()).zip(t.scale) {
-        *y = a as f32 * s;
-    }
-    Ok(())
+/// One segment token's attention over keys given one at a time, per head: a softmax kept as
+/// a running maximum and the token's and the joints' exponentials relative to it, with the
+/// joints' embeddings summed under their exponentials (no key or value is stored).
+struct Attention {
+    max: [f32; MAX_HEADS],
+    /// The token's own exponential.
+    token: [f32; MAX_HEADS],
+    /// The joints' exponentials, summed.
+    joints: [f32; MAX_HEADS],
+    /// The joints' int8 embeddings weighted by their exponentials, summed.
+    sums: [[f32; MAX_FEATURES]; MAX_HEADS],
 }
 
-/// One query's attention over keys given one at a time: a softmax per head kept as a
-/// running maximum, sum and weighted sum of values (no key is stored).
-struct Attention<'q> {
-    query: &'q [f32],
-    heads: usize,
-    max: [f32; MAX_FEATURES],
-    sum: [f32; MAX_FEATURES],
-    context: [f32; MAX_FEATURES],
-}
-
-impl<'q> Attention<'q> {
-    fn new(query: &'q [f32], heads: usize) -> Self {
+impl Attention {
+    /// Starts with the token's logit for itself, per head.
+    fn new(token_logits: &[f32]) -> Self {
+        let mut max = [0.0; MAX_HEADS];
+        max[..token_logits.len()].copy_from_slice(token_logits);
         Attention {
-            query,
-            heads: heads.clamp(1, query.len().max(1)),
-            max: [f32::NEG_INFINITY; MAX_FEATURES],
-            sum: [0.0; MAX_FEATURES],
-            context: [0.0; MAX_FEATURES],
+            max,
+            token: [1.0; MAX_HEADS],
+            joints: [0.0; MAX_HEADS],
+            sums: [[0.0; MAX_FEATURES]; MAX_HEADS],
         }
     }
 
-    fn add(&mut self, key: &[f32], value: &[f32]) {
-        let width = self.query.len() / self.heads;
-        for h in 0..self.heads {
-            let span = h * width..(h + 1) * width;
-            let logit = self.query[span.clone()]
-                .iter()
-                .zip(&key[span.clone()])
-                .fold(0.0, |acc, (q, k)| acc + q * k);
+    /// Adds a joint with `logits` (one per head) and int8 embedding `x`.
+    fn add(&mut self, logits: &[f32], x: &[i8]) {
+        for (h, &logit) in logits.iter().enumerate() {
             let (old, new) = if logit > self.max[h] {
                 (libm::expf(self.max[h] - logit), 1.0)
             } else {
                 (1.0, libm::expf(logit - self.max[h]))
             };
             self.max[h] = self.max[h].max(logit);
-            self.sum[h] = self.sum[h] * old + new;
-            for (c, &v) in self.context[span.clone()].iter_mut().zip(&value[span]) {
-                *c = *c * old + new * v;
+            self.token[h] *= old;
+            self.joints[h] = self.joints[h] * old + new;
+            for (sum, &v) in self.sums[h].iter_mut().zip(x) {
+                *sum = *sum * old + new * f32::from(v);
             }
         }
-    }
-
-    fn context(&self) -> impl Iterator<Item = f32> + '_ {
-        let width = self.query.len() / self.heads;
-        (0..self.query.len()).map(move |c| self.context[c] / self.sum[c / width])
     }
 }
 

@@ -13,7 +13,7 @@
 //! | scale | `f32` | outputs | the real value of one accumulator unit |
 //! | requant | [`Requant`] | outputs | accumulator unit over the output's int8 scale |
 //!
-//! then the three [`Table`]s, `f32`, segments × features each. All little-endian.
+//! then the [`Table`]s of the segment tokens' attention, `f32`. All little-endian.
 //!
 //! A layer whose int8 input has per-channel scales (the motion features) has them folded into
 //! its weights: its accumulators are in the same units whatever the input channel.
@@ -30,6 +30,8 @@ pub const MAGIC: [u8; 4] = *b"PCW\x01";
 pub const VERSION: u16 = 1;
 /// Most features per segment the core's scratch holds (the distilled student's `d`).
 pub const MAX_FEATURES: usize = 16;
+/// Most attention heads.
+pub const MAX_HEADS: usize = 8;
 /// Longest convolution kernel.
 pub const MAX_KERNEL: usize = 7;
 /// Frames in a window.
@@ -84,8 +86,9 @@ impl core::fmt::Display for WeightsError {
             ),
             WeightsError::Architecture => write!(
                 f,
-                "weights: sizes this build cannot run (at most {MAX_FEATURES} features, \
-                 kernel at most {MAX_KERNEL}, {WINDOW}-frame windows, {SEGMENTS} segments)"
+                "weights: sizes this build cannot run (at most {MAX_FEATURES} features and \
+                 {MAX_HEADS} heads, kernel at most {MAX_KERNEL}, {WINDOW}-frame windows, \
+                 {SEGMENTS} segments)"
             ),
             WeightsError::Scale => f.write_str("weights: an activation scale is not positive"),
             WeightsError::Payload => f.write_str(
@@ -134,7 +137,7 @@ impl Architecture {
         );
         (2..=MAX_FEATURES).contains(&d)
             && d.is_multiple_of(2)
-            && heads >= 1
+            && (1..=MAX_HEADS).contains(&heads)
             && d.is_multiple_of(heads)
             && kernel % 2 == 1
             && kernel <= MAX_KERNEL
@@ -240,9 +243,8 @@ pub enum Dense {
     MotionRest,
     /// Motion encoder: hidden → joint embedding; one bias row per frame (the time encoding).
     MotionOutput,
-    /// Attention keys of the joints.
-    Key,
-    /// Attention values of the joints.
+    /// Attention values, applied per head to the attention-weighted mean of the joints'
+    /// embeddings (the weights sum to one, so this is the mean of the joints' values).
     Value,
     /// Attention output; one bias row per segment (its token, the residual).
     Output,
@@ -266,14 +268,13 @@ pub enum Dense {
 
 impl Dense {
     /// Every layer, in payload order.
-    pub const ALL: [Dense; 17] = [
+    pub const ALL: [Dense; 16] = [
         Dense::SkeletonHidden,
         Dense::SkeletonOutput,
         Dense::SkeletonSegment,
         Dense::MotionFeatures,
         Dense::MotionRest,
         Dense::MotionOutput,
-        Dense::Key,
         Dense::Value,
         Dense::Output,
         Dense::Down1,
@@ -295,7 +296,6 @@ impl Dense {
             Dense::MotionFeatures => "motion.features",
             Dense::MotionRest => "motion.rest",
             Dense::MotionOutput => "motion.output",
-            Dense::Key => "attention.key",
             Dense::Value => "attention.value",
             Dense::Output => "attention.output",
             Dense::Down1 => "down_1",
@@ -343,28 +343,50 @@ impl Dense {
     }
 }
 
-/// `f32` tables of the segment tokens, segments × features each.
+/// `f32` tables of the segment tokens' attention. A token's query is a constant, so its logit
+/// for a joint is a fixed linear function of the joint's embedding: the keys are never
+/// computed, only these dot products.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Table {
-    /// Each token's attention query, divided by the square root of the head's width.
-    Queries,
-    /// Each token's attention key.
-    Keys,
-    /// Each token's attention value.
-    Values,
+    /// `[segment][head][feature]`: the key layer's weights seen through each token's query
+    /// (divided by the square root of the head's width, times the embeddings' int8 scale):
+    /// a joint's logit is this row's dot product with its int8 embedding, plus the offset.
+    JointLogits,
+    /// `[segment][head]`: the key layer's bias seen through each token's query.
+    LogitOffsets,
+    /// `[segment][head]`: each token's logit for its own key.
+    TokenLogits,
+    /// `[segment][feature]`: each token's value.
+    TokenValues,
 }
 
 impl Table {
     /// Every table, in payload order.
-    pub const ALL: [Table; 3] = [Table::Queries, Table::Keys, Table::Values];
+    pub const ALL: [Table; 4] = [
+        Table::JointLogits,
+        Table::LogitOffsets,
+        Table::TokenLogits,
+        Table::TokenValues,
+    ];
 
     /// Its name in tables.
     pub const fn name(self) -> &'static str {
         match self {
-            Table::Queries => "tokens.queries",
-            Table::Keys => "tokens.keys",
-            Table::Values => "tokens.values",
+            Table::JointLogits => "tokens.joint_logits",
+            Table::LogitOffsets => "tokens.logit_offsets",
+            Table::TokenLogits => "tokens.token_logits",
+            Table::TokenValues => "tokens.values",
+        }
+    }
+
+    /// Its length for `a`.
+    pub fn len(self, a: &Architecture) -> usize {
+        let heads = usize::from(a.heads);
+        match self {
+            Table::JointLogits => SEGMENTS * heads * a.d(),
+            Table::LogitOffsets | Table::TokenLogits => SEGMENTS * heads,
+            Table::TokenValues => SEGMENTS * a.d(),
         }
     }
 }
@@ -457,8 +479,8 @@ impl<'a> Weights<'a> {
             *slot = tensors;
         }
         let mut tables: [&[f32]; Table::ALL.len()] = [&[]; Table::ALL.len()];
-        for slot in &mut tables {
-            *slot = at.take(SEGMENTS * a.d())?;
+        for (slot, table) in tables.iter_mut().zip(Table::ALL) {
+            *slot = at.take(table.len(&a))?;
             if !slot.iter().all(|v| v.is_finite()) {
                 return Err(WeightsError::Payload);
             }
@@ -515,7 +537,11 @@ pub fn payload_len(a: &Architecture) -> usize {
                 .sum::<usize>()
         })
         .sum();
-    layers + Table::ALL.len() * aligned(SEGMENTS * a.d() * 4)
+    layers
+        + Table::ALL
+            .iter()
+            .map(|t| aligned(t.len(a) * 4))
+            .sum::<usize>()
 }
 
 /// Bytes [`write()`] may need for `a`.
@@ -581,11 +607,11 @@ pub fn write(
             put(bytemuck::cast_slice(t.scale))?;
             put(bytemuck::cast_slice(t.requant))?;
         }
-        for table in tables {
-            if table.len() != SEGMENTS * a.d() {
+        for (values, table) in tables.iter().zip(Table::ALL) {
+            if values.len() != table.len(&a) {
                 return Err(WeightsError::Payload);
             }
-            put(bytemuck::cast_slice(table))?;
+            put(bytemuck::cast_slice(values))?;
         }
         Ok(())
     })
@@ -683,13 +709,18 @@ pub(crate) mod testing {
             .collect();
         let tables: Vec<Vec<f32>> = Table::ALL
             .iter()
-            .map(|_| {
-                (0..SEGMENTS * a.d())
+            .map(|t| {
+                (0..t.len(&a))
                     .map(|_| (next() % 2001) as f32 / 1000.0 - 1.0)
                     .collect()
             })
             .collect();
-        let tables = [&tables[0][..], &tables[1][..], &tables[2][..]];
+        let tables = [
+            &tables[0][..],
+            &tables[1][..],
+            &tables[2][..],
+            &tables[3][..],
+        ];
         let mut out = std::vec![0u8; max_len(&a)];
         let n = write(
             &header(a),
@@ -755,7 +786,8 @@ mod tests {
                 layer.name()
             );
         }
-        assert_eq!(w.table(Table::Values).len(), SEGMENTS * 16);
+        assert_eq!(w.table(Table::TokenValues).len(), SEGMENTS * 16);
+        assert_eq!(w.table(Table::JointLogits).len(), SEGMENTS * 2 * 16);
     }
 
     #[test]

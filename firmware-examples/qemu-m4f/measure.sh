@@ -20,21 +20,25 @@ minstr() { awk -v n="$1" 'BEGIN { printf "%.3f M", n / 1e6 }'; }
 code=$(( $(section .vector_table) + $(section .text) + $(section .rodata) + $(section .data) ))
 log=$(field EMBEDDED log)
 transcript=$(field EMBEDDED transcript)
+golden=$(field EMBEDDED golden)
+weights=$(field EMBEDDED weights)
 static_ram=$(( $(section .data) + $(section .bss) + $(section .uninit) ))
 stack=$(field RAM stack)
 echo
 echo "| what | measured |"
 echo "| --- | --- |"
-echo "| flash: code, constants, both coach references (without the test's log and transcript) | $(kib $((code - log - transcript))) |"
+echo "| flash: code, constants, int8 weights, both coach references (without the test's log, transcript and golden vectors) | $(kib $((code - log - transcript - golden))) |"
+echo "| of which int8 weights | $(kib "$weights") |"
 echo "| static RAM (.data + .bss) | $(kib "$static_ram") |"
 for b in ring coach floats bytes; do
     echo "| of which session buffer \`$b\` | $(kib "$(field RAM "$b")") |"
 done
 echo "| stack high-water mark | $(kib "$stack") |"
 per_mac() { grep "^KERNEL int8 $1:" "$out" | sed -E 's/.*: ([0-9.]+) instructions per MAC/\1/'; }
-echo "| int8 linear layer (64 x 96, requantization included) | $(per_mac linear) instructions per MAC |"
-echo "| int8 grouped convolution (96 channels in 6 groups, kernel 3, 32 frames) | $(per_mac conv1d) instructions per MAC |"
+echo "| int8 linear layer: decoder.features, 16 x 16, requantization included | $(per_mac linear) instructions per MAC |"
+echo "| int8 grouped convolution: up_2, 96 channels in 6 groups, kernel 3, 64 frames | $(per_mac conv1d) instructions per MAC |"
+echo "| retarget one 64-frame coach window (int8 network, 22 joints onto 17) | $(minstr "$(grep '^NETWORK window' "$out" | sed -E 's/NETWORK window ([0-9]+).*/\1/')") |"
 echo "| decode one message (mean, $(field 'STAGE decode' calls) messages) | $(minstr "$(field 'STAGE decode' mean)") |"
 echo "| one pose frame: stream, skeleton fit, detector (mean / max) | $(minstr "$(field 'STAGE frame' mean)") / $(minstr "$(field 'STAGE frame' max)") |"
 echo "| the frame that ends a swing: events, DTW, report (mean of $(field 'STAGE swing' calls)) | $(minstr "$(field 'STAGE swing' mean)") |"
-echo "| student profile or coach selection: coach retargeted (analytic), its swing found | $(minstr "$(field 'STAGE setup' mean)") |"
+echo "| student profile or coach selection: coach retargeted (int8 network), its swing found | $(minstr "$(field 'STAGE setup' mean)") |"

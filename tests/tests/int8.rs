@@ -98,7 +98,7 @@ fn export_writes_weights_that_inspect_reads_and_eval_ranks() {
     let args: inspect::Args = parse(&[&out, "--json"]);
     let header: serde_json::Value = serde_json::from_str(&inspect::run(&args).unwrap()).unwrap();
     assert_eq!(header, report["header"]);
-    assert_eq!(header["layers"].as_array().unwrap().len(), 17);
+    assert_eq!(header["layers"].as_array().unwrap().len(), 16);
     let args: learn::EvalArgs = parse(&[
         "--weights",
         &out,

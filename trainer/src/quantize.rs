@@ -8,8 +8,10 @@
 //!   produces there on golf windows ([`calibrate`]) over 127.
 //! - **Constants** fold into biases: the time encoding (one bias row per frame), the segment
 //!   tokens' residual (one row per segment), and the rest features' columns of the first
-//!   joint layers (per joint, by the core at set-up). The tokens' queries, keys and values
-//!   are stored as `f32` tables.
+//!   joint layers (per joint, by the core at set-up).
+//! - **Attention**: a token's query is constant, so its logit for a joint is the key layer
+//!   seen through the query, one `f32` row per token and head ([`Table::JointLogits`]); keys
+//!   are never computed. The tokens' own logits and values are `f32` tables too.
 
 use crate::bodies::Variation;
 use crate::dataset::{Pool, Split, SplitRng, Structure, FORMATS};
@@ -343,14 +345,6 @@ pub fn export(
             },
         ),
         (
-            key.clone(),
-            Units {
-                input: &joints,
-                output: None,
-                rows: &[],
-            },
-        ),
-        (
             value.clone(),
             Units {
                 input: &joints,
@@ -439,14 +433,28 @@ pub fn export(
     let tensors: [Tensors<'_>; Dense::ALL.len()] = tensors
         .try_into()
         .map_err(|_| Error::Checkpoint("layer count".into()))?;
-    let width = (d / p.heads) as f32;
-    let queries: Vec<f32> = apply(query, &p.tokens)
-        .iter()
-        .map(|q| q / width.sqrt())
-        .collect();
-    let keys = apply(key, &p.tokens);
+    let heads = p.heads;
+    let width = d / heads;
+    let root = (width as f32).sqrt();
+    let queries = apply(query, &p.tokens);
+    let token_keys = apply(key, &p.tokens);
     let values = apply(value, &p.tokens);
-    let tables: [&[f32]; Table::ALL.len()] = [&queries, &keys, &values];
+    let (mut joint_logits, mut offsets, mut token_logits) = (Vec::new(), Vec::new(), Vec::new());
+    for (q, k) in queries.chunks_exact(d).zip(token_keys.chunks_exact(d)) {
+        for h in 0..heads {
+            let span = h * width..(h + 1) * width;
+            let through = |c: usize| q[c] / root;
+            joint_logits.extend((0..d).map(|i| {
+                span.clone()
+                    .map(|c| through(c) * key.weight[c * d + i])
+                    .sum::<f32>()
+                    * s.joints
+            }));
+            offsets.push(span.clone().map(|c| through(c) * key.bias[c]).sum::<f32>());
+            token_logits.push(span.clone().map(|c| through(c) * k[c]).sum::<f32>());
+        }
+    }
+    let tables: [&[f32]; Table::ALL.len()] = [&joint_logits, &offsets, &token_logits, &values];
     let header = Header {
         version: VERSION,
         architecture,

@@ -1,17 +1,20 @@
 //! posecoach's device pipeline on a Cortex-M4F (QEMU `mps2-an386`).
 //!
-//! Replays the recorded session `tests/logs/device_h36m_30hz.pclog` (embedded; a 30 Hz model
-//! rate) through the
-//! device's session with the bundled coach references (embedded `.pcr` blobs): decode → pose
-//! stream → swing detection → retarget (once per student and coach) → events → DTW → report.
-//! Every reply the device would send is encoded as on the serial link and compared with the
-//! host's (`posecoach replay --wire`, committed as `device_h36m_30hz.device.bin`). Prints each
-//! report and the instructions each stage took over defmt; exits 0 only if every byte matched.
+//! First checks the int8 retargeter (`weights/student-int8.pcw`, embedded) against its golden
+//! vectors bit for bit. Then replays the recorded session `tests/logs/device_h36m_30hz.pclog`
+//! (embedded; a 30 Hz model rate, the network's) through the device's session with the
+//! bundled coach references (embedded `.pcr` blobs) and the network: decode → pose stream →
+//! swing detection → retarget (the int8 network, once per student and coach) → events → DTW →
+//! report. Every reply the device would send is encoded as on the serial link and compared
+//! with the host's (`posecoach replay --weights … --wire`, committed as
+//! `device_h36m_30hz.int8.device.bin`). Prints each report and the instructions each stage
+//! took over defmt; exits 0 only if every bit matched.
 #![no_std]
 #![no_main]
 
 mod count;
 mod kernels;
+mod network;
 mod stack;
 
 use cortex_m as _;
@@ -24,6 +27,7 @@ use posecoach_adapters::session::{
 };
 use posecoach_core::blob::Aligned;
 use posecoach_core::reference::Reference;
+use posecoach_core::weights::{Architecture, Weights, SEGMENTS, WINDOW};
 use posecoach_core::wire::{encode, Config, Message, MAX_FRAME};
 use posecoach_core::Vec3;
 use static_cell::ConstStaticCell;
@@ -31,7 +35,7 @@ use static_cell::ConstStaticCell;
 static LOG: &Aligned<[u8]> = &Aligned(*include_bytes!(
     "../../../tests/logs/device_h36m_30hz.pclog"
 ));
-static EXPECTED: &[u8] = include_bytes!("../../../tests/logs/device_h36m_30hz.device.bin");
+static EXPECTED: &[u8] = include_bytes!("../../../tests/logs/device_h36m_30hz.int8.device.bin");
 static COACHES: [&Aligned<[u8]>; 2] = [
     &Aligned(*include_bytes!("../../../coaches/driver.pcr")),
     &Aligned(*include_bytes!("../../../coaches/iron.pcr")),
@@ -43,7 +47,23 @@ const STUDENT_JOINTS: usize = 17;
 const MODEL_RATE_HZ: u16 = 30;
 /// Frames of the longest bundled coach reference (110 at 60 Hz) at the model rate.
 const COACH_FRAMES: usize = frames_at(110, 60.0, MODEL_RATE_HZ);
-const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RATE_HZ);
+/// Joints of the bundled coaches (the canonical 22).
+const COACH_JOINTS: usize = 22;
+/// The embedded network's sizes (checked against its header at start).
+const NETWORK: Architecture = Architecture {
+    features: 16,
+    heads: 2,
+    kernel: 3,
+    window: WINDOW as u16,
+    segments: SEGMENTS as u16,
+    rate_hz: 30.0,
+};
+const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RATE_HZ).with_network(
+    &NETWORK,
+    STUDENT_JOINTS,
+    COACH_JOINTS,
+    COACH_FRAMES,
+);
 
 static RING: ConstStaticCell<[Vec3; LENS.ring]> =
     ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.ring]);
@@ -61,7 +81,8 @@ struct Stages {
     frame: Tally,
     /// A pose frame that ended a swing: the above, the copy out, events, DTW, report.
     swing: Tally,
-    /// A profile or coach selection: the coach retargeted onto the student, its events.
+    /// A profile or coach selection: the coach retargeted onto the student (the int8
+    /// network), its events.
     setup: Tally,
     /// Encoding a reply for the serial link.
     reply: Tally,
@@ -79,7 +100,7 @@ fn main() -> ! {
     };
     match status {
         Ok(()) => {
-            defmt::println!("PASS: every reply equals the host's");
+            defmt::println!("PASS: the network's golden vectors and every reply equal the host's");
             semihosting::process::exit(0)
         }
         Err(why) => {
@@ -91,9 +112,14 @@ fn main() -> ! {
 
 fn run() -> Result<(), &'static str> {
     count::check()?;
+    let weights =
+        Weights::from_bytes(&network::WEIGHTS.0).map_err(|_| "the weights are damaged")?;
+    if *weights.architecture() != NETWORK {
+        return Err("the weights are not the network the buffers were sized for");
+    }
     for (name, per_mac) in [
-        ("linear", kernels::linear_per_mac_centi()?),
-        ("conv1d", kernels::conv_per_mac_centi()?),
+        ("linear", kernels::linear_per_mac_centi(&weights)?),
+        ("conv1d", kernels::conv_per_mac_centi(&weights)?),
     ] {
         defmt::println!(
             "KERNEL int8 {=str}: {=u64}.{=u64:02} instructions per MAC",
@@ -110,9 +136,12 @@ fn run() -> Result<(), &'static str> {
         return Err("a coach reference is missing");
     };
     let coaches = [Coach::from(&driver), Coach::from(&iron)];
+    let (ring, coach) = (RING.take(), VIRTUAL_COACH.take());
+    let window = network::check_golden(&weights, ring, coach)?;
+    defmt::println!("NETWORK window {=u64} instructions", window);
     let buffers = Buffers {
-        ring: RING.take(),
-        coach: VIRTUAL_COACH.take(),
+        ring,
+        coach,
         floats: FLOATS.take(),
         bytes: BYTES.take(),
     };
@@ -120,8 +149,9 @@ fn run() -> Result<(), &'static str> {
         model_rate_hz: MODEL_RATE_HZ,
         ..DEFAULT_CONFIG
     };
-    let mut session =
-        Session::with_config(&coaches, buffers, own).map_err(|_| "the device's own settings")?;
+    let mut session = Session::with_config(&coaches, buffers, own)
+        .map_err(|_| "the device's own settings")?
+        .with_network(&weights);
     let mut reader = LogReader::new(&LOG.0).map_err(|_| "the embedded log is not a log")?;
     let mut stages = Stages::default();
     let mut expected = EXPECTED;
@@ -173,9 +203,11 @@ fn run() -> Result<(), &'static str> {
         stack::high_water()
     );
     defmt::println!(
-        "EMBEDDED log {=usize} transcript {=usize}",
+        "EMBEDDED log {=usize} transcript {=usize} golden {=usize} weights {=usize}",
         LOG.0.len(),
-        EXPECTED.len()
+        EXPECTED.len(),
+        network::golden_bytes(),
+        network::WEIGHTS.0.len()
     );
     if mismatch || !expected.is_empty() {
         return Err("a reply differs from the host's");

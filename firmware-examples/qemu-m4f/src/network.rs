@@ -1,0 +1,66 @@
+//! The int8 retargeter on the device: its golden vectors checked bit for bit, and one
+//! 64-frame window counted.
+
+use crate::count;
+use posecoach_core::blob::Aligned;
+use posecoach_core::network;
+use posecoach_core::reference::Reference;
+use posecoach_core::weights::Weights;
+use posecoach_core::Vec3;
+
+/// The committed int8 weights (`posecoach export`).
+pub static WEIGHTS: &Aligned<[u8]> = &Aligned(*include_bytes!("../../../weights/student-int8.pcw"));
+/// Their golden vectors: a coach swing at the network's rate, and its retargeting by the host.
+static GOLDEN_IN: &Aligned<[u8]> = &Aligned(*include_bytes!(
+    "../../../weights/student-int8.golden-in.pcr"
+));
+static GOLDEN_OUT: &Aligned<[u8]> = &Aligned(*include_bytes!(
+    "../../../weights/student-int8.golden-out.pcr"
+));
+
+/// Bytes of the golden vectors, which only the test embeds.
+pub fn golden_bytes() -> usize {
+    GOLDEN_IN.0.len() + GOLDEN_OUT.0.len()
+}
+
+/// Retargets the golden input onto the golden student with `scratch` and `out` (borrowed from
+/// the session's ring and virtual coach before the session starts) and compares every bit
+/// with the host's output; returns the instructions it took.
+pub fn check_golden(
+    weights: &Weights<'_>,
+    scratch: &mut [Vec3],
+    out: &mut [Vec3],
+) -> Result<u64, &'static str> {
+    let input = Reference::from_bytes(&GOLDEN_IN.0).map_err(|_| "golden input damaged")?;
+    let expected = Reference::from_bytes(&GOLDEN_OUT.0).map_err(|_| "golden output damaged")?;
+    let student = expected.skeleton();
+    let out = out
+        .get_mut(..expected.positions().len())
+        .ok_or("virtual coach buffer shorter than the golden output")?;
+    let start = count::now();
+    network::retarget(
+        weights,
+        input.skeleton(),
+        student,
+        input.positions(),
+        bytemuck::cast_slice_mut(scratch),
+        out,
+    )
+    .map_err(|_| "the network refused the golden input")?;
+    let spent = count::now() - start;
+    let bits = |v: &Vec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+    if out
+        .iter()
+        .zip(expected.positions())
+        .any(|(a, b)| bits(a) != bits(b))
+    {
+        return Err("the int8 network's output differs from the host's golden vectors");
+    }
+    defmt::println!(
+        "NETWORK golden: {=usize} frames of {=usize} joints onto {=usize}, equal to the bit",
+        input.frames(),
+        input.skeleton().len(),
+        student.len()
+    );
+    Ok(spent)
+}
