@@ -56,25 +56,23 @@ impl Requant {
         (f64::from(self.multiplier) * libm::exp2(f64::from(self.shift) - 31.0)) as f32
     }
 
-    /// `acc · factor`, rounded as integer hardware does it cheaply and the same everywhere:
-    /// `acc` shifted left by a positive `shift` (saturating), times the multiplier with the
-    /// product's top 32 bits rounded (ties up), then shifted right by a negative `shift`
-    /// with rounding (ties up). Within one unit of the exact product.
+    /// `acc · factor` rounded to the nearest integer (ties up), saturated to `i32`: one
+    /// 32 × 32 → 64-bit multiply (`SMULL`), then, for factors below ½ (every requantization
+    /// of the network), the product's top word shifted right with rounding: five
+    /// instructions. Integer arithmetic, the same on every machine.
     #[inline]
     pub fn scale(self, acc: i32) -> i32 {
-        let shift = self.shift;
-        let x = if shift > 0 {
-            (i64::from(acc) << shift).clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+        // `factor = multiplier · 2^-total`, total in 1..=61.
+        let total = 31 - self.shift;
+        let product = i64::from(acc) * i64::from(self.multiplier);
+        if total > 32 {
+            // Rounding at bit `total - 1` ≥ 32 touches only the top word, and the bits below
+            // it cannot carry into the result: |top| < 2^30, so the sum cannot overflow.
+            let top = (product >> 32) as i32;
+            (top + (1 << (total - 33))) >> (total - 32)
         } else {
-            acc
-        };
-        // One 32 × 32 → 64-bit multiply (SMULL on the M4).
-        let high = ((i64::from(x) * i64::from(self.multiplier) + (1 << 30)) >> 31) as i32;
-        if shift < 0 {
-            let right = -shift;
-            (high >> right) + ((high >> (right - 1)) & 1)
-        } else {
-            high
+            let rounded = (product + (1i64 << (total - 1))) >> total;
+            rounded.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
         }
     }
 
@@ -98,9 +96,15 @@ fn frexp(x: f32) -> (f32, i32) {
     (mantissa, exponent - 126)
 }
 
-/// The int8 value nearest `real / scale`, saturated.
+/// The int8 value nearest `real / scale` (halves away from zero), saturated; NaN gives 0.
+///
+/// Rounds by adding a signed half and truncating (`VCVT` on the M4F; a handful of
+/// instructions where `roundf` takes a software routine), the same on every machine.
+#[inline]
 pub fn quantize(real: f32, scale: f32) -> i8 {
-    libm::roundf(real / scale).clamp(-MAX as f32, MAX as f32) as i8
+    let v = real / scale;
+    let half = if v < 0.0 { -0.5 } else { 0.5 };
+    ((v + half) as i32).clamp(-MAX, MAX) as i8
 }
 
 /// `Σ a[k] · b[k]` over the shorter of the two.
@@ -115,25 +119,6 @@ pub fn dot(a: &[i8], b: &[i8]) -> i32 {
         .map(|(&x, &y)| i32::from(x) * i32::from(y))
         .sum();
     tail + dot4s(a4, b4)
-}
-
-/// [`dot`] of two rows with one `x`: `(Σ r0[k] x[k], Σ r1[k] x[k])` over the shortest. With
-/// the `dsp` feature each four bytes of `x` are widened once for both rows (integer sums, so
-/// the result is the plain code's exactly).
-#[inline]
-pub fn dot2(r0: &[i8], r1: &[i8], x: &[i8]) -> (i32, i32) {
-    let n = r0.len().min(r1.len()).min(x.len());
-    let (x4, x_rest) = x[..n].as_chunks::<4>();
-    let (a4, a_rest) = r0[..n].as_chunks::<4>();
-    let (b4, b_rest) = r1[..n].as_chunks::<4>();
-    let tail = |r: &[i8]| -> i32 {
-        r.iter()
-            .zip(x_rest)
-            .map(|(&w, &v)| i32::from(w) * i32::from(v))
-            .sum()
-    };
-    let (s0, s1) = dot4s2(a4, b4, x4);
-    (s0 + tail(a_rest), s1 + tail(b_rest))
 }
 
 /// Both rows' sums over four-byte groups.
@@ -156,7 +141,7 @@ fn dot4s2(a: &[[i8; 4]], b: &[[i8; 4]], x: &[[i8; 4]]) -> (i32, i32) {
 }
 
 /// `Σ` over four-byte groups, four lanes at a time (plain code on every target: a single
-/// row is the rare odd row of a layer; the DSP path is [`dot2`]'s).
+/// row is the rare odd row of a layer; the DSP path is [`dot4s2`]'s).
 #[inline(always)]
 fn dot4s(a: &[[i8; 4]], b: &[[i8; 4]]) -> i32 {
     let mut s = [0i32; 4];
@@ -283,10 +268,18 @@ pub fn linear(input: &[i8], layer: &Layer<'_>, out: &mut [i8]) -> Result<(), Sha
     if layer.requant.len() != out.len() {
         return Err(ShapeError::Mismatch);
     }
-    let (requant, activation) = (layer.requant, layer.activation);
-    sums(input, layer.weights, layer.bias, out.len(), |c, acc| {
-        out[c] = activation.apply(requant[c], acc);
-    })
+    let (outputs, activation) = (out.len(), layer.activation);
+    let sinks = out.iter_mut().zip(layer.requant);
+    sums(
+        input,
+        layer.weights,
+        layer.bias,
+        outputs,
+        sinks,
+        |acc, (o, &q)| {
+            *o = activation.apply(q, acc);
+        },
+    )
 }
 
 /// The accumulators of a fully connected layer, not requantized: `out[c] = Σ_k
@@ -302,33 +295,47 @@ pub fn accumulate(
     bias: &[i32],
     out: &mut [i32],
 ) -> Result<(), ShapeError> {
-    sums(input, weights, bias, out.len(), |c, acc| out[c] = acc)
+    let outputs = out.len();
+    sums(input, weights, bias, outputs, out.iter_mut(), |acc, o| {
+        *o = acc
+    })
 }
 
-/// Calls `f(c, Σ_k weights[c·n + k] · input[k] + bias[c])` for each of `outputs` rows, two
-/// rows at a time through [`dot2`]. The sum cannot overflow (127² · [`MAX_FIELD`] is far
-/// below `i32::MAX`); adding the bias saturates.
-#[inline]
-fn sums(
+/// Calls `f(Σ_k weights[c·n + k] · input[k] + bias[c], sink)` for each row `c` of `outputs`
+/// and its sink. With `n` a multiple of four (every layer of the network) rows go two at a
+/// time through whole four-byte groups ([`dot4s2`]); otherwise one at a time through [`dot`].
+/// The sum cannot overflow (127² · [`MAX_FIELD`] is far below `i32::MAX`); adding the bias
+/// saturates.
+#[inline(always)]
+fn sums<S>(
     input: &[i8],
     weights: &[i8],
     bias: &[i32],
     outputs: usize,
-    mut f: impl FnMut(usize, i32),
+    mut sinks: impl Iterator<Item = S>,
+    mut f: impl FnMut(i32, S),
 ) -> Result<(), ShapeError> {
     let n = input.len();
-    if weights.len() != outputs * n || bias.len() != outputs {
+    if weights.len() != outputs * n || bias.len() != outputs || n == 0 {
         return Err(ShapeError::Mismatch);
     }
-    let mut rows = weights.chunks_exact(n.max(1)).zip(bias).enumerate();
-    while let Some((c, (r0, &b0))) = rows.next() {
-        match rows.next() {
-            Some((_, (r1, &b1))) => {
-                let (s0, s1) = dot2(r0, r1, input);
-                f(c, s0.saturating_add(b0));
-                f(c + 1, s1.saturating_add(b1));
+    let (x, x_rest) = input.as_chunks::<4>();
+    let (w, _) = weights.as_chunks::<4>();
+    if !x_rest.is_empty() {
+        for ((row, &b), sink) in weights.chunks_exact(n).zip(bias).zip(sinks) {
+            f(dot(row, input).saturating_add(b), sink);
+        }
+        return Ok(());
+    }
+    let mut rows = w.chunks_exact(x.len()).zip(bias);
+    while let (Some((r0, &b0)), Some(s0)) = (rows.next(), sinks.next()) {
+        match (rows.next(), sinks.next()) {
+            (Some((r1, &b1)), Some(s1)) => {
+                let (a0, a1) = dot4s2(r0, r1, x);
+                f(a0.saturating_add(b0), s0);
+                f(a1.saturating_add(b1), s1);
             }
-            None => f(c, dot(r0, input).saturating_add(b0)),
+            _ => f(dot4s(r0, x).saturating_add(b0), s0),
         }
     }
     Ok(())
@@ -570,16 +577,21 @@ mod tests {
     fn requantization_rounds_ties_up_and_saturates() {
         let half = Requant::new(0.5).unwrap();
         assert_eq!([3, -3, 5, -5].map(|a| half.scale(a)), [2, -1, 3, -2]);
+        let eighth = Requant::new(0.125).unwrap();
+        assert_eq!(
+            [4, -4, 12, -12, 3].map(|a| eighth.scale(a)),
+            [1, 0, 2, -1, 0]
+        );
         assert_eq!(half.apply(1000), 127);
         assert_eq!(half.apply(-1000), -127);
     }
 
     proptest! {
         #[test]
-        fn requantization_is_the_rounded_product(acc in -1_000_000i32..1_000_000, factor in 1e-4f32..4.0) {
+        fn requantization_is_the_rounded_product(acc in any::<i32>(), factor in 1e-6f32..1e6) {
             let r = Requant::new(factor).unwrap();
             let exact = f64::from(acc) * f64::from(r.factor());
-            prop_assert!((f64::from(r.scale(acc)) - exact).abs() <= 1.0);
+            prop_assert!((f64::from(r.scale(acc)) - exact.clamp(f64::from(i32::MIN), f64::from(i32::MAX))).abs() <= 0.5 + 1e-9 * exact.abs());
         }
 
         #[test]
@@ -588,8 +600,15 @@ mod tests {
             let naive: i32 = a.iter().zip(&b).map(|(&x, &y)| i32::from(x) * i32::from(y)).sum();
             prop_assert_eq!(dot(&a, &b), naive);
             prop_assert_eq!(dot(&a, &b[..b.len() / 2]), dot(&a[..b.len() / 2], &b[..b.len() / 2]));
+            // Two rows at a time (lengths a multiple of four) or one (any other) add up alike.
             let reversed: Vec<i8> = b.iter().rev().copied().collect();
-            prop_assert_eq!(dot2(&a, &reversed, &b), (dot(&a, &b), dot(&reversed, &b)));
+            let rows = [a.clone(), reversed.clone(), a.clone()].concat();
+            let mut out = [0i32; 3];
+            if !b.is_empty() {
+                accumulate(&b, &rows, &[1, -1, i32::MAX], &mut out).unwrap();
+                let expected = [dot(&a, &b) + 1, dot(&reversed, &b) - 1, dot(&a, &b).saturating_add(i32::MAX)];
+                prop_assert_eq!(out, expected);
+            }
         }
     }
 

@@ -29,7 +29,7 @@ use crate::math;
 use crate::retarget::{Analytic, RetargetError};
 use crate::skeleton::{Segment, Skeleton};
 use crate::weights::{
-    Architecture, Dense, Table, Tensors, Weights, MAX_FEATURES, MAX_HEADS, MOTION_CHANNELS,
+    Architecture, Dense, Table, Tensors, Weights, MAX_FEATURES, MAX_HEADS, MOTION_INPUTS,
     QUATERNION, REST_CHANNELS, SEGMENTS, WINDOW,
 };
 use crate::{Quat, Vec3};
@@ -365,7 +365,7 @@ impl Net<'_, '_> {
         let rows = buffers.joints.chunks_exact_mut(d);
         for ((k, joint), bias) in rows.enumerate().zip(buffers.motion_bias.chunks_exact(d)) {
             let (p, v) = (relative(t, k), relative(after, k) - relative(before, k));
-            let mut x = [0i8; MOTION_CHANNELS];
+            let mut x = [0i8; MOTION_INPUTS];
             for ((x, real), &scale) in x
                 .iter_mut()
                 .zip(p.iter().chain(v.iter()))

@@ -40,6 +40,9 @@ pub const WINDOW: usize = 64;
 pub const SEGMENTS: usize = Segment::ALL.len();
 /// Motion features per joint and frame: position relative to the parent, and its change.
 pub const MOTION_CHANNELS: usize = 6;
+/// Inputs of the motion encoder's first layer: the motion features and two zeros, so that
+/// every int8 layer's rows are whole four-byte words.
+pub const MOTION_INPUTS: usize = MOTION_CHANNELS.next_multiple_of(4);
 /// Rest features per joint: offset from the parent, and position from the root.
 pub const REST_CHANNELS: usize = 6;
 /// Quaternion components the decoder outputs per joint.
@@ -237,7 +240,8 @@ pub enum Dense {
     SkeletonOutput,
     /// Skeleton encoder, per segment: mean joint feature → segment feature.
     SkeletonSegment,
-    /// Motion encoder, per joint and frame: motion features → hidden.
+    /// Motion encoder, per joint and frame: motion features (padded to [`MOTION_INPUTS`]) →
+    /// hidden.
     MotionFeatures,
     /// The same layer's rest-feature columns (once per source joint, in `f32`).
     MotionRest,
@@ -314,7 +318,7 @@ impl Dense {
         let d = a.d();
         match self {
             Dense::SkeletonHidden | Dense::MotionRest | Dense::DecoderRest => REST_CHANNELS,
-            Dense::MotionFeatures => MOTION_CHANNELS,
+            Dense::MotionFeatures => MOTION_INPUTS,
             Dense::Down1 | Dense::Down2 | Dense::Up1 | Dense::Up2 => usize::from(a.kernel) * d,
             Dense::Root => SEGMENTS * d,
             _ => d,

@@ -235,6 +235,24 @@ fn quantize(layer: &Layer, units: &Units<'_>) -> Result<Quantized, Error> {
     Ok(out)
 }
 
+/// `layer` with zero columns appended up to `inputs`.
+fn padded(layer: Layer, inputs: usize) -> Layer {
+    let weight = layer
+        .weight
+        .chunks_exact(layer.inputs)
+        .flat_map(|row| {
+            row.iter()
+                .copied()
+                .chain(std::iter::repeat_n(0.0, inputs - row.len()))
+        })
+        .collect();
+    Layer {
+        weight,
+        inputs,
+        ..layer
+    }
+}
+
 /// `x · Wᵀ + b` for each row of `x`.
 fn apply(layer: &Layer, x: &[f32]) -> Vec<f32> {
     x.chunks_exact(layer.inputs)
@@ -277,7 +295,7 @@ pub fn export(
     let d = config.features;
     let s = scales;
     let one = |_: usize| 1.0;
-    let motion = |i: usize| s.motion[i];
+    let motion = |i: usize| s.motion.get(i).copied().unwrap_or(1.0);
     let of = |v: f32| move |_: usize| v;
     let (hidden, joints, context, segments) =
         (of(s.hidden), of(s.joints), of(s.context), of(s.segments));
@@ -321,7 +339,7 @@ pub fn export(
             },
         ),
         (
-            p.motion[0].columns(0..m),
+            padded(p.motion[0].columns(0..m), weights::MOTION_INPUTS),
             Units {
                 input: &motion,
                 output: Some(s.hidden),
