@@ -4,28 +4,16 @@
 //! and the tensors.
 #![no_main]
 
+mod blob_input;
+
+use blob_input::{aligned, view, with_and_without_crc};
 use libfuzzer_sys::fuzz_target;
 use posecoach_core::format::Format;
 use posecoach_core::network::{self, retarget};
 use posecoach_core::weights::{max_len, write, Dense, Table, Weights};
 use posecoach_core::Vec3;
 
-/// `bytes` copied to a 16-byte-aligned buffer, as a blob in flash would be placed.
-fn aligned(bytes: &[u8]) -> Vec<u128> {
-    let mut store = vec![0u128; bytes.len().div_ceil(16)];
-    bytemuck::cast_slice_mut::<u128, u8>(&mut store)[..bytes.len()].copy_from_slice(bytes);
-    store
-}
-
-fuzz_target!(|data: &[u8]| {
-    check(data);
-    if let Some(body) = data.len().checked_sub(4) {
-        let mut fixed = data.to_vec();
-        let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(&data[..body]);
-        fixed[body..].copy_from_slice(&crc.to_le_bytes());
-        check(&fixed);
-    }
-});
+fuzz_target!(|data: &[u8]| with_and_without_crc(data, check));
 
 fn bits(values: &[f32]) -> Vec<u32> {
     values.iter().map(|v| v.to_bits()).collect()
@@ -33,7 +21,7 @@ fn bits(values: &[f32]) -> Vec<u32> {
 
 fn check(data: &[u8]) {
     let store = aligned(data);
-    let bytes = &bytemuck::cast_slice::<u128, u8>(&store)[..data.len()];
+    let bytes = view(&store, data.len());
     let Ok(weights) = Weights::from_bytes(bytes) else {
         return;
     };
@@ -43,8 +31,7 @@ fn check(data: &[u8]) {
     let n = write(weights.header(), &layers, &tables, &mut out)
         .expect("accepted weights can be written again");
     let again = aligned(&out[..n]);
-    let back = Weights::from_bytes(&bytemuck::cast_slice::<u128, u8>(&again)[..n])
-        .expect("written weights read back");
+    let back = Weights::from_bytes(view(&again, n)).expect("written weights read back");
     assert_eq!(back.header(), weights.header());
     for layer in Dense::ALL {
         let (a, b) = (back.layer(layer), weights.layer(layer));

@@ -67,6 +67,19 @@ impl Network {
     }
 }
 
+/// Runs `f` with the int8 weights in `path`, if given (a command's `--weights`).
+///
+/// # Errors
+/// If the file cannot be read or is not sound weights; `f`'s error.
+pub fn with_network<R>(
+    path: Option<&Path>,
+    f: impl FnOnce(Option<&Weights<'_>>) -> Result<R>,
+) -> Result<R> {
+    let network = path.map(Network::load).transpose()?;
+    let weights = network.as_ref().map(Network::weights).transpose()?;
+    f(weights.as_ref())
+}
+
 /// Runs `device` on the device's pipeline: a session with every bundled reference, the int8
 /// `network` if given, and buffers for any student and model rate.
 ///

@@ -68,15 +68,6 @@ pub fn run(args: &Args) -> Result<String> {
         "device-sim: serving {} (Ctrl-C to stop)",
         args.serial.port.display()
     );
-    let network = args
-        .weights
-        .as_deref()
-        .map(coaches::Network::load)
-        .transpose()?;
-    let weights = network
-        .as_ref()
-        .map(coaches::Network::weights)
-        .transpose()?;
     let stop = until_interrupted()?;
     let mut failing = false;
     let connect = || match open(&args.serial.port, args.serial.baud) {
@@ -95,7 +86,9 @@ pub fn run(args: &Args) -> Result<String> {
             None
         }
     };
-    let totals = simulate(connect, &stop, weights.as_ref())?;
+    let totals = coaches::with_network(args.weights.as_deref(), |weights| {
+        simulate(connect, &stop, weights)
+    })?;
     if args.json {
         let doc = serde_json::json!({"links": totals.links, "reports": totals.reports, "refused": totals.refused});
         return Ok(format!("{doc}\n"));

@@ -57,17 +57,9 @@ impl Replay {
 pub fn run(args: &Args) -> Result<String> {
     let bytes =
         std::fs::read(&args.log).with_context(|| format!("reading {}", args.log.display()))?;
-    let network = args
-        .weights
-        .as_deref()
-        .map(coaches::Network::load)
-        .transpose()?;
-    let weights = network
-        .as_ref()
-        .map(coaches::Network::weights)
-        .transpose()?;
-    let replay = replay(&bytes, weights.as_ref())
-        .with_context(|| format!("replaying {}", args.log.display()))?;
+    let replay = coaches::with_network(args.weights.as_deref(), |weights| {
+        replay(&bytes, weights).with_context(|| format!("replaying {}", args.log.display()))
+    })?;
     let json = replay.to_json();
     if let Some(path) = &args.wire {
         std::fs::write(path, &replay.wire)

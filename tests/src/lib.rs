@@ -225,3 +225,16 @@ pub fn json_difference(
         _ => (a != b).then(|| format!("{a} vs {b}")),
     }
 }
+
+/// A command's clap arguments.
+#[derive(clap::Parser)]
+struct Command<T: clap::Args> {
+    #[command(flatten)]
+    args: T,
+}
+
+/// Parses a command's arguments as the `posecoach` binary does.
+pub fn parse<T: clap::Args>(args: &[&str]) -> T {
+    use clap::Parser;
+    Command::<T>::parse_from(std::iter::once("posecoach").chain(args.iter().copied())).args
+}

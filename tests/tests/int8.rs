@@ -1,23 +1,12 @@
 //! The int8 retargeter: the committed weights against their golden vectors, and `export`,
 //! `inspect` and `eval` on them through the command line.
 
-use clap::Parser;
 use posecoach_adapters::io;
 use posecoach_cli::{inspect, learn};
 use posecoach_core::network;
 use posecoach_core::weights::Weights;
+use posecoach_tests::parse;
 use std::path::PathBuf;
-
-/// Parses a command's arguments as the binary does.
-#[derive(Parser)]
-struct Command<T: clap::Args> {
-    #[command(flatten)]
-    args: T,
-}
-
-fn parse<T: clap::Args>(args: &[&str]) -> T {
-    Command::<T>::parse_from(std::iter::once("posecoach").chain(args.iter().copied())).args
-}
 
 fn repo(path: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

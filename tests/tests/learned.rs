@@ -3,23 +3,12 @@
 //! `posecoach train --teacher` does.
 
 use burn::prelude::Device;
-use clap::Parser;
 use posecoach_adapters::io;
 use posecoach_cli::{learn, retarget, score};
+use posecoach_tests::parse;
 use posecoach_train::model::TeacherConfig;
 use posecoach_train::train::{TrainConfig, Trainer};
 use std::path::{Path, PathBuf};
-
-/// Parses a command's arguments as the binary does.
-#[derive(Parser)]
-struct Command<T: clap::Args> {
-    #[command(flatten)]
-    args: T,
-}
-
-fn parse<T: clap::Args>(args: &[&str]) -> T {
-    Command::<T>::parse_from(std::iter::once("posecoach").chain(args.iter().copied())).args
-}
 
 fn fixture(name: &str) -> String {
     posecoach_tests::fixture(name).display().to_string()

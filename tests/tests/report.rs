@@ -2,20 +2,10 @@
 //! self-contained, and rendered by headless Chromium into a screenshot that shows the student
 //! and the coach.
 
-use clap::Parser;
 use posecoach_cli::{demo, replay, score};
+use posecoach_tests::parse;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-#[derive(Parser)]
-struct Cli<T: clap::Args> {
-    #[command(flatten)]
-    args: T,
-}
-
-fn parse<T: clap::Args>(args: &[&str]) -> T {
-    Cli::<T>::parse_from(std::iter::once("posecoach").chain(args.iter().copied())).args
-}
 
 /// A folder of its own for a test.
 fn scratch(test: &str) -> PathBuf {

@@ -77,17 +77,17 @@ pub struct Calibration {
     max: [f32; POINTS.len()],
     /// Windows seen.
     pub windows: usize,
+    /// An activation could not be read back as `f32`s: the scales would miss it.
+    unreadable: bool,
 }
 
 impl Calibration {
     /// Records the magnitudes of `x` at `point`.
     pub fn see<const D: usize>(&mut self, point: Point, x: &Tensor<D>) {
-        let values: Vec<f32> = x
-            .clone()
-            .abs()
-            .into_data()
-            .try_to_vec::<f32>()
-            .unwrap_or_default();
+        let Ok(values) = x.clone().abs().into_data().try_to_vec::<f32>() else {
+            self.unreadable = true;
+            return;
+        };
         match POINTS.iter().position(|&p| p == point) {
             Some(i) => self.max[i] = values.iter().copied().fold(self.max[i], f32::max),
             None => {
@@ -126,7 +126,8 @@ impl Calibration {
 /// in batches of `batch`.
 ///
 /// # Errors
-/// [`Error::NoClips`] without golf clips long enough, else as [`Batch::new`].
+/// [`Error::NoClips`] without golf clips long enough, [`Error::Checkpoint`] if an activation
+/// could not be read, else as [`Batch::new`].
 pub fn calibrate(
     model: &Teacher,
     pool: &Pool,
@@ -162,6 +163,11 @@ pub fn calibrate(
         let batch = Batch::new(&sources, &onto, device)?;
         model.forward_observed(&batch, Some(&mut calibration));
         calibration.windows += n;
+    }
+    if calibration.unreadable {
+        return Err(Error::Checkpoint(
+            "calibration: an activation could not be read as f32".into(),
+        ));
     }
     Ok(calibration)
 }
