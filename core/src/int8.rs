@@ -81,6 +81,33 @@ impl Requant {
     pub fn apply(self, acc: i32) -> i8 {
         self.scale(acc).clamp(-MAX, MAX) as i8
     }
+    /// The same requantization, when its factor is below ¼ (`shift ≤ −2`), in the form the
+    /// kernels apply per output.
+    #[inline(always)]
+    fn small(self) -> Option<Small> {
+        (self.shift <= -2).then_some(Small {
+            multiplier: self.multiplier,
+            shift: (-2 - self.shift) as u32,
+        })
+    }
+}
+
+/// A [`Requant`] by less than ¼: [`Requant::scale`]'s product's top word is shifted right by
+/// `shift + 1` with rounding, as `((top >> shift) + 1) >> 1` (the same integer: flooring
+/// first cannot change where the rounded quotient falls): `SMMUL`, three shifts and adds.
+#[derive(Clone, Copy)]
+struct Small {
+    multiplier: i32,
+    /// `total − 33` for [`Requant::scale`]'s `total`, at least 0.
+    shift: u32,
+}
+
+impl Small {
+    #[inline(always)]
+    fn scale(self, acc: i32) -> i32 {
+        let top = ((i64::from(acc) * i64::from(self.multiplier)) >> 32) as i32;
+        ((top >> self.shift) + 1) >> 1
+    }
 }
 
 /// `x = mantissa · 2^exponent` with `mantissa` in `[0.5, 1)`, for a positive normal `x`.
@@ -113,82 +140,134 @@ pub fn dot(a: &[i8], b: &[i8]) -> i32 {
     let n = a.len().min(b.len());
     let (a4, a_rest) = a[..n].as_chunks::<4>();
     let (b4, b_rest) = b[..n].as_chunks::<4>();
+    let mut s = [0i32; 4];
+    for (x, y) in a4.iter().zip(b4) {
+        for k in 0..4 {
+            s[k] += i32::from(x[k]) * i32::from(y[k]);
+        }
+    }
     let tail: i32 = a_rest
         .iter()
         .zip(b_rest)
         .map(|(&x, &y)| i32::from(x) * i32::from(y))
         .sum();
-    tail + dot4s(a4, b4)
+    tail + s.iter().sum::<i32>()
 }
 
-/// Both rows' sums over four-byte groups.
-#[cfg(not(all(feature = "dsp", target_arch = "arm")))]
-#[inline(always)]
-fn dot4s2(a: &[[i8; 4]], b: &[[i8; 4]], x: &[[i8; 4]]) -> (i32, i32) {
-    (dot4s(a, x), dot4s(b, x))
+/// Vectors a layer's rows run against together: [`linear`] and [`accumulate`] take their
+/// inputs four at a time, so that each weight is loaded and widened once for four products.
+pub const LANES: usize = 4;
+
+/// Most inputs of one output (a linear layer's inputs, a convolution's kernel × inputs per
+/// group).
+pub const MAX_FIELD: usize = 128;
+/// Longest convolution kernel.
+pub use crate::weights::MAX_KERNEL;
+
+/// Up to [`LANES`] input vectors of one length, ready for [`Lanes::dots`]: built once per
+/// batch, loaded per group of vectors.
+struct Lanes<'x> {
+    inputs: [&'x [i8]; LANES],
+    /// On the DSP path, the inputs' four-byte groups sign-extended to 16-bit lanes and
+    /// interleaved: group `g` of lane `l` as words `[g][2l]` (bytes 0 and 2) and `[g][2l + 1]`
+    /// (bytes 1 and 3), the operands of `SMLAD`.
+    #[cfg(all(feature = "dsp", target_arch = "arm"))]
+    widened: [[u32; 2 * LANES]; MAX_FIELD / 4],
 }
 
-/// Both rows' sums over four-byte groups, `x` widened once per group.
-#[cfg(all(feature = "dsp", target_arch = "arm"))]
-#[inline(always)]
-fn dot4s2(a: &[[i8; 4]], b: &[[i8; 4]], x: &[[i8; 4]]) -> (i32, i32) {
-    let word = |v: &[i8; 4]| u32::from_le_bytes(v.map(|b| b as u8));
-    let (mut s0, mut s1) = (0i32, 0i32);
-    for ((p, q), v) in a.iter().zip(b).zip(x) {
-        (s0, s1) = dsp::dot4x2(s0, s1, word(v), word(p), word(q));
-    }
-    (s0, s1)
-}
-
-/// `Σ` over four-byte groups, four lanes at a time (plain code on every target: a single
-/// row is the rare odd row of a layer; the DSP path is [`dot4s2`]'s).
-#[inline(always)]
-fn dot4s(a: &[[i8; 4]], b: &[[i8; 4]]) -> i32 {
-    let mut s = [0i32; 4];
-    for (x, y) in a.iter().zip(b) {
-        for k in 0..4 {
-            s[k] += i32::from(x[k]) * i32::from(y[k]);
+impl<'x> Lanes<'x> {
+    fn new() -> Self {
+        Lanes {
+            inputs: [&[]; LANES],
+            #[cfg(all(feature = "dsp", target_arch = "arm"))]
+            widened: [[0; 2 * LANES]; MAX_FIELD / 4],
         }
     }
-    s.iter().sum()
+
+    /// Takes `inputs`, each at most [`MAX_FIELD`] long.
+    #[inline(always)]
+    fn load(&mut self, inputs: [&'x [i8]; LANES]) {
+        self.inputs = inputs;
+        #[cfg(all(feature = "dsp", target_arch = "arm"))]
+        {
+            let half = |a: i8, b: i8| u32::from(a as i16 as u16) | u32::from(b as i16 as u16) << 16;
+            for (l, x) in inputs.iter().enumerate() {
+                let (groups, _) = x.as_chunks::<4>();
+                for (w, g) in self.widened.iter_mut().zip(groups) {
+                    w[2 * l] = half(g[0], g[2]);
+                    w[2 * l + 1] = half(g[1], g[3]);
+                }
+            }
+        }
+    }
+
+    /// `Σ_k row[k] · input[k]` for each lane, over the row's length (the inputs' length).
+    #[inline(always)]
+    fn dots(&self, row: &[i8]) -> [i32; LANES] {
+        #[cfg(all(feature = "dsp", target_arch = "arm"))]
+        if let (groups, []) = row.as_chunks::<4>() {
+            return dsp::row(&self.widened[..groups.len().min(MAX_FIELD / 4)], groups);
+        }
+        self.inputs.map(|x| dot(row, x))
+    }
 }
 
 #[cfg(all(feature = "dsp", target_arch = "arm"))]
 #[allow(unsafe_code)]
 mod dsp {
-    /// `s0` and `s1` plus the four products of the int8 lanes of `x` with those of `w0` and
-    /// of `w1`: `x` widened once (two `SXTB16`: bytes 0, 2 and 1, 3 as 16-bit lanes), each
-    /// weight word widened and added two products per `SMLAD`, as CMSIS-NN's kernels do.
+    use super::LANES;
+
+    /// Each lane's `Σ_g` of `row[g]`'s four int8 weights times the lane's widened group `g`
+    /// (`widened[g][2l]`, `widened[g][2l + 1]`): per group one load and two `SXTB16` widen
+    /// the weights, then per lane one `LDRD` and two `SMLAD` add four products (17
+    /// instructions for 16 multiply-accumulates, loop included), as CMSIS-NN's kernels do.
     #[inline(always)]
-    pub(super) fn dot4x2(mut s0: i32, mut s1: i32, x: u32, w0: u32, w1: u32) -> (i32, i32) {
-        // SAFETY: register-only instructions (SXTB16, SMLAD) of the ARMv7E-M DSP extension,
-        // which the `dsp` feature declares the target has: no memory, no stack; SMLAD may set
-        // the Q flag on overflow, which nothing reads (`preserves_flags` is not claimed).
+    pub(super) fn row(widened: &[[u32; 2 * LANES]], row: &[[i8; 4]]) -> [i32; LANES] {
+        let groups = widened.len().min(row.len());
+        let mut s = [0i32; LANES];
+        if groups == 0 {
+            return s;
+        }
+        // SAFETY: reads `groups` words from `row` (4 bytes each: `ldr` allows any alignment on
+        // the Cortex-M4) and `groups` × 32 bytes from `widened` (word-aligned `u32`s, as `ldrd`
+        // needs), both within their slices since `groups` is at most either length and at
+        // least 1 (the loop runs before it tests). Writes only registers; SMLAD may set the Q
+        // flag, which nothing reads; the flags are clobbered (no `preserves_flags`).
         unsafe {
             core::arch::asm!(
-                "sxtb16 {xe}, {x}",
-                "sxtb16 {xo}, {x}, ror #8",
-                "sxtb16 {te}, {w0}",
-                "sxtb16 {to}, {w0}, ror #8",
-                "smlad {s0}, {xe}, {te}, {s0}",
-                "smlad {s0}, {xo}, {to}, {s0}",
-                "sxtb16 {te}, {w1}",
-                "sxtb16 {to}, {w1}, ror #8",
-                "smlad {s1}, {xe}, {te}, {s1}",
-                "smlad {s1}, {xo}, {to}, {s1}",
-                x = in(reg) x,
-                w0 = in(reg) w0,
-                w1 = in(reg) w1,
-                s0 = inout(reg) s0,
-                s1 = inout(reg) s1,
+                "2:",
+                "ldr {w}, [{pw}], #4",
+                "sxtb16 {t}, {w}, ror #8",
+                "sxtb16 {w}, {w}",
+                "ldrd {xe}, {xo}, [{px}], #8",
+                "smlad {s0}, {xe}, {w}, {s0}",
+                "smlad {s0}, {xo}, {t}, {s0}",
+                "ldrd {xe}, {xo}, [{px}], #8",
+                "smlad {s1}, {xe}, {w}, {s1}",
+                "smlad {s1}, {xo}, {t}, {s1}",
+                "ldrd {xe}, {xo}, [{px}], #8",
+                "smlad {s2}, {xe}, {w}, {s2}",
+                "smlad {s2}, {xo}, {t}, {s2}",
+                "ldrd {xe}, {xo}, [{px}], #8",
+                "smlad {s3}, {xe}, {w}, {s3}",
+                "smlad {s3}, {xo}, {t}, {s3}",
+                "subs {n}, {n}, #1",
+                "bne 2b",
+                pw = inout(reg) row.as_ptr() => _,
+                px = inout(reg) widened.as_ptr() => _,
+                n = inout(reg) groups => _,
+                s0 = inout(reg) s[0],
+                s1 = inout(reg) s[1],
+                s2 = inout(reg) s[2],
+                s3 = inout(reg) s[3],
+                w = out(reg) _,
+                t = out(reg) _,
                 xe = out(reg) _,
                 xo = out(reg) _,
-                te = out(reg) _,
-                to = out(reg) _,
-                options(pure, nomem, nostack)
+                options(readonly, nostack)
             );
         }
-        (s0, s1)
+        s
     }
 }
 
@@ -205,9 +284,6 @@ pub enum Activation {
     Leaky,
 }
 
-/// Largest receptive field of one output channel of [`conv1d`] (kernel × inputs per group).
-pub const MAX_FIELD: usize = 512;
-
 /// Negative slope of the leaky ReLU.
 pub const LEAKY_SLOPE: f32 = 0.2;
 /// [`LEAKY_SLOPE`] as a [`Requant`]: round(0.8 · 2^31) · 2^-33, the exact 0.2 to 10 digits.
@@ -216,13 +292,24 @@ const LEAKY: Requant = Requant {
     shift: -2,
 };
 
+/// [`LEAKY`] ready to apply.
+const LEAKY_SMALL: Small = Small {
+    multiplier: LEAKY.multiplier,
+    shift: (-2 - LEAKY.shift) as u32,
+};
+
 impl Activation {
     /// `acc` rescaled by `requant`, activated and saturated.
     #[inline]
     pub fn apply(self, requant: Requant, acc: i32) -> i8 {
-        let v = requant.scale(acc);
+        self.activate(requant.scale(acc))
+    }
+
+    /// A rescaled value `v` activated and saturated.
+    #[inline(always)]
+    fn activate(self, v: i32) -> i8 {
         let v = match self {
-            Activation::Leaky if v < 0 => LEAKY.scale(v),
+            Activation::Leaky if v < 0 => LEAKY_SMALL.scale(v),
             _ => v,
         };
         v.clamp(-MAX, MAX) as i8
@@ -237,108 +324,133 @@ pub enum ShapeError {
     Mismatch,
 }
 
-/// A layer's parameters: int8 weights (one row per output channel), int32 biases in the
-/// accumulator's scale, and each output channel's requantization.
+/// A layer's parameters: int8 weights (one row per output channel) and each output
+/// channel's requantization; its biases come with its inputs.
 #[derive(Clone, Copy, Debug)]
 pub struct Layer<'w> {
     /// `outputs × inputs` (for a convolution `outputs × kernel × inputs per group`).
     pub weights: &'w [i8],
-    /// One per output channel.
-    pub bias: &'w [i32],
     /// One per output channel: accumulator scale over output scale.
     pub requant: &'w [Requant],
     /// Applied after rescaling.
     pub activation: Activation,
 }
 
-impl Layer<'_> {
-    fn outputs(&self) -> usize {
-        self.bias.len()
-    }
-}
-
-/// A fully connected layer: `out[c] = act(requant[c](Σ_k weights[c·n + k] · input[k] +
-/// bias[c]))` for `n = input.len()` and `c` over `out`.
+/// A fully connected layer on `count` vectors: for each `i < count`, `out[i·m + c] =
+/// act(requant[c](Σ_k weights[c·n + k] · input(i)[k] + bias(i)[c]))`, with `m` outputs (one per
+/// requantization) and `n = weights.len() / m` inputs. Vectors go through the rows
+/// [`LANES`] at a time.
 ///
 /// # Errors
-/// [`ShapeError::Mismatch`] unless `weights` is `out.len() × input.len()` and `bias` and
-/// `requant` have one entry per output.
+/// [`ShapeError::Mismatch`] unless `weights` is `m × n` with `0 < n ≤` [`MAX_FIELD`], every
+/// `input(i)` is `n` long, every `bias(i)` `m` long and `out` is `count × m`.
 #[inline]
-pub fn linear(input: &[i8], layer: &Layer<'_>, out: &mut [i8]) -> Result<(), ShapeError> {
-    if layer.requant.len() != out.len() {
+pub fn linear<'x, 'b>(
+    count: usize,
+    input: impl Fn(usize) -> &'x [i8],
+    bias: impl Fn(usize) -> &'b [i32],
+    layer: &Layer<'_>,
+    out: &mut [i8],
+) -> Result<(), ShapeError> {
+    let (m, activation) = (layer.requant.len(), layer.activation);
+    if out.len() != count * m {
         return Err(ShapeError::Mismatch);
     }
-    let (outputs, activation) = (out.len(), layer.activation);
-    let sinks = out.iter_mut().zip(layer.requant);
-    sums(
-        input,
-        layer.weights,
-        layer.bias,
-        outputs,
-        sinks,
-        |acc, (o, &q)| {
-            *o = activation.apply(q, acc);
-        },
-    )
-}
-
-/// The accumulators of a fully connected layer, not requantized: `out[c] = Σ_k
-/// weights[c·n + k] · input[k] + bias[c]`, for a layer whose outputs go on in `f32`.
-///
-/// # Errors
-/// [`ShapeError::Mismatch`] unless `weights` is `out.len() × input.len()` and `bias` has one
-/// entry per output.
-#[inline]
-pub fn accumulate(
-    input: &[i8],
-    weights: &[i8],
-    bias: &[i32],
-    out: &mut [i32],
-) -> Result<(), ShapeError> {
-    let outputs = out.len();
-    sums(input, weights, bias, outputs, out.iter_mut(), |acc, o| {
-        *o = acc
+    rows(count, input, bias, layer.weights, m, |first, c, sums| {
+        let requant = layer.requant[c];
+        let outs = out[first * m + c..].iter_mut().step_by(m).zip(sums);
+        match requant.small() {
+            Some(small) => outs.for_each(|(o, &acc)| *o = activation.activate(small.scale(acc))),
+            None => outs.for_each(|(o, &acc)| *o = activation.apply(requant, acc)),
+        }
     })
 }
 
-/// Calls `f(Σ_k weights[c·n + k] · input[k] + bias[c], sink)` for each row `c` of `outputs`
-/// and its sink. With `n` a multiple of four (every layer of the network) rows go two at a
-/// time through whole four-byte groups ([`dot4s2`]); otherwise one at a time through [`dot`].
-/// The sum cannot overflow (127² · [`MAX_FIELD`] is far below `i32::MAX`); adding the bias
-/// saturates.
-#[inline(always)]
-fn sums<S>(
-    input: &[i8],
+/// [`linear`]'s accumulators, not requantized, for a layer whose outputs go on in `f32`:
+/// `out[i·m + c] = Σ_k weights[c·n + k] · input(i)[k] + bias(i)[c]` with `m = out.len() / count`
+/// (no vectors: nothing to do).
+///
+/// # Errors
+/// As [`linear`].
+#[inline]
+pub fn accumulate<'x, 'b>(
+    count: usize,
+    input: impl Fn(usize) -> &'x [i8],
+    bias: impl Fn(usize) -> &'b [i32],
     weights: &[i8],
-    bias: &[i32],
-    outputs: usize,
-    mut sinks: impl Iterator<Item = S>,
-    mut f: impl FnMut(i32, S),
+    out: &mut [i32],
 ) -> Result<(), ShapeError> {
-    let n = input.len();
-    if weights.len() != outputs * n || bias.len() != outputs || n == 0 {
+    let Some(m) = out.len().checked_div(count) else {
+        return if out.is_empty() {
+            Ok(())
+        } else {
+            Err(ShapeError::Mismatch)
+        };
+    };
+    if m * count != out.len() {
         return Err(ShapeError::Mismatch);
     }
-    let (x, x_rest) = input.as_chunks::<4>();
-    let (w, _) = weights.as_chunks::<4>();
-    if !x_rest.is_empty() {
-        for ((row, &b), sink) in weights.chunks_exact(n).zip(bias).zip(sinks) {
-            f(dot(row, input).saturating_add(b), sink);
-        }
-        return Ok(());
+    rows(count, input, bias, weights, m, |first, c, sums| {
+        let outs = out[first * m + c..].iter_mut().step_by(m);
+        outs.zip(sums).for_each(|(o, &acc)| *o = acc);
+    })
+}
+
+/// Calls `sink(first, c, sums)` for each group of up to [`LANES`] vectors from `first` and
+/// each output `c`, `sums[l] = Σ_k weights[c·n + k] · input(first + l)[k] + bias(first +
+/// l)[c]` (a last, short group computes its last vector in the missing lanes). The sum cannot overflow (127² · [`MAX_FIELD`] is far below
+/// `i32::MAX`); adding the bias saturates.
+#[inline(always)]
+fn rows<'x, 'b>(
+    count: usize,
+    input: impl Fn(usize) -> &'x [i8],
+    bias: impl Fn(usize) -> &'b [i32],
+    weights: &[i8],
+    outputs: usize,
+    mut sink: impl FnMut(usize, usize, &[i32]),
+) -> Result<(), ShapeError> {
+    let n = weights
+        .len()
+        .checked_div(outputs)
+        .ok_or(ShapeError::Mismatch)?;
+    if n == 0 || n > MAX_FIELD || n * outputs != weights.len() {
+        return Err(ShapeError::Mismatch);
     }
-    let mut rows = w.chunks_exact(x.len()).zip(bias);
-    while let (Some((r0, &b0)), Some(s0)) = (rows.next(), sinks.next()) {
-        match (rows.next(), sinks.next()) {
-            (Some((r1, &b1)), Some(s1)) => {
-                let (a0, a1) = dot4s2(r0, r1, x);
-                f(a0.saturating_add(b0), s0);
-                f(a1.saturating_add(b1), s1);
+    let mut lanes = Lanes::new();
+    for first in (0..count).step_by(LANES) {
+        let real = (count - first).min(LANES);
+        let vector = |l: usize| first + l.min(real - 1);
+        let mut inputs: [&[i8]; LANES] = [&[]; LANES];
+        let mut biases: [&[i32]; LANES] = [&[]; LANES];
+        for (l, (x, b)) in inputs.iter_mut().zip(&mut biases).enumerate() {
+            (*x, *b) = (input(vector(l)), bias(vector(l)));
+            if x.len() != n || b.len() != outputs {
+                return Err(ShapeError::Mismatch);
             }
-            _ => f(dot4s(r0, x).saturating_add(b0), s0),
+        }
+        lanes.load(inputs);
+        for (c, row) in weights.chunks_exact(n).enumerate() {
+            let mut sums = lanes.dots(row);
+            for (sum, b) in sums.iter_mut().zip(&biases) {
+                *sum = sum.saturating_add(b[c]);
+            }
+            sink(first, c, &sums[..real]);
         }
     }
     Ok(())
+}
+
+/// The shape of a [`conv1d`]: 1-D convolution over time within channel groups.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Conv {
+    /// Input and output channels.
+    pub channels: usize,
+    /// Groups of `channels / groups` channels, each convolved on its own.
+    pub groups: usize,
+    /// Taps (odd).
+    pub kernel: usize,
+    /// Output frames are input frames `0, stride, 2·stride, …`.
+    pub stride: usize,
 }
 
 /// A 1-D convolution over time within channel groups, group-major: `input` is `groups ×
@@ -346,72 +458,87 @@ fn sums<S>(
 /// features), zero-padded by `kernel / 2` each side, so output frame `t` of a group sees its
 /// input frames `t·stride − kernel/2 ..= t·stride + kernel/2`: one contiguous run of the
 /// input, against which each output channel's weights (`[k][i]` for tap `k` and in-group
-/// input `i`) are one row of a linear layer. `out` is `groups × frames.div_ceil(stride) ×
-/// width`; `channels = groups × width`.
+/// input `i`) are one row of a [`linear`] layer, biases `bias` (one per channel). `out` is
+/// `groups × frames.div_ceil(stride) × width`, `width = channels / groups`.
 ///
 /// # Errors
-/// [`ShapeError::Mismatch`] if the lengths do not fit `channels`, `groups` and `kernel`, or a
-/// channel's field exceeds [`MAX_FIELD`].
+/// [`ShapeError::Mismatch`] if the lengths do not fit `shape`, the kernel is even or longer
+/// than [`MAX_KERNEL`], or a channel's field (kernel × width) exceeds [`MAX_FIELD`].
 pub fn conv1d(
     input: &[i8],
-    channels: usize,
-    groups: usize,
-    kernel: usize,
-    stride: usize,
+    shape: &Conv,
     layer: &Layer<'_>,
+    bias: &[i32],
     out: &mut [i8],
 ) -> Result<(), ShapeError> {
+    let Conv {
+        channels,
+        groups,
+        kernel,
+        stride,
+    } = *shape;
     let width = channels.checked_div(groups).ok_or(ShapeError::Mismatch)?;
     let frames = input
         .len()
         .checked_div(channels)
         .ok_or(ShapeError::Mismatch)?;
     let outputs = frames.div_ceil(stride.max(1));
+    let field = kernel * width;
     if stride == 0
         || kernel.is_multiple_of(2)
+        || kernel > MAX_KERNEL
+        || field > MAX_FIELD
         || width * groups != channels
         || frames * channels != input.len()
-        || layer.outputs() != channels
+        || bias.len() != channels
         || layer.requant.len() != channels
-        || layer.weights.len() != channels * kernel * width
+        || layer.weights.len() != channels * field
         || out.len() != outputs * channels
     {
         return Err(ShapeError::Mismatch);
     }
     let half = kernel / 2;
-    let field = kernel * width;
-    // The field of an output frame near either end, zeros where it overhangs.
-    let mut padded = [0i8; MAX_FIELD];
-    let padded = padded.get_mut(..field).ok_or(ShapeError::Mismatch)?;
+    let first = |t: usize| (t * stride) as isize - half as isize;
+    // Output frames whose fields overhang the input: the first `left`, and those from
+    // `right` on (at most `half` each side, fewer with a stride); their fields are copied
+    // with zeros where they overhang.
+    let left = (0..outputs).take_while(|&t| first(t) < 0).count();
+    let right = (left..outputs)
+        .find(|&t| first(t) + kernel as isize > frames as isize)
+        .unwrap_or(outputs);
+    let mut padded = [[0i8; MAX_FIELD]; MAX_KERNEL - 1];
     let segments = input.chunks_exact(frames * width);
     for (g, (x, y)) in segments
         .zip(out.chunks_exact_mut(outputs * width))
         .enumerate()
     {
+        let edge = (0..left).chain(right..outputs);
+        for (taps, t) in padded.iter_mut().zip(edge) {
+            for (k, tap) in taps[..field].chunks_exact_mut(width).enumerate() {
+                let s = first(t) + k as isize;
+                match usize::try_from(s).ok().filter(|&s| s < frames) {
+                    Some(s) => tap.copy_from_slice(&x[s * width..(s + 1) * width]),
+                    None => tap.fill(0),
+                }
+            }
+        }
+        let run = |t: usize| {
+            if t < left {
+                &padded[t][..field]
+            } else if t >= right {
+                &padded[left + t - right][..field]
+            } else {
+                let s = first(t) as usize;
+                &x[s * width..(s + kernel) * width]
+            }
+        };
         let span = g * width..(g + 1) * width;
         let group = Layer {
             weights: &layer.weights[span.start * field..span.end * field],
-            bias: &layer.bias[span.clone()],
-            requant: &layer.requant[span],
+            requant: &layer.requant[span.clone()],
             activation: layer.activation,
         };
-        for (t, row) in y.chunks_exact_mut(width).enumerate() {
-            let first = (t * stride) as isize - half as isize;
-            let inside = first >= 0 && first as usize + kernel <= frames;
-            let run = if inside {
-                &x[first as usize * width..(first as usize + kernel) * width]
-            } else {
-                for (k, taps) in padded.chunks_exact_mut(width).enumerate() {
-                    let s = first + k as isize;
-                    match usize::try_from(s).ok().filter(|&s| s < frames) {
-                        Some(s) => taps.copy_from_slice(&x[s * width..(s + 1) * width]),
-                        None => taps.fill(0),
-                    }
-                }
-                &*padded
-            };
-            linear(run, &group, row)?;
-        }
+        linear(outputs, run, |_| &bias[span.clone()], &group, y)?;
     }
     Ok(())
 }
@@ -533,15 +660,20 @@ mod tests {
             .map(|&s| Requant::new(sx * s / sy).unwrap())
             .collect();
         let xq: Vec<i8> = x.iter().map(|&v| quantize(v, sx)).collect();
+        let layer = Layer {
+            weights: &wq,
+            requant: &rq,
+            activation: Activation::Identity,
+        };
         for stride in [1, 2] {
             let mut out = vec![0i8; frames.div_ceil(stride) * channels];
-            let layer = Layer {
-                weights: &wq,
-                bias: &bq,
-                requant: &rq,
-                activation: Activation::Identity,
+            let shape = Conv {
+                channels,
+                groups,
+                kernel,
+                stride,
             };
-            conv1d(&xq, channels, groups, kernel, stride, &layer, &mut out).unwrap();
+            conv1d(&xq, &shape, &layer, &bq, &mut out).unwrap();
             let real = conv_reference(&x, channels, groups, kernel, stride, &w, &b);
             for (k, (&q, &r)) in out.iter().zip(&real).enumerate() {
                 assert!(
@@ -552,14 +684,14 @@ mod tests {
             }
         }
         let mut out = vec![0i8; frames * channels];
-        let layer = Layer {
-            weights: &wq,
-            bias: &bq,
-            requant: &rq,
-            activation: Activation::Identity,
+        let shape = Conv {
+            channels,
+            groups: 3,
+            kernel,
+            stride: 1,
         };
         assert_eq!(
-            conv1d(&xq, channels, 3, kernel, 1, &layer, &mut out),
+            conv1d(&xq, &shape, &layer, &bq, &mut out),
             Err(ShapeError::Mismatch)
         );
     }
@@ -595,19 +727,58 @@ mod tests {
         }
 
         #[test]
+        fn a_small_requantization_rounds_as_the_general_one(acc in any::<i32>(), factor in 1e-7f32..0.3) {
+            let r = Requant::new(factor).unwrap();
+            match r.small() {
+                Some(small) => prop_assert_eq!(small.scale(acc), r.scale(acc)),
+                None => prop_assert!(factor >= 0.25),
+            }
+            prop_assert_eq!(LEAKY_SMALL.scale(acc), LEAKY.scale(acc));
+        }
+
+        #[test]
         fn dot_is_the_sum_of_products(pairs in proptest::collection::vec((any::<i8>(), any::<i8>()), 0..70)) {
             let (a, b): (Vec<i8>, Vec<i8>) = pairs.into_iter().unzip();
             let naive: i32 = a.iter().zip(&b).map(|(&x, &y)| i32::from(x) * i32::from(y)).sum();
             prop_assert_eq!(dot(&a, &b), naive);
             prop_assert_eq!(dot(&a, &b[..b.len() / 2]), dot(&a[..b.len() / 2], &b[..b.len() / 2]));
-            // Two rows at a time (lengths a multiple of four) or one (any other) add up alike.
-            let reversed: Vec<i8> = b.iter().rev().copied().collect();
-            let rows = [a.clone(), reversed.clone(), a.clone()].concat();
-            let mut out = [0i32; 3];
-            if !b.is_empty() {
-                accumulate(&b, &rows, &[1, -1, i32::MAX], &mut out).unwrap();
-                let expected = [dot(&a, &b) + 1, dot(&reversed, &b) - 1, dot(&a, &b).saturating_add(i32::MAX)];
-                prop_assert_eq!(out, expected);
+        }
+
+        /// Vectors go through the rows four at a time (a short last group, widths that are no
+        /// multiple of four, biases at the ends of `i32`): each sum is still its own dot
+        /// product plus its bias, saturated.
+        #[test]
+        fn batched_rows_are_each_vectors_dot_products(
+            (n, m, count) in (1..40usize, 1..6usize, 1..10usize),
+            seed in any::<u64>(),
+        ) {
+            let mut state = seed;
+            let mut next = move || {
+                state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+                (state >> 56) as i8
+            };
+            let weights: Vec<i8> = (0..m * n).map(|_| next()).collect();
+            let inputs: Vec<i8> = (0..count * n).map(|_| next()).collect();
+            let ends = [i32::MAX, i32::MIN, 0];
+            let biases: Vec<i32> = (0..count * m)
+                .map(|k| if k % 5 == 0 { ends[k % 3] } else { i32::from(next()) * 1000 })
+                .collect();
+            let mut out = vec![0i32; count * m];
+            let input = |i: usize| &inputs[i * n..(i + 1) * n];
+            let bias = |i: usize| &biases[i * m..(i + 1) * m];
+            accumulate(count, input, bias, &weights, &mut out).unwrap();
+            for i in 0..count {
+                for c in 0..m {
+                    let expected = dot(&weights[c * n..(c + 1) * n], input(i)).saturating_add(bias(i)[c]);
+                    prop_assert_eq!(out[i * m + c], expected, "vector {} output {}", i, c);
+                }
+            }
+            let requant = vec![Requant::new(0.01).unwrap(); m];
+            let layer = Layer { weights: &weights, requant: &requant, activation: Activation::Leaky };
+            let mut q = vec![0i8; count * m];
+            linear(count, input, bias, &layer, &mut q).unwrap();
+            for (k, (&q, &acc)) in q.iter().zip(&out).enumerate() {
+                prop_assert_eq!(q, Activation::Leaky.apply(requant[k % m], acc));
             }
         }
     }
@@ -641,11 +812,10 @@ mod tests {
         let mut out = [0i8; 2];
         let layer = Layer {
             weights: &wq,
-            bias: &bq,
             requant: &rq,
             activation: Activation::Identity,
         };
-        linear(&xq, &layer, &mut out).unwrap();
+        linear(1, |_| &xq, |_| &bq, &layer, &mut out).unwrap();
         for c in 0..2 {
             let real: f32 = w[c].iter().zip(&x).map(|(a, b)| a * b).sum::<f32>() + b[c];
             assert!(
@@ -658,6 +828,17 @@ mod tests {
             weights: &wq[1..],
             ..layer
         };
-        assert_eq!(linear(&xq, &short, &mut out), Err(ShapeError::Mismatch));
+        assert_eq!(
+            linear(1, |_| &xq, |_| &bq, &short, &mut out),
+            Err(ShapeError::Mismatch)
+        );
+        assert_eq!(
+            linear(1, |_| &xq[1..], |_| &bq, &layer, &mut out),
+            Err(ShapeError::Mismatch)
+        );
+        assert_eq!(
+            linear(2, |_| &xq, |_| &bq, &layer, &mut out),
+            Err(ShapeError::Mismatch)
+        );
     }
 }

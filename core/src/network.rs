@@ -324,6 +324,7 @@ impl Net<'_, '_> {
         for t in 0..WINDOW {
             self.encode_frame(frame, origin, t, buffers)?;
         }
+        self.tokens(buffers)?;
         self.convolve(buffers)?;
         for t in 0..WINDOW.min(count - start) {
             let pose = &mut out[(start + t) * self.target.len()..][..self.target.len()];
@@ -332,9 +333,9 @@ impl Net<'_, '_> {
         Ok(())
     }
 
-    /// The motion encoder up to the convolutions, frame `t`: joint embeddings, then attention
-    /// of each segment token over itself, the root and its segment's joints, into
-    /// `buffers.a`.
+    /// The motion encoder up to the segment tokens' output layer, frame `t`: joint
+    /// embeddings, then attention of each segment token over itself, the root and its
+    /// segment's joints, leaving each token's context in `buffers.b` (`[S][T][d]`).
     fn encode_frame<'f>(
         &self,
         frame: impl Fn(usize) -> &'f [Vec3],
@@ -342,7 +343,7 @@ impl Net<'_, '_> {
         t: usize,
         buffers: &mut Buffers<'_>,
     ) -> Result<(), NetworkError> {
-        let d = self.d;
+        let (d, m) = (self.d, self.source.len());
         let h = self.source.height();
         let scales = self.weights.scales();
         let relative = |t: usize, k: usize| {
@@ -354,18 +355,9 @@ impl Net<'_, '_> {
             }
         };
         let (before, after) = (t.max(1) - 1, t.max(1));
-        let features = self.layer(Dense::MotionFeatures);
-        let output = self.layer(Dense::MotionOutput);
-        let embed = Layer {
-            weights: output.weights,
-            bias: output.bias_row(t),
-            requant: output.requant,
-            activation: Activation::Identity,
-        };
-        let rows = buffers.joints.chunks_exact_mut(d);
-        for ((k, joint), bias) in rows.enumerate().zip(buffers.motion_bias.chunks_exact(d)) {
+        let mut x = [[0i8; MOTION_INPUTS]; MAX_JOINTS];
+        for (k, x) in x.iter_mut().enumerate().take(m) {
             let (p, v) = (relative(t, k), relative(after, k) - relative(before, k));
-            let mut x = [0i8; MOTION_INPUTS];
             for ((x, real), &scale) in x
                 .iter_mut()
                 .zip(p.iter().chain(v.iter()))
@@ -373,27 +365,42 @@ impl Net<'_, '_> {
             {
                 *x = int8::quantize(*real, scale);
             }
-            let mut hidden = [0i8; MAX_FEATURES];
-            let first = Layer {
-                weights: features.weights,
-                bias,
-                requant: features.requant,
-                activation: Activation::Leaky,
-            };
-            int8::linear(&x, &first, &mut hidden[..d])?;
-            int8::linear(&hidden[..d], &embed, joint)?;
         }
+        let features = self.layer(Dense::MotionFeatures);
+        let first = Layer {
+            weights: features.weights,
+            requant: features.requant,
+            activation: Activation::Leaky,
+        };
+        let mut hidden = [0i8; MAX_JOINTS * MAX_FEATURES];
+        let motion_bias = &*buffers.motion_bias;
+        int8::linear(
+            m,
+            |k| &x[k],
+            |k| &motion_bias[k * d..(k + 1) * d],
+            &first,
+            &mut hidden[..m * d],
+        )?;
+        let output = self.layer(Dense::MotionOutput);
+        let embed = Layer {
+            weights: output.weights,
+            requant: output.requant,
+            activation: Activation::Identity,
+        };
+        let rows = |k: usize| &hidden[k * d..(k + 1) * d];
+        int8::linear(m, rows, |_| output.bias_row(t), &embed, buffers.joints)?;
+
         let heads = usize::from(self.weights.architecture().heads);
         let width = d / heads;
-        let output = self.layer(Dense::Output);
-        let value = self.layer(Dense::Value);
         let [logits, offsets, token_logits, token_values] =
             Table::ALL.map(|t| self.weights.table(t));
+        // Per segment and head: the weighted mean joint embedding and the softmax's parts.
+        let mut means = [[[0i8; MAX_FEATURES]; MAX_HEADS]; SEGMENTS];
+        let mut shares = [[(0.0f32, 0.0f32); MAX_HEADS]; SEGMENTS];
         for (s, segment) in Segment::ALL.iter().enumerate() {
             let row = s * heads..(s + 1) * heads;
             let mut attention = Attention::new(&token_logits[row.clone()]);
-            let seen = (0..self.source.len())
-                .filter(|&k| k == 0 || self.source.segment_contains(*segment, k));
+            let seen = (0..m).filter(|&k| k == 0 || self.source.segment_contains(*segment, k));
             for k in seen {
                 let joint = &buffers.joints[k * d..(k + 1) * d];
                 let mut logit = [0.0; MAX_HEADS];
@@ -409,40 +416,63 @@ impl Net<'_, '_> {
                 }
                 attention.add(&logit[..heads], joint);
             }
-            // Per head: the token's value and the joints' values, the latter as the value
-            // layer of the joints' weighted mean embedding.
-            let mut context = [0i8; MAX_FEATURES];
             for h in 0..heads {
-                let span = h * width..(h + 1) * width;
-                let mut mean = [0i8; MAX_FEATURES];
-                for (m, &x) in mean.iter_mut().zip(&attention.sums[h][..d]) {
-                    *m = int8::quantize(x, attention.joints[h].max(f32::MIN_POSITIVE));
+                let joints = attention.joints[h];
+                for (q, &x) in means[s][h].iter_mut().zip(&attention.sums[h][..d]) {
+                    *q = int8::quantize(x, joints.max(f32::MIN_POSITIVE));
                 }
-                let mut acc = [0i32; MAX_FEATURES];
-                let rows = span.start * d..span.end * d;
-                let (weights, bias) = (&value.weights[rows], &value.bias[span.clone()]);
-                int8::accumulate(&mean[..d], weights, bias, &mut acc[..width])?;
-                let total = attention.token[h] + attention.joints[h];
-                for (c, (q, &a)) in context[span.clone()]
-                    .iter_mut()
-                    .zip(&acc[..width])
-                    .enumerate()
-                {
-                    let at = span.start + c;
-                    let joints = a as f32 * value.scale[at];
-                    let token = token_values[s * d + at];
-                    let real = (attention.token[h] * token + attention.joints[h] * joints) / total;
+                shares[s][h] = (attention.token[h], joints);
+            }
+        }
+        // Per head, for all segments at once: the value layer of the mean embedding, mixed
+        // with the token's own value.
+        let value = self.layer(Dense::Value);
+        let mut contexts = [[0i8; MAX_FEATURES]; SEGMENTS];
+        for h in 0..heads {
+            let span = h * width..(h + 1) * width;
+            let mut acc = [0i32; SEGMENTS * MAX_FEATURES];
+            int8::accumulate(
+                SEGMENTS,
+                |s| &means[s][h][..d],
+                |_| &value.bias[span.clone()],
+                &value.weights[span.start * d..span.end * d],
+                &mut acc[..SEGMENTS * width],
+            )?;
+            for (s, (context, acc)) in contexts.iter_mut().zip(acc.chunks_exact(width)).enumerate()
+            {
+                let (token, joints) = shares[s][h];
+                for ((q, &a), at) in context[span.clone()].iter_mut().zip(acc).zip(span.clone()) {
+                    let joint = a as f32 * value.scale[at];
+                    let real =
+                        (token * token_values[s * d + at] + joints * joint) / (token + joints);
                     *q = int8::quantize(real, scales.context);
                 }
             }
-            let layer = Layer {
-                weights: output.weights,
-                bias: output.bias_row(s),
-                requant: output.requant,
-                activation: Activation::Identity,
-            };
+        }
+        for (s, context) in contexts.iter().enumerate() {
             let at = (s * WINDOW + t) * d;
-            int8::linear(&context[..d], &layer, &mut buffers.a[at..at + d])?;
+            buffers.b[at..at + d].copy_from_slice(&context[..d]);
+        }
+        Ok(())
+    }
+
+    /// The segment tokens' output layer over the window's frames, from `buffers.b` into
+    /// `buffers.a`.
+    fn tokens(&self, buffers: &mut Buffers<'_>) -> Result<(), NetworkError> {
+        let d = self.d;
+        let output = self.layer(Dense::Output);
+        let layer = Layer {
+            weights: output.weights,
+            requant: output.requant,
+            activation: Activation::Identity,
+        };
+        let contexts = buffers.b.chunks_exact(WINDOW * d);
+        for (s, (context, out)) in contexts
+            .zip(buffers.a.chunks_exact_mut(WINDOW * d))
+            .enumerate()
+        {
+            let frame = |t: usize| &context[t * d..(t + 1) * d];
+            int8::linear(WINDOW, frame, |_| output.bias_row(s), &layer, out)?;
         }
         Ok(())
     }
@@ -452,17 +482,21 @@ impl Net<'_, '_> {
     /// `buffers.b`.
     fn convolve(&self, buffers: &mut Buffers<'_>) -> Result<(), NetworkError> {
         let d = self.d;
-        let channels = SEGMENTS * d;
         let kernel = usize::from(self.weights.architecture().kernel);
         let conv = |layer: Dense, activation, stride, input: &[i8], out: &mut [i8]| {
             let t = self.layer(layer);
+            let shape = int8::Conv {
+                channels: SEGMENTS * d,
+                groups: SEGMENTS,
+                kernel,
+                stride,
+            };
             let layer = Layer {
                 weights: t.weights,
-                bias: t.bias,
                 requant: t.requant,
                 activation,
             };
-            int8::conv1d(input, channels, SEGMENTS, kernel, stride, &layer, out)
+            int8::conv1d(input, &shape, &layer, t.bias, out)
         };
         conv(Dense::Down1, Activation::Leaky, 2, buffers.a, buffers.c)?;
         conv(Dense::Down2, Activation::Identity, 2, buffers.c, buffers.f)?;
@@ -511,7 +545,7 @@ impl Net<'_, '_> {
         buffers: &Buffers<'_>,
         pose: &mut [Vec3],
     ) -> Result<(), NetworkError> {
-        let d = self.d;
+        let (d, n) = (self.d, self.target.len());
         let feature = |s: usize| &buffers.b[(s * WINDOW + t) * d..][..d];
         let mut all = [0i8; SEGMENTS * MAX_FEATURES];
         for (s, row) in all.chunks_exact_mut(d).enumerate().take(SEGMENTS) {
@@ -519,7 +553,8 @@ impl Net<'_, '_> {
         }
         let root = self.layer(Dense::Root);
         let mut acc = [0i32; 3];
-        int8::accumulate(&all[..SEGMENTS * d], root.weights, root.bias, &mut acc)?;
+        let all = &all[..SEGMENTS * d];
+        int8::accumulate(1, |_| all, |_| root.bias, root.weights, &mut acc)?;
         let h = self.target.height();
         let correction = Vec3::new(
             acc[0] as f32 * root.scale[0],
@@ -528,30 +563,31 @@ impl Net<'_, '_> {
         );
         let start = source[self.prior.root()];
         pose[0] = start * self.prior.scale() + correction * h;
-        let hidden_layer = self.layer(Dense::DecoderFeatures);
+        // Every bone's correction at once: bone `k` (row `k - 1`) reads its segment's feature.
+        let bones = n - 1;
+        let features = self.layer(Dense::DecoderFeatures);
+        let layer = Layer {
+            weights: features.weights,
+            requant: features.requant,
+            activation: Activation::Leaky,
+        };
+        let mut hidden = [0i8; MAX_JOINTS * MAX_FEATURES];
+        let input = |i: usize| feature(self.target.bone_segment(i + 1) as usize);
+        let bias = |i: usize| &buffers.decoder_bias[(i + 1) * d..(i + 2) * d];
+        int8::linear(bones, input, bias, &layer, &mut hidden[..bones * d])?;
         let output = self.layer(Dense::DecoderOutput);
+        let mut raw = [0i32; MAX_JOINTS * QUATERNION];
+        let rows = |i: usize| &hidden[i * d..(i + 1) * d];
+        let raw = &mut raw[..bones * QUATERNION];
+        int8::accumulate(bones, rows, |_| output.bias, output.weights, raw)?;
         let mut prior = [Quat::identity(); MAX_JOINTS];
         let mut global = [Quat::identity(); MAX_JOINTS];
-        for k in 1..self.target.len() {
+        for (k, raw) in (1..n).zip(raw.chunks_exact(QUATERNION)) {
             if let Some(chord) = self.prior.chord(k) {
                 let to = source[chord.to] - source[chord.from];
                 prior[k] = crate::kinematics::swing(chord.rest, to);
             }
             let parent = self.target.parent(k).unwrap_or(0);
-            let layer = Layer {
-                weights: hidden_layer.weights,
-                bias: &buffers.decoder_bias[k * d..(k + 1) * d],
-                requant: hidden_layer.requant,
-                activation: Activation::Leaky,
-            };
-            let mut hidden = [0i8; MAX_FEATURES];
-            int8::linear(
-                feature(self.target.bone_segment(k) as usize),
-                &layer,
-                &mut hidden[..d],
-            )?;
-            let mut raw = [0i32; QUATERNION];
-            int8::accumulate(&hidden[..d], output.weights, output.bias, &mut raw)?;
             let q = |i: usize| raw[i] as f32 * output.scale[i];
             let raw = Quaternion::new(1.0 + q(0), q(1), q(2), q(3));
             let norm = math::sqrt(raw.norm_squared() + NORM_EPSILON);

@@ -2,7 +2,7 @@
 //! layers: its widest convolution and a joint layer.
 
 use crate::count;
-use posecoach_core::int8::{self, Activation, Layer};
+use posecoach_core::int8::{self, Activation, Conv, Layer};
 use posecoach_core::weights::{Dense, Weights};
 
 /// Deterministic bytes: a 32-bit LCG's high byte.
@@ -32,12 +32,17 @@ pub fn conv_per_mac_centi(weights: &Weights<'_>) -> Result<u64, &'static str> {
     let mut out = [0i8; CHANNELS * FRAMES];
     let layer = Layer {
         weights: t.weights,
-        bias: t.bias,
         requant: t.requant,
         activation: Activation::Leaky,
     };
+    let shape = Conv {
+        channels: CHANNELS,
+        groups: GROUPS,
+        kernel: KERNEL,
+        stride: 1,
+    };
     let start = count::now();
-    int8::conv1d(&input, CHANNELS, GROUPS, KERNEL, 1, &layer, &mut out).map_err(|_| "shape")?;
+    int8::conv1d(&input, &shape, &layer, t.bias, &mut out).map_err(|_| "shape")?;
     let spent = count::now() - start;
     let macs = (FRAMES * CHANNELS * KERNEL * CHANNELS / GROUPS) as u64;
     // Interior frames see every tap; the two end frames one tap fewer.
@@ -45,36 +50,44 @@ pub fn conv_per_mac_centi(weights: &Weights<'_>) -> Result<u64, &'static str> {
     Ok(spent * 100 / macs)
 }
 
-/// Instructions per MAC of `int8::linear` on the joint decoder's hidden layer (16 × 16, as the
-/// network runs it once per joint and frame), times 100, after checking its outputs against a
-/// plain scalar loop's (the DSP path must add up exactly as the portable one).
+/// Instructions per MAC of `int8::linear` on the joint decoder's hidden layer (16 × 16), as
+/// the network runs it: on a frame's 16 bones at once, each with its own bias row. Times 100,
+/// after checking every output against a plain scalar loop's (the DSP path must add up
+/// exactly as the portable one).
 pub fn linear_per_mac_centi(weights: &Weights<'_>) -> Result<u64, &'static str> {
     const N: usize = 16;
+    const BONES: usize = 16;
     let t = weights.layer(Dense::DecoderFeatures);
     if t.weights.len() != N * N {
         return Err("decoder.features is not the benchmark's size");
     }
-    let input = core::hint::black_box(bytes::<N>(3));
-    let mut out = [0i8; N];
+    let inputs = core::hint::black_box(bytes::<{ N * BONES }>(3));
+    let mut biases = [0i32; N * BONES];
+    for (b, &x) in biases.iter_mut().zip(&bytes::<{ N * BONES }>(7)) {
+        *b = i32::from(x) * 64;
+    }
+    let mut out = [0i8; N * BONES];
     let layer = Layer {
         weights: t.weights,
-        bias: t.bias,
         requant: t.requant,
-        activation: Activation::Identity,
+        activation: Activation::Leaky,
     };
+    let input = |i: usize| &inputs[i * N..(i + 1) * N];
+    let bias = |i: usize| &biases[i * N..(i + 1) * N];
     let start = count::now();
-    int8::linear(&input, &layer, &mut out).map_err(|_| "shape")?;
+    int8::linear(BONES, input, bias, &layer, &mut out).map_err(|_| "shape")?;
     let spent = count::now() - start;
-    for (c, &o) in out.iter().enumerate() {
+    for (k, &o) in out.iter().enumerate() {
+        let (i, c) = (k / N, k % N);
         let row = &t.weights[c * N..(c + 1) * N];
         let sum: i32 = row
             .iter()
-            .zip(&input)
+            .zip(input(i))
             .map(|(&w, &x)| i32::from(w) * i32::from(x))
             .sum();
-        if t.requant[c].apply(sum + t.bias[c]) != o {
+        if Activation::Leaky.apply(t.requant[c], sum + bias(i)[c]) != o {
             return Err("the int8 kernel disagrees with a scalar loop");
         }
     }
-    Ok(spent * 100 / (N * N) as u64)
+    Ok(spent * 100 / (N * N * BONES) as u64)
 }
