@@ -164,51 +164,55 @@ pub const MAX_FIELD: usize = 128;
 /// Longest convolution kernel.
 pub use crate::weights::MAX_KERNEL;
 
-/// Up to [`LANES`] input vectors of one length, ready for [`Lanes::dots`]: built once per
-/// batch, loaded per group of vectors.
-struct Lanes<'x> {
-    inputs: [&'x [i8]; LANES],
-    /// On the DSP path, the inputs' four-byte groups sign-extended to 16-bit lanes and
-    /// interleaved: group `g` of lane `l` as words `[g][2l]` (bytes 0 and 2) and `[g][2l + 1]`
-    /// (bytes 1 and 3), the operands of `SMLAD`.
+/// Room for the vectors a layer call runs on together, made once and lent to every call
+/// ([`linear`], [`accumulate`], [`conv1d`]) so that none clears its own: on the DSP path the
+/// inputs' four-byte groups sign-extended to 16-bit lanes and interleaved (group `g` of lane
+/// `l` as words `[g][2l]`, bytes 0 and 2, and `[g][2l + 1]`, bytes 1 and 3: the operands of
+/// `SMLAD`); nothing elsewhere.
+pub struct Workspace {
     #[cfg(all(feature = "dsp", target_arch = "arm"))]
     widened: [[u32; 2 * LANES]; MAX_FIELD / 4],
 }
 
-impl<'x> Lanes<'x> {
-    fn new() -> Self {
-        Lanes {
-            inputs: [&[]; LANES],
+impl Workspace {
+    /// An empty workspace (1 KiB on the DSP path).
+    pub const fn new() -> Self {
+        Workspace {
             #[cfg(all(feature = "dsp", target_arch = "arm"))]
             widened: [[0; 2 * LANES]; MAX_FIELD / 4],
         }
     }
 
-    /// Takes `inputs`, each at most [`MAX_FIELD`] long.
+    /// Takes `inputs`, each at most [`MAX_FIELD`] long, for [`Workspace::dots`].
     #[inline(always)]
-    fn load(&mut self, inputs: [&'x [i8]; LANES]) {
-        self.inputs = inputs;
+    fn load(&mut self, inputs: &[&[i8]; LANES]) {
         #[cfg(all(feature = "dsp", target_arch = "arm"))]
-        {
-            let half = |a: i8, b: i8| u32::from(a as i16 as u16) | u32::from(b as i16 as u16) << 16;
-            for (l, x) in inputs.iter().enumerate() {
-                let (groups, _) = x.as_chunks::<4>();
-                for (w, g) in self.widened.iter_mut().zip(groups) {
-                    w[2 * l] = half(g[0], g[2]);
-                    w[2 * l + 1] = half(g[1], g[3]);
-                }
+        for (l, x) in inputs.iter().enumerate() {
+            let (groups, _) = x.as_chunks::<4>();
+            for (w, g) in self.widened.iter_mut().zip(groups) {
+                let [even, odd] = dsp::widen(u32::from_le_bytes(g.map(|b| b as u8)));
+                (w[2 * l], w[2 * l + 1]) = (even, odd);
             }
         }
+        #[cfg(not(all(feature = "dsp", target_arch = "arm")))]
+        let _ = inputs;
     }
 
-    /// `Σ_k row[k] · input[k]` for each lane, over the row's length (the inputs' length).
+    /// `Σ_k row[k] · input[k]` for each of the loaded `inputs`, over the row's length (the
+    /// inputs' length).
     #[inline(always)]
-    fn dots(&self, row: &[i8]) -> [i32; LANES] {
+    fn dots(&self, inputs: &[&[i8]; LANES], row: &[i8]) -> [i32; LANES] {
         #[cfg(all(feature = "dsp", target_arch = "arm"))]
         if let (groups, []) = row.as_chunks::<4>() {
             return dsp::row(&self.widened[..groups.len().min(MAX_FIELD / 4)], groups);
         }
-        self.inputs.map(|x| dot(row, x))
+        inputs.map(|x| dot(row, x))
+    }
+}
+
+impl Default for Workspace {
+    fn default() -> Self {
+        Workspace::new()
     }
 }
 
@@ -216,6 +220,25 @@ impl<'x> Lanes<'x> {
 #[allow(unsafe_code)]
 mod dsp {
     use super::LANES;
+
+    /// The int8 lanes of `x`: bytes 0 and 2, then bytes 1 and 3, sign-extended to 16 bits
+    /// (two `SXTB16`).
+    #[inline(always)]
+    pub(super) fn widen(x: u32) -> [u32; 2] {
+        let (even, odd);
+        // SAFETY: register-only instructions of the DSP extension; no memory, no flags.
+        unsafe {
+            core::arch::asm!(
+                "sxtb16 {even}, {x}",
+                "sxtb16 {odd}, {x}, ror #8",
+                x = in(reg) x,
+                even = out(reg) even,
+                odd = lateout(reg) odd,
+                options(pure, nomem, nostack, preserves_flags)
+            );
+        }
+        [even, odd]
+    }
 
     /// Each lane's `Σ_g` of `row[g]`'s four int8 weights times the lane's widened group `g`
     /// (`widened[g][2l]`, `widened[g][2l + 1]`): per group one load and two `SXTB16` widen
@@ -312,7 +335,8 @@ impl Activation {
             Activation::Leaky if v < 0 => LEAKY_SMALL.scale(v),
             _ => v,
         };
-        v.clamp(-MAX, MAX) as i8
+        // `SSAT` to −128..=127, then −128 raised: as `clamp(−MAX, MAX)`, in fewer instructions.
+        v.clamp(-MAX - 1, MAX).max(-MAX) as i8
     }
 }
 
@@ -346,6 +370,7 @@ pub struct Layer<'w> {
 /// `input(i)` is `n` long, every `bias(i)` `m` long and `out` is `count × m`.
 #[inline]
 pub fn linear<'x, 'b>(
+    work: &mut Workspace,
     count: usize,
     input: impl Fn(usize) -> &'x [i8],
     bias: impl Fn(usize) -> &'b [i32],
@@ -356,14 +381,24 @@ pub fn linear<'x, 'b>(
     if out.len() != count * m {
         return Err(ShapeError::Mismatch);
     }
-    rows(count, input, bias, layer.weights, m, |first, c, sums| {
-        let requant = layer.requant[c];
-        let outs = out[first * m + c..].iter_mut().step_by(m).zip(sums);
-        match requant.small() {
-            Some(small) => outs.for_each(|(o, &acc)| *o = activation.activate(small.scale(acc))),
-            None => outs.for_each(|(o, &acc)| *o = activation.apply(requant, acc)),
-        }
-    })
+    rows(
+        work,
+        count,
+        input,
+        bias,
+        layer.weights,
+        m,
+        |first, c, sums| {
+            let requant = layer.requant[c];
+            let outs = out[first * m + c..].iter_mut().step_by(m).zip(sums);
+            match requant.small() {
+                Some(small) => {
+                    outs.for_each(|(o, &acc)| *o = activation.activate(small.scale(acc)))
+                }
+                None => outs.for_each(|(o, &acc)| *o = activation.apply(requant, acc)),
+            }
+        },
+    )
 }
 
 /// [`linear`]'s accumulators, not requantized, for a layer whose outputs go on in `f32`:
@@ -374,6 +409,7 @@ pub fn linear<'x, 'b>(
 /// As [`linear`].
 #[inline]
 pub fn accumulate<'x, 'b>(
+    work: &mut Workspace,
     count: usize,
     input: impl Fn(usize) -> &'x [i8],
     bias: impl Fn(usize) -> &'b [i32],
@@ -390,7 +426,7 @@ pub fn accumulate<'x, 'b>(
     if m * count != out.len() {
         return Err(ShapeError::Mismatch);
     }
-    rows(count, input, bias, weights, m, |first, c, sums| {
+    rows(work, count, input, bias, weights, m, |first, c, sums| {
         let outs = out[first * m + c..].iter_mut().step_by(m);
         outs.zip(sums).for_each(|(o, &acc)| *o = acc);
     })
@@ -402,6 +438,7 @@ pub fn accumulate<'x, 'b>(
 /// `i32::MAX`); adding the bias saturates.
 #[inline(always)]
 fn rows<'x, 'b>(
+    work: &mut Workspace,
     count: usize,
     input: impl Fn(usize) -> &'x [i8],
     bias: impl Fn(usize) -> &'b [i32],
@@ -416,7 +453,6 @@ fn rows<'x, 'b>(
     if n == 0 || n > MAX_FIELD || n * outputs != weights.len() {
         return Err(ShapeError::Mismatch);
     }
-    let mut lanes = Lanes::new();
     for first in (0..count).step_by(LANES) {
         let real = (count - first).min(LANES);
         let vector = |l: usize| first + l.min(real - 1);
@@ -428,9 +464,9 @@ fn rows<'x, 'b>(
                 return Err(ShapeError::Mismatch);
             }
         }
-        lanes.load(inputs);
+        work.load(&inputs);
         for (c, row) in weights.chunks_exact(n).enumerate() {
-            let mut sums = lanes.dots(row);
+            let mut sums = work.dots(&inputs, row);
             for (sum, b) in sums.iter_mut().zip(&biases) {
                 *sum = sum.saturating_add(b[c]);
             }
@@ -465,6 +501,7 @@ pub struct Conv {
 /// [`ShapeError::Mismatch`] if the lengths do not fit `shape`, the kernel is even or longer
 /// than [`MAX_KERNEL`], or a channel's field (kernel × width) exceeds [`MAX_FIELD`].
 pub fn conv1d(
+    work: &mut Workspace,
     input: &[i8],
     shape: &Conv,
     layer: &Layer<'_>,
@@ -538,7 +575,7 @@ pub fn conv1d(
             requant: &layer.requant[span.clone()],
             activation: layer.activation,
         };
-        linear(outputs, run, |_| &bias[span.clone()], &group, y)?;
+        linear(work, outputs, run, |_| &bias[span.clone()], &group, y)?;
     }
     Ok(())
 }
@@ -673,7 +710,7 @@ mod tests {
                 kernel,
                 stride,
             };
-            conv1d(&xq, &shape, &layer, &bq, &mut out).unwrap();
+            conv1d(&mut Workspace::new(), &xq, &shape, &layer, &bq, &mut out).unwrap();
             let real = conv_reference(&x, channels, groups, kernel, stride, &w, &b);
             for (k, (&q, &r)) in out.iter().zip(&real).enumerate() {
                 assert!(
@@ -691,7 +728,7 @@ mod tests {
             stride: 1,
         };
         assert_eq!(
-            conv1d(&xq, &shape, &layer, &bq, &mut out),
+            conv1d(&mut Workspace::new(), &xq, &shape, &layer, &bq, &mut out),
             Err(ShapeError::Mismatch)
         );
     }
@@ -766,7 +803,7 @@ mod tests {
             let mut out = vec![0i32; count * m];
             let input = |i: usize| &inputs[i * n..(i + 1) * n];
             let bias = |i: usize| &biases[i * m..(i + 1) * m];
-            accumulate(count, input, bias, &weights, &mut out).unwrap();
+            accumulate(&mut Workspace::new(), count, input, bias, &weights, &mut out).unwrap();
             for i in 0..count {
                 for c in 0..m {
                     let expected = dot(&weights[c * n..(c + 1) * n], input(i)).saturating_add(bias(i)[c]);
@@ -776,7 +813,7 @@ mod tests {
             let requant = vec![Requant::new(0.01).unwrap(); m];
             let layer = Layer { weights: &weights, requant: &requant, activation: Activation::Leaky };
             let mut q = vec![0i8; count * m];
-            linear(count, input, bias, &layer, &mut q).unwrap();
+            linear(&mut Workspace::new(), count, input, bias, &layer, &mut q).unwrap();
             for (k, (&q, &acc)) in q.iter().zip(&out).enumerate() {
                 prop_assert_eq!(q, Activation::Leaky.apply(requant[k % m], acc));
             }
@@ -815,7 +852,7 @@ mod tests {
             requant: &rq,
             activation: Activation::Identity,
         };
-        linear(1, |_| &xq, |_| &bq, &layer, &mut out).unwrap();
+        linear(&mut Workspace::new(), 1, |_| &xq, |_| &bq, &layer, &mut out).unwrap();
         for c in 0..2 {
             let real: f32 = w[c].iter().zip(&x).map(|(a, b)| a * b).sum::<f32>() + b[c];
             assert!(
@@ -829,15 +866,22 @@ mod tests {
             ..layer
         };
         assert_eq!(
-            linear(1, |_| &xq, |_| &bq, &short, &mut out),
+            linear(&mut Workspace::new(), 1, |_| &xq, |_| &bq, &short, &mut out),
             Err(ShapeError::Mismatch)
         );
         assert_eq!(
-            linear(1, |_| &xq[1..], |_| &bq, &layer, &mut out),
+            linear(
+                &mut Workspace::new(),
+                1,
+                |_| &xq[1..],
+                |_| &bq,
+                &layer,
+                &mut out
+            ),
             Err(ShapeError::Mismatch)
         );
         assert_eq!(
-            linear(2, |_| &xq, |_| &bq, &layer, &mut out),
+            linear(&mut Workspace::new(), 2, |_| &xq, |_| &bq, &layer, &mut out),
             Err(ShapeError::Mismatch)
         );
     }

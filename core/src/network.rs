@@ -119,6 +119,8 @@ struct Buffers<'s> {
     c: &'s mut [i8],
     /// `[S][T/4][d]`: the encoder's output, fused.
     f: &'s mut [i8],
+    /// The int8 layers' workspace.
+    work: int8::Workspace,
 }
 
 impl<'s> Buffers<'s> {
@@ -143,6 +145,7 @@ impl<'s> Buffers<'s> {
             b: bytes(&mut rest, SEGMENTS * WINDOW * d)?,
             c: bytes(&mut rest, SEGMENTS * WINDOW / 2 * d)?,
             f: bytes(&mut rest, SEGMENTS * WINDOW / 4 * d)?,
+            work: int8::Workspace::new(),
         })
     }
 }
@@ -321,8 +324,31 @@ impl Net<'_, '_> {
         };
         let root = frame(0)[0];
         let origin = Vec3::new(root.x, 0.0, root.z);
+        // Each joint's position relative to its parent (the root's to the window's origin),
+        // in heights, of two consecutive frames: the features and their differences.
+        let h = self.source.height();
+        let relative = |t: usize, out: &mut [Vec3; MAX_JOINTS]| {
+            let p = frame(t);
+            let at = |k: usize| (p[k] - origin) / h;
+            for (k, out) in out.iter_mut().enumerate().take(m) {
+                *out = match self.source.parent(k) {
+                    Some(parent) if k > 0 => at(k) - at(parent),
+                    _ => at(k),
+                };
+            }
+        };
+        let (mut before, mut after) = ([Vec3::zeros(); MAX_JOINTS], [Vec3::zeros(); MAX_JOINTS]);
+        relative(0, &mut before);
         for t in 0..WINDOW {
-            self.encode_frame(frame, origin, t, buffers)?;
+            // Frame 0 moves as frame 1 does.
+            if t > 1 {
+                core::mem::swap(&mut before, &mut after);
+            }
+            if t != 1 {
+                relative(t.max(1), &mut after);
+            }
+            let here = if t == 0 { &before } else { &after };
+            self.encode_frame(&here[..m], &before[..m], &after[..m], t, buffers)?;
         }
         self.tokens(buffers)?;
         self.convolve(buffers)?;
@@ -333,31 +359,23 @@ impl Net<'_, '_> {
         Ok(())
     }
 
-    /// The motion encoder up to the segment tokens' output layer, frame `t`: joint
-    /// embeddings, then attention of each segment token over itself, the root and its
-    /// segment's joints, leaving each token's context in `buffers.b` (`[S][T][d]`).
-    fn encode_frame<'f>(
+    /// The motion encoder up to the segment tokens' output layer, frame `t` (its joints'
+    /// relative positions `here`, their velocity `after − before`): joint embeddings, then
+    /// attention of each segment token over itself, the root and its segment's joints,
+    /// leaving each token's context in `buffers.b` (`[S][T][d]`).
+    fn encode_frame(
         &self,
-        frame: impl Fn(usize) -> &'f [Vec3],
-        origin: Vec3,
+        here: &[Vec3],
+        before: &[Vec3],
+        after: &[Vec3],
         t: usize,
         buffers: &mut Buffers<'_>,
     ) -> Result<(), NetworkError> {
         let (d, m) = (self.d, self.source.len());
-        let h = self.source.height();
         let scales = self.weights.scales();
-        let relative = |t: usize, k: usize| {
-            let p = frame(t);
-            let at = |k: usize| (p[k] - origin) / h;
-            match self.source.parent(k) {
-                Some(parent) if k > 0 => at(k) - at(parent),
-                _ => at(k),
-            }
-        };
-        let (before, after) = (t.max(1) - 1, t.max(1));
         let mut x = [[0i8; MOTION_INPUTS]; MAX_JOINTS];
         for (k, x) in x.iter_mut().enumerate().take(m) {
-            let (p, v) = (relative(t, k), relative(after, k) - relative(before, k));
+            let (p, v) = (here[k], after[k] - before[k]);
             for ((x, real), &scale) in x
                 .iter_mut()
                 .zip(p.iter().chain(v.iter()))
@@ -375,6 +393,7 @@ impl Net<'_, '_> {
         let mut hidden = [0i8; MAX_JOINTS * MAX_FEATURES];
         let motion_bias = &*buffers.motion_bias;
         int8::linear(
+            &mut buffers.work,
             m,
             |k| &x[k],
             |k| &motion_bias[k * d..(k + 1) * d],
@@ -388,7 +407,8 @@ impl Net<'_, '_> {
             activation: Activation::Identity,
         };
         let rows = |k: usize| &hidden[k * d..(k + 1) * d];
-        int8::linear(m, rows, |_| output.bias_row(t), &embed, buffers.joints)?;
+        let bias = |_| output.bias_row(t);
+        int8::linear(&mut buffers.work, m, rows, bias, &embed, buffers.joints)?;
 
         let heads = usize::from(self.weights.architecture().heads);
         let width = d / heads;
@@ -432,6 +452,7 @@ impl Net<'_, '_> {
             let span = h * width..(h + 1) * width;
             let mut acc = [0i32; SEGMENTS * MAX_FEATURES];
             int8::accumulate(
+                &mut buffers.work,
                 SEGMENTS,
                 |s| &means[s][h][..d],
                 |_| &value.bias[span.clone()],
@@ -472,7 +493,8 @@ impl Net<'_, '_> {
             .enumerate()
         {
             let frame = |t: usize| &context[t * d..(t + 1) * d];
-            int8::linear(WINDOW, frame, |_| output.bias_row(s), &layer, out)?;
+            let bias = |_| output.bias_row(s);
+            int8::linear(&mut buffers.work, WINDOW, frame, bias, &layer, out)?;
         }
         Ok(())
     }
@@ -483,7 +505,12 @@ impl Net<'_, '_> {
     fn convolve(&self, buffers: &mut Buffers<'_>) -> Result<(), NetworkError> {
         let d = self.d;
         let kernel = usize::from(self.weights.architecture().kernel);
-        let conv = |layer: Dense, activation, stride, input: &[i8], out: &mut [i8]| {
+        let conv = |work: &mut int8::Workspace,
+                    layer: Dense,
+                    activation,
+                    stride,
+                    input: &[i8],
+                    out: &mut [i8]| {
             let t = self.layer(layer);
             let shape = int8::Conv {
                 channels: SEGMENTS * d,
@@ -496,10 +523,24 @@ impl Net<'_, '_> {
                 requant: t.requant,
                 activation,
             };
-            int8::conv1d(input, &shape, &layer, t.bias, out)
+            int8::conv1d(work, input, &shape, &layer, t.bias, out)
         };
-        conv(Dense::Down1, Activation::Leaky, 2, buffers.a, buffers.c)?;
-        conv(Dense::Down2, Activation::Identity, 2, buffers.c, buffers.f)?;
+        conv(
+            &mut buffers.work,
+            Dense::Down1,
+            Activation::Leaky,
+            2,
+            buffers.a,
+            buffers.c,
+        )?;
+        conv(
+            &mut buffers.work,
+            Dense::Down2,
+            Activation::Identity,
+            2,
+            buffers.c,
+            buffers.f,
+        )?;
         let scales = self.weights.scales();
         let quarter = WINDOW / 4;
         for s in 0..SEGMENTS {
@@ -525,6 +566,7 @@ impl Net<'_, '_> {
         upsample(buffers.f, buffers.c, quarter)?;
         let half = SEGMENTS * WINDOW / 2 * d;
         conv(
+            &mut buffers.work,
             Dense::Up1,
             Activation::Leaky,
             1,
@@ -532,7 +574,14 @@ impl Net<'_, '_> {
             &mut buffers.b[..half],
         )?;
         upsample(&buffers.b[..half], buffers.a, WINDOW / 2)?;
-        conv(Dense::Up2, Activation::Leaky, 1, buffers.a, buffers.b)?;
+        conv(
+            &mut buffers.work,
+            Dense::Up2,
+            Activation::Leaky,
+            1,
+            buffers.a,
+            buffers.b,
+        )?;
         Ok(())
     }
 
@@ -542,7 +591,7 @@ impl Net<'_, '_> {
         &self,
         source: &[Vec3],
         t: usize,
-        buffers: &Buffers<'_>,
+        buffers: &mut Buffers<'_>,
         pose: &mut [Vec3],
     ) -> Result<(), NetworkError> {
         let (d, n) = (self.d, self.target.len());
@@ -554,7 +603,14 @@ impl Net<'_, '_> {
         let root = self.layer(Dense::Root);
         let mut acc = [0i32; 3];
         let all = &all[..SEGMENTS * d];
-        int8::accumulate(1, |_| all, |_| root.bias, root.weights, &mut acc)?;
+        int8::accumulate(
+            &mut buffers.work,
+            1,
+            |_| all,
+            |_| root.bias,
+            root.weights,
+            &mut acc,
+        )?;
         let h = self.target.height();
         let correction = Vec3::new(
             acc[0] as f32 * root.scale[0],
@@ -574,12 +630,26 @@ impl Net<'_, '_> {
         let mut hidden = [0i8; MAX_JOINTS * MAX_FEATURES];
         let input = |i: usize| feature(self.target.bone_segment(i + 1) as usize);
         let bias = |i: usize| &buffers.decoder_bias[(i + 1) * d..(i + 2) * d];
-        int8::linear(bones, input, bias, &layer, &mut hidden[..bones * d])?;
+        int8::linear(
+            &mut buffers.work,
+            bones,
+            input,
+            bias,
+            &layer,
+            &mut hidden[..bones * d],
+        )?;
         let output = self.layer(Dense::DecoderOutput);
         let mut raw = [0i32; MAX_JOINTS * QUATERNION];
         let rows = |i: usize| &hidden[i * d..(i + 1) * d];
         let raw = &mut raw[..bones * QUATERNION];
-        int8::accumulate(bones, rows, |_| output.bias, output.weights, raw)?;
+        int8::accumulate(
+            &mut buffers.work,
+            bones,
+            rows,
+            |_| output.bias,
+            output.weights,
+            raw,
+        )?;
         let mut prior = [Quat::identity(); MAX_JOINTS];
         let mut global = [Quat::identity(); MAX_JOINTS];
         for (k, raw) in (1..n).zip(raw.chunks_exact(QUATERNION)) {

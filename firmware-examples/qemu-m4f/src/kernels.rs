@@ -41,8 +41,9 @@ pub fn conv_per_mac_centi(weights: &Weights<'_>) -> Result<u64, &'static str> {
         kernel: KERNEL,
         stride: 1,
     };
+    let mut work = int8::Workspace::new();
     let start = count::now();
-    int8::conv1d(&input, &shape, &layer, t.bias, &mut out).map_err(|_| "shape")?;
+    int8::conv1d(&mut work, &input, &shape, &layer, t.bias, &mut out).map_err(|_| "shape")?;
     let spent = count::now() - start;
     let macs = (FRAMES * CHANNELS * KERNEL * CHANNELS / GROUPS) as u64;
     // Interior frames see every tap; the two end frames one tap fewer.
@@ -74,8 +75,9 @@ pub fn linear_per_mac_centi(weights: &Weights<'_>) -> Result<u64, &'static str> 
     };
     let input = |i: usize| &inputs[i * N..(i + 1) * N];
     let bias = |i: usize| &biases[i * N..(i + 1) * N];
+    let mut work = int8::Workspace::new();
     let start = count::now();
-    int8::linear(BONES, input, bias, &layer, &mut out).map_err(|_| "shape")?;
+    int8::linear(&mut work, BONES, input, bias, &layer, &mut out).map_err(|_| "shape")?;
     let spent = count::now() - start;
     for (k, &o) in out.iter().enumerate() {
         let (i, c) = (k / N, k % N);
