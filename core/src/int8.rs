@@ -1,6 +1,6 @@
-//! Integer arithmetic of the quantized retargeter: symmetric int8 values with `f32` scales
-//! (`real = scale · q`, `q` in −127..=127), int32 accumulation and fixed-point
-//! requantization.
+//! Integer arithmetic of the quantized retargeter: int8 values with symmetric `f32` scales
+//! (`real = scale · q`, a scale mapping the largest magnitude to 127; values beyond it
+//! saturate to −128..=127), int32 accumulation and fixed-point requantization.
 //!
 //! A layer `y = W x + b` with input scale `s_x`, per-output-channel weight scales `s_w[c]`
 //! and output scale `s_y` accumulates `Σ W_q x_q + b_q` in int32 (`b_q = b / (s_x s_w[c])`)
@@ -19,8 +19,11 @@ pub struct Requant {
     shift: i32,
 }
 
-/// Largest magnitude of a quantized value (−128 is never produced, so negation is exact).
+/// The largest int8 value, which a symmetric scale maps the largest magnitude to (−128 is
+/// reached only by saturation).
 pub const MAX: i32 = 127;
+/// The smallest int8 value.
+const MIN: i32 = -128;
 /// Exponents a [`Requant`] covers: factors from about `2^-30` to `2^30`.
 const SHIFTS: core::ops::RangeInclusive<i32> = -30..=30;
 
@@ -79,7 +82,7 @@ impl Requant {
     /// `acc · factor` rounded as [`Requant::scale`] rounds, as a saturated int8 value.
     #[inline]
     pub fn apply(self, acc: i32) -> i8 {
-        self.scale(acc).clamp(-MAX, MAX) as i8
+        self.scale(acc).clamp(MIN, MAX) as i8
     }
     /// The same requantization, when its factor is below ¼ (`shift ≤ −2`), in the form the
     /// kernels apply per output.
@@ -131,7 +134,7 @@ fn frexp(x: f32) -> (f32, i32) {
 pub fn quantize(real: f32, scale: f32) -> i8 {
     let v = real / scale;
     let half = if v < 0.0 { -0.5 } else { 0.5 };
-    ((v + half) as i32).clamp(-MAX, MAX) as i8
+    ((v + half) as i32).clamp(MIN, MAX) as i8
 }
 
 /// `Σ a[k] · b[k]` over the shorter of the two.
@@ -198,15 +201,19 @@ impl Workspace {
         let _ = inputs;
     }
 
-    /// `Σ_k row[k] · input[k]` for each of the loaded `inputs`, over the row's length (the
-    /// inputs' length).
+    /// `start[l] + Σ_k row[k] · inputs[l][k]` for each of the loaded `inputs` (wrapping), over
+    /// the row's length (the inputs' length).
     #[inline(always)]
-    fn dots(&self, inputs: &[&[i8]; LANES], row: &[i8]) -> [i32; LANES] {
+    fn dots(&self, inputs: &[&[i8]; LANES], row: &[i8], start: [i32; LANES]) -> [i32; LANES] {
         #[cfg(all(feature = "dsp", target_arch = "arm"))]
         if let (groups, []) = row.as_chunks::<4>() {
-            return dsp::row(&self.widened[..groups.len().min(MAX_FIELD / 4)], groups);
+            return dsp::row(
+                start,
+                &self.widened[..groups.len().min(MAX_FIELD / 4)],
+                groups,
+            );
         }
-        inputs.map(|x| dot(row, x))
+        core::array::from_fn(|l| start[l].wrapping_add(dot(row, inputs[l])))
     }
 }
 
@@ -240,14 +247,17 @@ mod dsp {
         [even, odd]
     }
 
-    /// Each lane's `Σ_g` of `row[g]`'s four int8 weights times the lane's widened group `g`
+    /// Each lane's `s[l] + Σ_g` of `row[g]`'s four int8 weights times the lane's widened group `g`
     /// (`widened[g][2l]`, `widened[g][2l + 1]`): per group one load and two `SXTB16` widen
     /// the weights, then per lane one `LDRD` and two `SMLAD` add four products (17
     /// instructions for 16 multiply-accumulates, loop included), as CMSIS-NN's kernels do.
     #[inline(always)]
-    pub(super) fn row(widened: &[[u32; 2 * LANES]], row: &[[i8; 4]]) -> [i32; LANES] {
+    pub(super) fn row(
+        mut s: [i32; LANES],
+        widened: &[[u32; 2 * LANES]],
+        row: &[[i8; 4]],
+    ) -> [i32; LANES] {
         let groups = widened.len().min(row.len());
-        let mut s = [0i32; LANES];
         if groups == 0 {
             return s;
         }
@@ -335,8 +345,8 @@ impl Activation {
             Activation::Leaky if v < 0 => LEAKY_SMALL.scale(v),
             _ => v,
         };
-        // `SSAT` to −128..=127, then −128 raised: as `clamp(−MAX, MAX)`, in fewer instructions.
-        v.clamp(-MAX - 1, MAX).max(-MAX) as i8
+        // One `SSAT` on the M4F.
+        v.clamp(MIN, MAX) as i8
     }
 }
 
@@ -388,14 +398,25 @@ pub fn linear<'x, 'b>(
         bias,
         layer.weights,
         m,
-        |first, c, sums| {
+        |vectors, c, sums| {
             let requant = layer.requant[c];
-            let outs = out[first * m + c..].iter_mut().step_by(m).zip(sums);
+            // Lanes past the last vector repeat it: they store its output again.
+            let mut store = |l: usize, q: i8| {
+                if let Some(o) = out.get_mut(vectors[l] * m + c) {
+                    *o = q;
+                }
+            };
             match requant.small() {
                 Some(small) => {
-                    outs.for_each(|(o, &acc)| *o = activation.activate(small.scale(acc)))
+                    for (l, &acc) in sums.iter().enumerate() {
+                        store(l, activation.activate(small.scale(acc)));
+                    }
                 }
-                None => outs.for_each(|(o, &acc)| *o = activation.apply(requant, acc)),
+                None => {
+                    for (l, &acc) in sums.iter().enumerate() {
+                        store(l, activation.apply(requant, acc));
+                    }
+                }
             }
         },
     )
@@ -426,16 +447,21 @@ pub fn accumulate<'x, 'b>(
     if m * count != out.len() {
         return Err(ShapeError::Mismatch);
     }
-    rows(work, count, input, bias, weights, m, |first, c, sums| {
-        let outs = out[first * m + c..].iter_mut().step_by(m);
-        outs.zip(sums).for_each(|(o, &acc)| *o = acc);
+    rows(work, count, input, bias, weights, m, |vectors, c, sums| {
+        for (&i, acc) in vectors.iter().zip(sums) {
+            if let Some(o) = out.get_mut(i * m + c) {
+                *o = acc;
+            }
+        }
     })
 }
 
-/// Calls `sink(first, c, sums)` for each group of up to [`LANES`] vectors from `first` and
-/// each output `c`, `sums[l] = Σ_k weights[c·n + k] · input(first + l)[k] + bias(first +
-/// l)[c]` (a last, short group computes its last vector in the missing lanes). The sum cannot overflow (127² · [`MAX_FIELD`] is far below
-/// `i32::MAX`); adding the bias saturates.
+/// Calls `sink(vectors, c, sums)` for each group of [`LANES`] vectors and each output `c`:
+/// `sums[l] = bias(i)[c] + Σ_k weights[c·n + k] · input(i)[k]` for vector `i = vectors[l]` (a
+/// last, short group repeats its last vector in the missing lanes, so those lanes' results
+/// equal its). The products' sum cannot overflow (127² · [`MAX_FIELD`] is far below
+/// `i32::MAX`); the bias is the accumulator's start, so a bias within `2^30` of either end of
+/// `i32` wraps it around (the same on every target).
 #[inline(always)]
 fn rows<'x, 'b>(
     work: &mut Workspace,
@@ -444,7 +470,7 @@ fn rows<'x, 'b>(
     bias: impl Fn(usize) -> &'b [i32],
     weights: &[i8],
     outputs: usize,
-    mut sink: impl FnMut(usize, usize, &[i32]),
+    mut sink: impl FnMut(&[usize; LANES], usize, [i32; LANES]),
 ) -> Result<(), ShapeError> {
     let n = weights
         .len()
@@ -454,23 +480,20 @@ fn rows<'x, 'b>(
         return Err(ShapeError::Mismatch);
     }
     for first in (0..count).step_by(LANES) {
-        let real = (count - first).min(LANES);
-        let vector = |l: usize| first + l.min(real - 1);
+        let last = count - 1;
+        let vectors: [usize; LANES] = core::array::from_fn(|l| (first + l).min(last));
         let mut inputs: [&[i8]; LANES] = [&[]; LANES];
         let mut biases: [&[i32]; LANES] = [&[]; LANES];
-        for (l, (x, b)) in inputs.iter_mut().zip(&mut biases).enumerate() {
-            (*x, *b) = (input(vector(l)), bias(vector(l)));
+        for ((x, b), &i) in inputs.iter_mut().zip(&mut biases).zip(&vectors) {
+            (*x, *b) = (input(i), bias(i));
             if x.len() != n || b.len() != outputs {
                 return Err(ShapeError::Mismatch);
             }
         }
         work.load(&inputs);
         for (c, row) in weights.chunks_exact(n).enumerate() {
-            let mut sums = work.dots(&inputs, row);
-            for (sum, b) in sums.iter_mut().zip(&biases) {
-                *sum = sum.saturating_add(b[c]);
-            }
-            sink(first, c, &sums[..real]);
+            let start = biases.map(|b| b[c]);
+            sink(&vectors, c, work.dots(&inputs, row, start));
         }
     }
     Ok(())
@@ -629,7 +652,7 @@ mod tests {
         let one = Requant::new(1.0).unwrap();
         assert_eq!(Activation::Leaky.apply(one, -50), -10);
         assert_eq!(Activation::Leaky.apply(one, 50), 50);
-        assert_eq!(Activation::Identity.apply(one, -500), -127);
+        assert_eq!(Activation::Identity.apply(one, -500), -128);
     }
 
     /// A float convolution with the same (group-major) layout, for comparison.
@@ -752,7 +775,8 @@ mod tests {
             [1, 0, 2, -1, 0]
         );
         assert_eq!(half.apply(1000), 127);
-        assert_eq!(half.apply(-1000), -127);
+        assert_eq!(half.apply(-1000), -128);
+        assert_eq!([quantize(-200.0, 1.0), quantize(200.0, 1.0)], [-128, 127]);
     }
 
     proptest! {
@@ -783,7 +807,7 @@ mod tests {
 
         /// Vectors go through the rows four at a time (a short last group, widths that are no
         /// multiple of four, biases at the ends of `i32`): each sum is still its own dot
-        /// product plus its bias, saturated.
+        /// product plus its bias (wrapping at the ends of `i32`).
         #[test]
         fn batched_rows_are_each_vectors_dot_products(
             (n, m, count) in (1..40usize, 1..6usize, 1..10usize),
@@ -806,7 +830,7 @@ mod tests {
             accumulate(&mut Workspace::new(), count, input, bias, &weights, &mut out).unwrap();
             for i in 0..count {
                 for c in 0..m {
-                    let expected = dot(&weights[c * n..(c + 1) * n], input(i)).saturating_add(bias(i)[c]);
+                    let expected = dot(&weights[c * n..(c + 1) * n], input(i)).wrapping_add(bias(i)[c]);
                     prop_assert_eq!(out[i * m + c], expected, "vector {} output {}", i, c);
                 }
             }

@@ -422,7 +422,11 @@ impl Net<'_, '_> {
             let mut attention = Attention::new(&token_logits[row.clone()]);
             let seen = (0..m).filter(|&k| k == 0 || self.source.segment_contains(*segment, k));
             for k in seen {
-                let joint = &buffers.joints[k * d..(k + 1) * d];
+                let mut joint = [0.0; MAX_FEATURES];
+                for (x, &q) in joint.iter_mut().zip(&buffers.joints[k * d..(k + 1) * d]) {
+                    *x = f32::from(q);
+                }
+                let joint = &joint[..d];
                 let mut logit = [0.0; MAX_HEADS];
                 for ((l, u), &offset) in logit
                     .iter_mut()
@@ -432,7 +436,7 @@ impl Net<'_, '_> {
                     *l = u
                         .iter()
                         .zip(joint)
-                        .fold(offset, |acc, (&u, &x)| acc + u * f32::from(x));
+                        .fold(offset, |acc, (&u, &x)| acc + u * x);
                 }
                 attention.add(&logit[..heads], joint);
             }
@@ -696,19 +700,22 @@ impl Attention {
         }
     }
 
-    /// Adds a joint with `logits` (one per head) and int8 embedding `x`.
-    fn add(&mut self, logits: &[f32], x: &[i8]) {
+    /// Adds a joint with `logits` (one per head) and embedding `x` (its int8 values): a new
+    /// maximum rescales what came before by `old`, any other logit adds its exponential
+    /// `new` (the factor of 1 on the other side skipped: exact).
+    fn add(&mut self, logits: &[f32], x: &[f32]) {
         for (h, &logit) in logits.iter().enumerate() {
-            let (old, new) = if logit > self.max[h] {
-                (libm::expf(self.max[h] - logit), 1.0)
+            let sums = self.sums[h].iter_mut().zip(x);
+            if logit > self.max[h] {
+                let old = libm::expf(self.max[h] - logit);
+                self.max[h] = logit;
+                self.token[h] *= old;
+                self.joints[h] = self.joints[h] * old + 1.0;
+                sums.for_each(|(sum, &v)| *sum = *sum * old + v);
             } else {
-                (1.0, libm::expf(logit - self.max[h]))
-            };
-            self.max[h] = self.max[h].max(logit);
-            self.token[h] *= old;
-            self.joints[h] = self.joints[h] * old + new;
-            for (sum, &v) in self.sums[h].iter_mut().zip(x) {
-                *sum = *sum * old + new * f32::from(v);
+                let new = libm::expf(logit - self.max[h]);
+                self.joints[h] += new;
+                sums.for_each(|(sum, &v)| *sum += new * v);
             }
         }
     }

@@ -28,6 +28,9 @@ use serde::{Deserialize, Serialize};
 pub const MAGIC: [u8; 4] = *b"PCW\x01";
 /// Version of the header this build reads and writes.
 pub const VERSION: u16 = 1;
+/// Largest magnitude of a stored bias: an accumulator starts from its bias and adds a field's
+/// products (below `2^23`), so it never wraps.
+pub const MAX_BIAS: u32 = 1 << 30;
 /// Most features per segment the core's scratch holds (the distilled student's `d`).
 pub const MAX_FEATURES: usize = 16;
 /// Most attention heads.
@@ -74,7 +77,7 @@ pub enum WeightsError {
     /// The payload is not the architecture's tensors, or the blob is not 4-byte aligned.
     Payload,
     /// A stored value is out of range: a non-finite or non-positive scale, a non-finite table
-    /// entry, or a requantization [`Requant::new`] cannot make.
+    /// entry, a bias beyond [`MAX_BIAS`], or a requantization [`Requant::new`] cannot make.
     Value(Dense),
 }
 
@@ -477,6 +480,7 @@ impl<'a> Weights<'a> {
             };
             if !tensors.scale.iter().copied().all(positive)
                 || !tensors.requant.iter().all(|r| r.is_valid())
+                || tensors.bias.iter().any(|b| b.unsigned_abs() > MAX_BIAS)
             {
                 return Err(WeightsError::Value(layer));
             }
@@ -824,29 +828,38 @@ mod tests {
     }
 
     #[test]
-    fn a_bad_requantization_is_refused() {
+    fn a_bad_requantization_or_bias_is_refused() {
         let a = STUDENT;
         let bytes = blob(a, 3, false);
         let words = aligned(&bytes);
         let view = &bytemuck::cast_slice::<u32, u8>(&words)[..bytes.len()];
         let blob = Blob::open(view, MAGIC).unwrap();
-        let mut payload = blob.payload.to_vec();
-        // The first layer's first requant: after its weights, bias and scale.
+        // The first layer's first bias (after its weights) and first requant (after its
+        // weights, bias and scale).
         let (n, m) = (
             Dense::SkeletonHidden.outputs(&a),
             Dense::SkeletonHidden.inputs(&a),
         );
-        let at = [n * m, 4 * n, 4 * n]
-            .iter()
-            .map(|b| b.next_multiple_of(blob::ALIGN))
-            .sum::<usize>();
-        payload[at + 4..at + 8].copy_from_slice(&40i32.to_le_bytes());
-        let h: Header = postcard::from_bytes(blob.header).unwrap();
-        let mut out = std::vec![0u8; bytes.len() + 64];
-        let len = blob::write(MAGIC, &h, &payload, &mut out).unwrap();
-        assert_eq!(
-            open(&out[..len]),
-            Err(WeightsError::Value(Dense::SkeletonHidden))
-        );
+        let start = |arrays: &[usize]| {
+            arrays
+                .iter()
+                .map(|b| b.next_multiple_of(blob::ALIGN))
+                .sum::<usize>()
+        };
+        let bias = start(&[n * m]);
+        let requant = start(&[n * m, 4 * n, 4 * n]) + 4;
+        let bad_bias = (MAX_BIAS + 1) as i32;
+        for (at, value) in [(requant, 40i32), (bias, bad_bias), (bias, -bad_bias)] {
+            let mut payload = blob.payload.to_vec();
+            payload[at..at + 4].copy_from_slice(&value.to_le_bytes());
+            let h: Header = postcard::from_bytes(blob.header).unwrap();
+            let mut out = std::vec![0u8; bytes.len() + 64];
+            let len = blob::write(MAGIC, &h, &payload, &mut out).unwrap();
+            assert_eq!(
+                open(&out[..len]),
+                Err(WeightsError::Value(Dense::SkeletonHidden)),
+                "{value} at {at}"
+            );
+        }
     }
 }

@@ -204,7 +204,8 @@ struct Units<'a> {
 /// `layer` quantized: weights folded with their inputs' scales, then per output channel.
 ///
 /// # Errors
-/// [`Error::Checkpoint`] if a requantization is out of [`Requant`]'s range.
+/// [`Error::Checkpoint`] if a requantization is out of [`Requant`]'s range or a bias beyond
+/// [`weights::MAX_BIAS`] accumulator units.
 fn quantize(layer: &Layer, units: &Units<'_>) -> Result<Quantized, Error> {
     let n = layer.outputs();
     let mut out = Quantized {
@@ -235,7 +236,15 @@ fn quantize(layer: &Layer, units: &Units<'_>) -> Result<Quantized, Error> {
     };
     for row in rows.chunks_exact(n) {
         for ((b, extra), scale) in layer.bias.iter().zip(row).zip(&out.scale) {
-            out.bias.push(((b + extra) / scale).round() as i32);
+            let units = ((b + extra) / scale).round();
+            if units.is_nan() || units.abs() > weights::MAX_BIAS as f32 {
+                return Err(Error::Checkpoint(format!(
+                    "bias {} is {units} accumulator units, beyond the core's {}",
+                    b + extra,
+                    weights::MAX_BIAS
+                )));
+            }
+            out.bias.push(units as i32);
         }
     }
     Ok(out)
