@@ -387,39 +387,18 @@ pub fn linear<'x, 'b>(
     layer: &Layer<'_>,
     out: &mut [i8],
 ) -> Result<(), ShapeError> {
-    let (m, activation) = (layer.requant.len(), layer.activation);
-    if out.len() != count * m {
+    if out.len() != count * layer.requant.len() {
         return Err(ShapeError::Mismatch);
     }
-    rows(
-        work,
-        count,
-        input,
-        bias,
-        layer.weights,
-        m,
-        |vectors, c, sums| {
-            let requant = layer.requant[c];
-            // Lanes past the last vector repeat it: they store its output again.
-            let mut store = |l: usize, q: i8| {
-                if let Some(o) = out.get_mut(vectors[l] * m + c) {
-                    *o = q;
-                }
-            };
-            match requant.small() {
-                Some(small) => {
-                    for (l, &acc) in sums.iter().enumerate() {
-                        store(l, activation.activate(small.scale(acc)));
-                    }
-                }
-                None => {
-                    for (l, &acc) in sums.iter().enumerate() {
-                        store(l, activation.apply(requant, acc));
-                    }
-                }
-            }
-        },
-    )
+    let activation = layer.activation;
+    let finish = |c: usize, sums: [i32; LANES]| {
+        let requant = layer.requant[c];
+        match requant.small() {
+            Some(small) => sums.map(|acc| activation.activate(small.scale(acc))),
+            None => sums.map(|acc| activation.apply(requant, acc)),
+        }
+    };
+    rows(work, count, input, bias, layer.weights, out, finish)
 }
 
 /// [`linear`]'s accumulators, not requantized, for a layer whose outputs go on in `f32`:
@@ -437,6 +416,26 @@ pub fn accumulate<'x, 'b>(
     weights: &[i8],
     out: &mut [i32],
 ) -> Result<(), ShapeError> {
+    rows(work, count, input, bias, weights, out, |_, sums| sums)
+}
+
+/// `out[i·m + c] = finish(c, sums)[l]` for every vector `i` and output `c`, where `sums[l] =
+/// bias(i)[c] + Σ_k weights[c·n + k] · input(i)[k]` for the vectors `i` of lane `l`: rows
+/// outermost within each group of [`LANES`] vectors. With fewer vectors than lanes, the last
+/// repeats in the missing lanes; with more, the last group overlaps the one before (its
+/// vectors' outputs are stored twice, alike). The products' sum cannot overflow (127² ·
+/// [`MAX_FIELD`] is far below `i32::MAX`); the bias is the accumulator's start, so a bias
+/// within `2^30` of either end of `i32` wraps it around (the same on every target).
+#[inline(always)]
+fn rows<'x, 'b, T: Copy>(
+    work: &mut Workspace,
+    count: usize,
+    input: impl Fn(usize) -> &'x [i8],
+    bias: impl Fn(usize) -> &'b [i32],
+    weights: &[i8],
+    out: &mut [T],
+    mut finish: impl FnMut(usize, [i32; LANES]) -> [T; LANES],
+) -> Result<(), ShapeError> {
     let Some(m) = out.len().checked_div(count) else {
         return if out.is_empty() {
             Ok(())
@@ -444,57 +443,43 @@ pub fn accumulate<'x, 'b>(
             Err(ShapeError::Mismatch)
         };
     };
-    if m * count != out.len() {
+    let n = weights.len().checked_div(m).ok_or(ShapeError::Mismatch)?;
+    if n == 0 || n > MAX_FIELD || n * m != weights.len() || m * count != out.len() {
         return Err(ShapeError::Mismatch);
     }
-    rows(work, count, input, bias, weights, m, |vectors, c, sums| {
-        for (&i, acc) in vectors.iter().zip(sums) {
-            if let Some(o) = out.get_mut(i * m + c) {
-                *o = acc;
-            }
-        }
-    })
-}
-
-/// Calls `sink(vectors, c, sums)` for each group of [`LANES`] vectors and each output `c`:
-/// `sums[l] = bias(i)[c] + Σ_k weights[c·n + k] · input(i)[k]` for vector `i = vectors[l]` (a
-/// last, short group repeats its last vector in the missing lanes, so those lanes' results
-/// equal its). The products' sum cannot overflow (127² · [`MAX_FIELD`] is far below
-/// `i32::MAX`); the bias is the accumulator's start, so a bias within `2^30` of either end of
-/// `i32` wraps it around (the same on every target).
-#[inline(always)]
-fn rows<'x, 'b>(
-    work: &mut Workspace,
-    count: usize,
-    input: impl Fn(usize) -> &'x [i8],
-    bias: impl Fn(usize) -> &'b [i32],
-    weights: &[i8],
-    outputs: usize,
-    mut sink: impl FnMut(&[usize; LANES], usize, [i32; LANES]),
-) -> Result<(), ShapeError> {
-    let n = weights
-        .len()
-        .checked_div(outputs)
-        .ok_or(ShapeError::Mismatch)?;
-    if n == 0 || n > MAX_FIELD || n * outputs != weights.len() {
-        return Err(ShapeError::Mismatch);
-    }
-    for first in (0..count).step_by(LANES) {
-        let last = count - 1;
-        let vectors: [usize; LANES] = core::array::from_fn(|l| (first + l).min(last));
+    let mut first = 0;
+    while first < count {
+        let start = first.min(count.saturating_sub(LANES));
+        let vectors: [usize; LANES] = core::array::from_fn(|l| (start + l).min(count - 1));
         let mut inputs: [&[i8]; LANES] = [&[]; LANES];
         let mut biases: [&[i32]; LANES] = [&[]; LANES];
         for ((x, b), &i) in inputs.iter_mut().zip(&mut biases).zip(&vectors) {
             (*x, *b) = (input(i), bias(i));
-            if x.len() != n || b.len() != outputs {
+            if x.len() != n || b.len() != m {
                 return Err(ShapeError::Mismatch);
             }
         }
         work.load(&inputs);
-        for (c, row) in weights.chunks_exact(n).enumerate() {
-            let start = biases.map(|b| b[c]);
-            sink(&vectors, c, work.dots(&inputs, row, start));
+        let row = |c: usize, row: &[i8]| work.dots(&inputs, row, biases.map(|b| b[c]));
+        let rows = weights.chunks_exact(n).enumerate();
+        if let Some(block) = out.get_mut(start * m..(start + LANES) * m) {
+            // Four whole vectors: each lane's outputs in a slice of its own.
+            let (o0, rest) = block.split_at_mut(m);
+            let (o1, rest) = rest.split_at_mut(m);
+            let (o2, o3) = rest.split_at_mut(m);
+            let lanes = o0.iter_mut().zip(o1).zip(o2).zip(o3);
+            for ((c, w), (((a, b), c_), d)) in rows.zip(lanes) {
+                [*a, *b, *c_, *d] = finish(c, row(c, w));
+            }
+        } else {
+            for (c, w) in rows {
+                let values = finish(c, row(c, w));
+                for (o, v) in out[c..].iter_mut().step_by(m).zip(values) {
+                    *o = v;
+                }
+            }
         }
+        first = start + LANES;
     }
     Ok(())
 }
