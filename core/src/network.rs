@@ -182,6 +182,8 @@ pub fn retarget(
         target,
         prior,
         d,
+        seen: Segment::ALL.map(|segment| Joints::of(source, segment)),
+        bone_segments: core::array::from_fn(|k| target.bone_segment(k) as u8),
     };
     net.skeleton(&mut buffers);
     net.rest_biases(&mut buffers);
@@ -204,6 +206,35 @@ struct Net<'n, 'w> {
     target: &'n Skeleton,
     prior: Analytic<'n>,
     d: usize,
+    /// Per segment: the source joints its token attends to.
+    seen: [Joints; SEGMENTS],
+    /// Per target joint: the segment whose feature decodes its bone.
+    bone_segments: [u8; MAX_JOINTS],
+}
+
+/// A segment's attended joints: the root, then the segment's own in order.
+struct Joints {
+    list: [u8; MAX_JOINTS],
+    len: usize,
+}
+
+impl Joints {
+    fn of(skeleton: &Skeleton, segment: Segment) -> Joints {
+        let mut joints = Joints {
+            list: [0; MAX_JOINTS],
+            len: 0,
+        };
+        let seen = (0..skeleton.len()).filter(|&k| k == 0 || skeleton.segment_contains(segment, k));
+        for (slot, k) in joints.list.iter_mut().zip(seen) {
+            *slot = k as u8;
+            joints.len += 1;
+        }
+        joints
+    }
+
+    fn iter(&self) -> impl Iterator<Item = usize> + '_ {
+        self.list[..self.len].iter().map(|&k| usize::from(k))
+    }
 }
 
 /// A skeleton's rest features of joint `k`: offset from the parent and position from the
@@ -417,11 +448,11 @@ impl Net<'_, '_> {
         // Per segment and head: the weighted mean joint embedding and the softmax's parts.
         let mut means = [[[0i8; MAX_FEATURES]; MAX_HEADS]; SEGMENTS];
         let mut shares = [[(0.0f32, 0.0f32); MAX_HEADS]; SEGMENTS];
-        for (s, segment) in Segment::ALL.iter().enumerate() {
+        let mut attention = Attention::new();
+        for (s, seen) in self.seen.iter().enumerate() {
             let row = s * heads..(s + 1) * heads;
-            let mut attention = Attention::new(&token_logits[row.clone()]);
-            let seen = (0..m).filter(|&k| k == 0 || self.source.segment_contains(*segment, k));
-            for k in seen {
+            // The root comes first: it starts the sums.
+            for (first, k) in seen.iter().enumerate().map(|(i, k)| (i == 0, k)) {
                 let mut joint = [0.0; MAX_FEATURES];
                 for (x, &q) in joint.iter_mut().zip(&buffers.joints[k * d..(k + 1) * d]) {
                     *x = f32::from(q);
@@ -438,7 +469,11 @@ impl Net<'_, '_> {
                         .zip(joint)
                         .fold(offset, |acc, (&u, &x)| acc + u * x);
                 }
-                attention.add(&logit[..heads], joint);
+                if first {
+                    attention.start(&token_logits[row.clone()], &logit[..heads], joint);
+                } else {
+                    attention.add(&logit[..heads], joint);
+                }
             }
             for h in 0..heads {
                 let joints = attention.joints[h];
@@ -632,7 +667,7 @@ impl Net<'_, '_> {
             activation: Activation::Leaky,
         };
         let mut hidden = [0i8; MAX_JOINTS * MAX_FEATURES];
-        let input = |i: usize| feature(self.target.bone_segment(i + 1) as usize);
+        let input = |i: usize| feature(usize::from(self.bone_segments[i + 1]));
         let bias = |i: usize| &buffers.decoder_bias[(i + 1) * d..(i + 2) * d];
         int8::linear(
             &mut buffers.work,
@@ -688,15 +723,33 @@ struct Attention {
 }
 
 impl Attention {
-    /// Starts with the token's logit for itself, per head.
-    fn new(token_logits: &[f32]) -> Self {
-        let mut max = [0.0; MAX_HEADS];
-        max[..token_logits.len()].copy_from_slice(token_logits);
+    fn new() -> Self {
         Attention {
-            max,
-            token: [1.0; MAX_HEADS],
+            max: [0.0; MAX_HEADS],
+            token: [0.0; MAX_HEADS],
             joints: [0.0; MAX_HEADS],
             sums: [[0.0; MAX_FEATURES]; MAX_HEADS],
+        }
+    }
+
+    /// Starts a token over its first joint: the token's logits for itself and the joint's
+    /// (one per head), the joint's embedding `x`. Equal to adding the joint to empty sums,
+    /// without clearing them first.
+    fn start(&mut self, token_logits: &[f32], logits: &[f32], x: &[f32]) {
+        for (h, (&own, &logit)) in token_logits.iter().zip(logits).enumerate() {
+            let sums = self.sums[h].iter_mut().zip(x);
+            if logit > own {
+                self.max[h] = logit;
+                self.token[h] = libm::expf(own - logit);
+                self.joints[h] = 1.0;
+                sums.for_each(|(sum, &v)| *sum = v);
+            } else {
+                let new = libm::expf(logit - own);
+                self.max[h] = own;
+                self.token[h] = 1.0;
+                self.joints[h] = new;
+                sums.for_each(|(sum, &v)| *sum = new * v);
+            }
         }
     }
 
