@@ -28,13 +28,13 @@ use crate::pose_stream::{PoseStream, StreamConfig, StreamCounters, StreamError, 
 use core::ops::Range;
 use posecoach_core::config::MAX_SWING_FRAMES;
 use posecoach_core::detector::{DetectorConfig, DetectorError, SwingDetector, SwingWindow};
-use posecoach_core::events::{self, EventError, STILL_S};
+use posecoach_core::events::{self, EventError, SwingEvents, STILL_S};
 use posecoach_core::format::Format;
 use posecoach_core::math::norm;
 use posecoach_core::network::{self, NetworkError};
 use posecoach_core::reference::Reference;
 use posecoach_core::retarget::Analytic;
-use posecoach_core::score::{self, Report, ScoreError};
+use posecoach_core::score::{self, Detected, Report, ScoreError};
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
 use posecoach_core::weights::{Architecture, Weights};
 use posecoach_core::wire::{
@@ -373,6 +373,8 @@ struct Student<'b> {
     t0_us: Option<u64>,
     /// The virtual coach's swing: frames from its set-up to its finish.
     coach_swing: Range<usize>,
+    /// The events of the virtual coach's swing, found once.
+    coach_events: SwingEvents,
     /// The IMUs' fusion, in a session with a sensor layout.
     imu: Option<ImuAdapter>,
 }
@@ -613,10 +615,13 @@ impl<'b> Session<'b> {
                 let frames = &self.virtual_coach[..coach.frames_at(rate) * joints];
                 let coach_hz = coach_rate(coach, rate);
                 let swing = swing_span(&skeleton, frames, coach_hz).map_err(Refusal::CoachSwing)?;
+                let span = &frames[swing.start * joints..swing.end * joints];
+                let events =
+                    events::detect(&skeleton, span, coach_hz).map_err(Refusal::CoachSwing)?;
                 let stream = PoseStream::new(StreamConfig::new(rate)).map_err(Refusal::Stream)?;
-                Ok((stream, swing, imu))
+                Ok((stream, swing, events, imu))
             });
-        let (stream, coach_swing, imu) = match checked {
+        let (stream, coach_swing, coach_events, imu) = match checked {
             Ok(done) => done,
             Err(e) => {
                 self.spare = ring;
@@ -631,6 +636,7 @@ impl<'b> Session<'b> {
             detector,
             t0_us: None,
             coach_swing,
+            coach_events,
             imu,
         });
         Ok(())
@@ -742,6 +748,7 @@ impl<'b> Session<'b> {
             skeleton,
             detector,
             coach_swing,
+            coach_events,
             ..
         } = student;
         let joints = skeleton.len();
@@ -781,17 +788,20 @@ impl<'b> Session<'b> {
                 coach: &virtual_coach[coach_swing.start * joints..coach_swing.end * joints],
                 coach_hz,
             };
-            let result = score::score(
-                compared.skeleton,
-                compared.student,
-                rate,
-                compared.coach,
-                coach_hz,
-                config.band_radius,
-                config.anchored,
-                floats,
-                bytes,
-            );
+            let coach = Detected {
+                positions: compared.coach,
+                hz: coach_hz,
+                events: *coach_events,
+            };
+            let result = Detected::new(skeleton, compared.student, rate)
+                .map_err(|error| ScoreError::Events {
+                    student: true,
+                    error,
+                })
+                .and_then(|student| {
+                    let (radius, anchored) = (config.band_radius, config.anchored);
+                    score::compare(skeleton, &student, &coach, radius, anchored, floats, bytes)
+                });
             match result {
                 Ok(report) => {
                     let report = &*last_report.insert(report);

@@ -34,7 +34,7 @@
 //! ```
 
 use crate::config::MAX_JOINTS;
-use crate::math::sqrt;
+use crate::math::{sqrt, sum_sqrt};
 use crate::Vec3;
 
 /// Largest number of anchors a band may have.
@@ -655,12 +655,19 @@ impl CellCost<'_> {
             *h = p - frame[0];
         }
         let frames = b[first * joints..].chunks_exact(joints);
+        let mut squares = [0.0; MAX_JOINTS];
+        let squares = &mut squares[..joints];
         for (o, other) in out.iter_mut().zip(frames) {
-            let mut sum = 0.0;
-            for ((&w, h), p) in self.weights.iter().zip(&here).zip(other) {
+            for ((s, h), p) in squares.iter_mut().zip(&here).zip(other) {
                 let d = h - (p - other[0]);
-                sum += weigh(w, sqrt(d.x * d.x + d.y * d.y + d.z * d.z));
+                *s = d.x * d.x + d.y * d.y + d.z * d.z;
             }
+            let sum = if self.unit {
+                sum_sqrt(squares)
+            } else {
+                let weighed = self.weights.iter().zip(&*squares);
+                weighed.fold(0.0, |sum, (&w, &s)| sum + weigh(w, sqrt(s)))
+            };
             *o = sum * self.scale;
         }
     }

@@ -70,3 +70,77 @@ fn vsqrt(x: f32) -> f32 {
     }
     f32::from_bits(root)
 }
+
+/// `Σ √squares[i]`, added in order from 0.0: a sum of lengths from their squares, the same
+/// bits as adding [`sqrt`]s one by one. On an ARM FPU eight at a time in one `asm!` block
+/// (three instructions a root where one [`sqrt`] and its addition take seven).
+#[inline]
+pub fn sum_sqrt(squares: &[f32]) -> f32 {
+    #[cfg(all(
+        not(any(test, feature = "std")),
+        target_arch = "arm",
+        target_abi = "eabihf"
+    ))]
+    {
+        let (eights, rest) = squares.as_chunks::<8>();
+        let sum = eights.iter().fold(0.0, vsqrt8);
+        rest.iter().fold(sum, |sum, &q| sum + sqrt(q))
+    }
+    #[cfg(not(all(
+        not(any(test, feature = "std")),
+        target_arch = "arm",
+        target_abi = "eabihf"
+    )))]
+    {
+        squares.iter().fold(0.0, |sum, &q| sum + sqrt(q))
+    }
+}
+
+/// `sum + √q[0] + √q[1] + … + √q[7]`, added in that order, on the FPU: the eight values go
+/// into `s0`–`s7` and the sum into `s8`, which are saved on the stack and restored (`VPUSH`,
+/// `VPOP`), as [`vsqrt`] saves `s0`.
+#[cfg(all(
+    not(any(test, feature = "std")),
+    target_arch = "arm",
+    target_abi = "eabihf"
+))]
+#[inline(always)]
+#[allow(unsafe_code)]
+fn vsqrt8(sum: f32, q: &[f32; 8]) -> f32 {
+    let out: u32;
+    // SAFETY: reads the eight floats of `q` (a valid, 4-byte-aligned array, as `VLDM` needs);
+    // `s0`–`s8` are pushed before use and popped after, so every FPU register the compiler
+    // allocated keeps its value; the stack is used only between the push and the pop, below
+    // `sp` as the ABI allows; no flags (VSQRT may set FPSCR's sticky exception bits, which
+    // nothing here reads).
+    unsafe {
+        core::arch::asm!(
+            "vpush {{s0-s8}}",
+            "vldmia {q}, {{s0-s7}}",
+            "vmov s8, {sum}",
+            "vsqrt.f32 s0, s0",
+            "vadd.f32 s8, s8, s0",
+            "vsqrt.f32 s1, s1",
+            "vadd.f32 s8, s8, s1",
+            "vsqrt.f32 s2, s2",
+            "vadd.f32 s8, s8, s2",
+            "vsqrt.f32 s3, s3",
+            "vadd.f32 s8, s8, s3",
+            "vsqrt.f32 s4, s4",
+            "vadd.f32 s8, s8, s4",
+            "vsqrt.f32 s5, s5",
+            "vadd.f32 s8, s8, s5",
+            "vsqrt.f32 s6, s6",
+            "vadd.f32 s8, s8, s6",
+            "vsqrt.f32 s7, s7",
+            "vadd.f32 s8, s8, s7",
+            "vmov {out}, s8",
+            "vpop {{s0-s8}}",
+            q = in(reg) q.as_ptr(),
+            sum = in(reg) sum.to_bits(),
+            out = lateout(reg) out,
+            options(readonly, preserves_flags)
+        );
+    }
+    f32::from_bits(out)
+}

@@ -449,10 +449,10 @@ fn closest_coach_pose<'c>(
     move |k| c0[k] + (c1[k] - c0[k]) * t
 }
 
-/// Writes `swing` root-relative and channel-major into `out` (3 · joints · frames floats).
 /// Scores `student` (frames × skeleton joints at `student_hz`) against the coach's virtual
 /// swing `coach` (on the same skeleton, at `coach_hz`), with a DTW band of `radius` frames
-/// around the event-anchored guide (`anchored`) or the diagonal.
+/// around the event-anchored guide (`anchored`) or the diagonal: [`compare`] after detecting
+/// both swings' events.
 ///
 /// # Errors
 /// [`ScoreError`] when events cannot be found, a swing is too long or the scratch (see
@@ -469,17 +469,68 @@ pub fn score(
     floats: &mut [f32],
     bytes: &mut [u8],
 ) -> Result<Report, ScoreError> {
+    let detect = |positions, hz, student| {
+        Detected::new(skeleton, positions, hz)
+            .map_err(|error| ScoreError::Events { student, error })
+    };
+    let (student, coach) = (
+        detect(student, student_hz, true)?,
+        detect(coach, coach_hz, false)?,
+    );
+    compare(skeleton, &student, &coach, radius, anchored, floats, bytes)
+}
+
+/// A swing with its events: frames × skeleton joints at `hz`.
+#[derive(Clone, Copy, Debug)]
+pub struct Detected<'a> {
+    /// The frames, frame-major.
+    pub positions: &'a [Vec3],
+    /// Their rate.
+    pub hz: f32,
+    /// Its events, as [`events::detect`] finds them in `positions`.
+    pub events: SwingEvents,
+}
+
+impl<'a> Detected<'a> {
+    /// `positions` with the events [`events::detect`] finds in them.
+    ///
+    /// # Errors
+    /// [`EventError`] when they cannot be found.
+    pub fn new(skeleton: &Skeleton, positions: &'a [Vec3], hz: f32) -> Result<Self, EventError> {
+        let events = events::detect(skeleton, positions, hz)?;
+        Ok(Detected {
+            positions,
+            hz,
+            events,
+        })
+    }
+}
+
+/// [`score`] of two swings whose events are known (a device detects its coach's once).
+///
+/// # Errors
+/// [`ScoreError`] when a swing is too long, the swings are of different kinds or the
+/// scratch (see [`scratch_len`]) too short.
+pub fn compare(
+    skeleton: &Skeleton,
+    student: &Detected<'_>,
+    coach: &Detected<'_>,
+    radius: u16,
+    anchored: bool,
+    floats: &mut [f32],
+    bytes: &mut [u8],
+) -> Result<Report, ScoreError> {
     let joints = skeleton.len();
-    let student_events =
-        events::detect(skeleton, student, student_hz).map_err(|error| ScoreError::Events {
-            student: true,
-            error,
-        })?;
-    let coach_events =
-        events::detect(skeleton, coach, coach_hz).map_err(|error| ScoreError::Events {
-            student: false,
-            error,
-        })?;
+    let Detected {
+        positions: student,
+        hz: student_hz,
+        events: student_events,
+    } = *student;
+    let Detected {
+        positions: coach,
+        hz: coach_hz,
+        events: coach_events,
+    } = *coach;
     if student_events.kind != coach_events.kind {
         return Err(ScoreError::KindMismatch);
     }
