@@ -213,8 +213,19 @@ impl Workspace {
                 groups,
             );
         }
-        core::array::from_fn(|l| start[l].wrapping_add(dot(row, inputs[l])))
+        dots(inputs, row, start)
     }
+}
+
+/// `start[l] + Σ_k row[k] · inputs[l][k]` for each lane (wrapping), by [`dot`]: the portable
+/// path, and on the DSP path the one for rows of no whole four-byte groups (kept out of line).
+#[inline(never)]
+fn dots(inputs: &[&[i8]; LANES], row: &[i8], start: [i32; LANES]) -> [i32; LANES] {
+    let mut sums = start;
+    for (sum, x) in sums.iter_mut().zip(inputs) {
+        *sum = sum.wrapping_add(dot(row, x));
+    }
+    sums
 }
 
 impl Default for Workspace {
@@ -390,15 +401,17 @@ pub fn linear<'x, 'b>(
     if out.len() != count * layer.requant.len() {
         return Err(ShapeError::Mismatch);
     }
-    let activation = layer.activation;
-    let finish = |c: usize, sums: [i32; LANES]| {
-        let requant = layer.requant[c];
-        match requant.small() {
-            Some(small) => sums.map(|acc| activation.activate(small.scale(acc))),
-            None => sums.map(|acc| activation.apply(requant, acc)),
+    let requant = layer.requant;
+    match layer.activation {
+        Activation::Identity => {
+            let finish = Requantize::<false> { requant };
+            rows(work, count, &input, &bias, layer.weights, out, &finish)
         }
-    };
-    rows(work, count, input, bias, layer.weights, out, finish)
+        Activation::Leaky => {
+            let finish = Requantize::<true> { requant };
+            rows(work, count, &input, &bias, layer.weights, out, &finish)
+        }
+    }
 }
 
 /// [`linear`]'s accumulators, not requantized, for a layer whose outputs go on in `f32`:
@@ -416,7 +429,52 @@ pub fn accumulate<'x, 'b>(
     weights: &[i8],
     out: &mut [i32],
 ) -> Result<(), ShapeError> {
-    rows(work, count, input, bias, weights, out, |_, sums| sums)
+    rows(work, count, &input, &bias, weights, out, &Raw)
+}
+
+/// What becomes of a row's sums, one per lane.
+trait Finish {
+    type Out: Copy;
+    /// Output `c` of each lane from its sum.
+    fn finish(&self, c: usize, sums: [i32; LANES]) -> [Self::Out; LANES];
+}
+
+/// Requantized to int8, then the leaky slope applied (`LEAKY`) or not.
+struct Requantize<'r, const LEAKY: bool> {
+    requant: &'r [Requant],
+}
+
+impl<const LEAKY: bool> Finish for Requantize<'_, LEAKY> {
+    type Out = i8;
+
+    #[inline(always)]
+    fn finish(&self, c: usize, sums: [i32; LANES]) -> [i8; LANES] {
+        let activation = if LEAKY {
+            Activation::Leaky
+        } else {
+            Activation::Identity
+        };
+        let requant = self.requant[c];
+        let mut out = [0; LANES];
+        let outs = out.iter_mut().zip(sums);
+        match requant.small() {
+            Some(small) => outs.for_each(|(o, acc)| *o = activation.activate(small.scale(acc))),
+            None => outs.for_each(|(o, acc)| *o = activation.apply(requant, acc)),
+        }
+        out
+    }
+}
+
+/// The sums as they are.
+struct Raw;
+
+impl Finish for Raw {
+    type Out = i32;
+
+    #[inline(always)]
+    fn finish(&self, _: usize, sums: [i32; LANES]) -> [i32; LANES] {
+        sums
+    }
 }
 
 /// `out[i·m + c] = finish(c, sums)[l]` for every vector `i` and output `c`, where `sums[l] =
@@ -426,15 +484,18 @@ pub fn accumulate<'x, 'b>(
 /// vectors' outputs are stored twice, alike). The products' sum cannot overflow (127² ·
 /// [`MAX_FIELD`] is far below `i32::MAX`); the bias is the accumulator's start, so a bias
 /// within `2^30` of either end of `i32` wraps it around (the same on every target).
-#[inline(always)]
-fn rows<'x, 'b, T: Copy>(
+///
+/// One copy per kind of output (the vectors and biases are looked up through `dyn`, once
+/// per group), not one per layer: the kernel's code is flash.
+#[inline(never)]
+fn rows<'x, 'b, F: Finish>(
     work: &mut Workspace,
     count: usize,
-    input: impl Fn(usize) -> &'x [i8],
-    bias: impl Fn(usize) -> &'b [i32],
+    input: &dyn Fn(usize) -> &'x [i8],
+    bias: &dyn Fn(usize) -> &'b [i32],
     weights: &[i8],
-    out: &mut [T],
-    mut finish: impl FnMut(usize, [i32; LANES]) -> [T; LANES],
+    out: &mut [F::Out],
+    finish: &F,
 ) -> Result<(), ShapeError> {
     let Some(m) = out.len().checked_div(count) else {
         return if out.is_empty() {
@@ -469,11 +530,11 @@ fn rows<'x, 'b, T: Copy>(
             let (o2, o3) = rest.split_at_mut(m);
             let lanes = o0.iter_mut().zip(o1).zip(o2).zip(o3);
             for ((c, w), (((a, b), c_), d)) in rows.zip(lanes) {
-                [*a, *b, *c_, *d] = finish(c, row(c, w));
+                [*a, *b, *c_, *d] = finish.finish(c, row(c, w));
             }
         } else {
             for (c, w) in rows {
-                let values = finish(c, row(c, w));
+                let values = finish.finish(c, row(c, w));
                 for (o, v) in out[c..].iter_mut().step_by(m).zip(values) {
                     *o = v;
                 }
