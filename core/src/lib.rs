@@ -31,8 +31,9 @@
 //! - [`weights`]: the quantized retargeter's weights stored as a blob, checked once.
 //! - [`network`]: the quantized retargeter itself, on those weights.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
-// `deny`, not `forbid`: register-only `asm!` for the FPU's square root (`math`) and, with the
-// `dsp` feature, the int8 dot product's DSP instructions (`int8`) are the exceptions.
+// `deny`, not `forbid`: `asm!` is the exception, in two modules, each block with its proof:
+// the FPU's square root, singly and eight at a time (`math`), and, with the `dsp` feature, the
+// int8 kernels' DSP instructions (`int8`), which read only the slices they are given.
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
