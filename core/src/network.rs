@@ -113,7 +113,8 @@ struct Buffers<'s> {
     joints: &'s mut [i8],
     /// `[S][T][d]`: the segment tokens after attention, then the last convolution's input.
     a: &'s mut [i8],
-    /// `[S][T][d]`: the first decoder convolution's output (its first half), then the last's.
+    /// `[S][T][d]`: the segment tokens' contexts, then the first decoder convolution's output
+    /// (its first half), then the last's.
     b: &'s mut [i8],
     /// `[S][T/2][d]`: the first downsampling's output, then the first decoder input.
     c: &'s mut [i8],
@@ -176,15 +177,18 @@ pub fn retarget(
     let d = weights.architecture().d();
     let mut buffers = Buffers::carve(scratch, d, m, n).ok_or(NetworkError::Scratch)?;
     let prior = Analytic::new(source, target)?;
-    let net = Net {
+    let mut net = Net {
         weights,
         source,
         target,
         prior,
         d,
         seen: Segment::ALL.map(|segment| Joints::of(source, segment)),
-        bone_segments: core::array::from_fn(|k| target.bone_segment(k) as u8),
+        bone_segments: [0; MAX_JOINTS],
     };
+    for (k, segment) in net.bone_segments.iter_mut().enumerate().take(n) {
+        *segment = target.bone_segment(k) as u8;
+    }
     net.skeleton(&mut buffers);
     net.rest_biases(&mut buffers);
     let mut start = 0;
