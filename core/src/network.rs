@@ -29,7 +29,7 @@ use crate::math;
 use crate::retarget::{Analytic, RetargetError};
 use crate::skeleton::{Segment, Skeleton};
 use crate::weights::{
-    Architecture, Dense, Table, Tensors, Weights, MAX_FEATURES, MAX_HEADS, MOTION_INPUTS,
+    Architecture, Dense, Table, Tensors, Weights, MAX_BIAS, MAX_FEATURES, MAX_HEADS, MOTION_INPUTS,
     QUATERNION, REST_CHANNELS, SEGMENTS, WINDOW,
 };
 use crate::{Quat, Vec3};
@@ -320,7 +320,8 @@ impl Net<'_, '_> {
     }
 
     /// The first layers' biases per joint: the stored bias plus the constant rest-feature
-    /// columns' contribution, in the layer's accumulator units.
+    /// columns' contribution, in the layer's accumulator units (held within
+    /// [`MAX_BIAS`], as stored biases are, so that no accumulator wraps).
     fn rest_biases(&self, buffers: &mut Buffers<'_>) {
         let sides = [
             (self.source, Dense::MotionFeatures, Dense::MotionRest),
@@ -337,7 +338,10 @@ impl Net<'_, '_> {
                 dense_f32(columns, &x, &mut real[..self.d]);
                 let stored = layer.bias.iter().zip(layer.scale);
                 for ((b, (&stored, &scale)), real) in bias.iter_mut().zip(stored).zip(real) {
-                    *b = stored.saturating_add(units(real, scale));
+                    let limit = MAX_BIAS as i32;
+                    *b = stored
+                        .saturating_add(units(real, scale))
+                        .clamp(-limit, limit);
                 }
             }
         }

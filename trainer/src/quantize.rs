@@ -205,7 +205,8 @@ struct Units<'a> {
 ///
 /// # Errors
 /// [`Error::Checkpoint`] if a requantization is out of [`Requant`]'s range or a bias beyond
-/// [`weights::MAX_BIAS`] accumulator units.
+/// [`weights::MAX_BIAS`] accumulator units (a non-finite one: every channel's unit holds its
+/// biases within half that).
 fn quantize(layer: &Layer, units: &Units<'_>) -> Result<Quantized, Error> {
     let n = layer.outputs();
     let mut out = Quantized {
@@ -214,13 +215,29 @@ fn quantize(layer: &Layer, units: &Units<'_>) -> Result<Quantized, Error> {
         scale: Vec::with_capacity(n),
         requant: Vec::with_capacity(n),
     };
-    for row in layer.weight.chunks_exact(layer.inputs) {
+    let zeros = vec![0.0; n];
+    let rows = match units.rows.is_empty() {
+        true => &zeros[..],
+        false => units.rows,
+    };
+    // Each channel's largest bias (over its rows), which its accumulator unit must hold
+    // within half the core's bias range.
+    let mut biggest = vec![0.0f32; n];
+    for row in rows.chunks_exact(n) {
+        for ((m, b), extra) in biggest.iter_mut().zip(&layer.bias).zip(row) {
+            *m = m.max((b + extra).abs());
+        }
+    }
+    let floor = |c: usize| biggest[c] / (weights::MAX_BIAS / 2) as f32;
+    for (c, row) in layer.weight.chunks_exact(layer.inputs).enumerate() {
         let folded: Vec<f32> = row
             .iter()
             .enumerate()
             .map(|(i, w)| w * (units.input)(i))
             .collect();
-        let scale = folded.iter().fold(TINY, |m, w| m.max(w.abs())) / int8::MAX as f32;
+        let largest = folded.iter().fold(TINY, |m, w| m.max(w.abs()));
+        // A dead channel (zero weights) takes its unit from its bias instead.
+        let scale = (largest / int8::MAX as f32).max(floor(c));
         out.weights
             .extend(folded.iter().map(|&w| int8::quantize(w, scale)));
         out.scale.push(scale);
@@ -229,11 +246,6 @@ fn quantize(layer: &Layer, units: &Units<'_>) -> Result<Quantized, Error> {
             Error::Checkpoint(format!("requantization by {factor} out of range"))
         })?);
     }
-    let zeros = vec![0.0; n];
-    let rows = match units.rows.is_empty() {
-        true => &zeros[..],
-        false => units.rows,
-    };
     for row in rows.chunks_exact(n) {
         for ((b, extra), scale) in layer.bias.iter().zip(row).zip(&out.scale) {
             let units = ((b + extra) / scale).round();
