@@ -1,33 +1,15 @@
 //! Float functions that `core` lacks.
 //!
 //! With std (the host build and tests) these are std's, which the compiler can vectorize; on
-//! an ARM FPU (the `eabihf` targets: the Cortex-M4F) the square root is the FPU's `VSQRT.F32`
-//! (see `vsqrt`); elsewhere libm's (about 90 instructions on a Cortex-M4F, a tenth of all the
-//! device's instructions before this path existed). All three are correctly rounded IEEE
-//! square roots, so results are bit-identical on the host and on the device.
+//! an ARM FPU (the `eabihf` targets: the Cortex-M4F) the square root is the FPU's `VSQRT.F32`;
+//! elsewhere libm's (about 90 instructions on a Cortex-M4F, a tenth of all the device's
+//! instructions before the FPU path existed). All three are correctly rounded IEEE square
+//! roots, so results are bit-identical on the host and on the device.
 
 /// Square root.
 #[inline(always)]
 pub fn sqrt(x: f32) -> f32 {
-    #[cfg(any(test, feature = "std"))]
-    {
-        x.sqrt()
-    }
-    #[cfg(all(
-        not(any(test, feature = "std")),
-        target_arch = "arm",
-        target_abi = "eabihf"
-    ))]
-    {
-        vsqrt(x)
-    }
-    #[cfg(all(
-        not(any(test, feature = "std")),
-        not(all(target_arch = "arm", target_abi = "eabihf"))
-    ))]
-    {
-        libm::sqrtf(x)
-    }
+    imp::sqrt(x)
 }
 
 /// Euclidean length, bit-identical to nalgebra's `norm()` (the same sum of squares) but
@@ -37,110 +19,122 @@ pub fn norm(v: &crate::Vec3) -> f32 {
     sqrt(v.norm_squared())
 }
 
-/// The FPU's square root. `core` has no stable `f32::sqrt` and LLVM does not turn libm's
-/// software square root into the instruction, hence the one `asm!` in the crate. Rust admits
-/// FPU registers as `asm!` operands only with its `vfp2` target feature, which also claims
-/// double precision the Cortex-M4F lacks, so the value passes through a core register and
-/// `s0` is saved and restored around the instruction: five instructions in all.
-#[cfg(all(
-    not(any(test, feature = "std")),
-    target_arch = "arm",
-    target_abi = "eabihf"
-))]
-#[inline(always)]
-#[allow(unsafe_code)]
-fn vsqrt(x: f32) -> f32 {
-    let root: u32;
-    // SAFETY: the instructions touch only core registers the compiler allocated for them and
-    // `s0`, which they restore: no memory, no stack, no flags (VSQRT may set FPSCR's sticky
-    // exception bits, which nothing here reads). Every `eabihf` ARM target has a VFP unit
-    // with VMOV and VSQRT.F32.
-    unsafe {
-        core::arch::asm!(
-            "vmov {save}, s0",
-            "vmov s0, {x}",
-            "vsqrt.f32 s0, s0",
-            "vmov {root}, s0",
-            "vmov s0, {save}",
-            x = in(reg) x.to_bits(),
-            root = lateout(reg) root,
-            save = out(reg) _,
-            options(pure, nomem, nostack, preserves_flags)
-        );
-    }
-    f32::from_bits(root)
-}
-
 /// `Σ √squares[i]`, added in order from 0.0: a sum of lengths from their squares, the same
 /// bits as adding [`sqrt`]s one by one. On an ARM FPU eight at a time in one `asm!` block
 /// (three instructions a root where one [`sqrt`] and its addition take seven).
 #[inline]
 pub fn sum_sqrt(squares: &[f32]) -> f32 {
-    #[cfg(all(
-        not(any(test, feature = "std")),
-        target_arch = "arm",
-        target_abi = "eabihf"
-    ))]
-    {
-        let (eights, rest) = squares.as_chunks::<8>();
-        let sum = eights.iter().fold(0.0, vsqrt8);
-        rest.iter().fold(sum, |sum, &q| sum + sqrt(q))
+    imp::sum_sqrt(squares)
+}
+
+/// std's or libm's square root.
+#[cfg(not(all(
+    not(any(test, feature = "std")),
+    target_arch = "arm",
+    target_abi = "eabihf"
+)))]
+mod imp {
+    #[inline(always)]
+    pub(super) fn sqrt(x: f32) -> f32 {
+        #[cfg(any(test, feature = "std"))]
+        {
+            x.sqrt()
+        }
+        #[cfg(not(any(test, feature = "std")))]
+        {
+            libm::sqrtf(x)
+        }
     }
-    #[cfg(not(all(
-        not(any(test, feature = "std")),
-        target_arch = "arm",
-        target_abi = "eabihf"
-    )))]
-    {
+
+    #[inline(always)]
+    pub(super) fn sum_sqrt(squares: &[f32]) -> f32 {
         squares.iter().fold(0.0, |sum, &q| sum + sqrt(q))
     }
 }
 
-/// `sum + √q[0] + √q[1] + … + √q[7]`, added in that order, on the FPU: the eight values go
-/// into `s0`–`s7` and the sum into `s8`, which are saved on the stack and restored (`VPUSH`,
-/// `VPOP`), as [`vsqrt`] saves `s0`.
+/// The FPU's square root. `core` has no stable `f32::sqrt` and LLVM does not turn libm's
+/// software square root into the instruction, hence `asm!`. Rust admits FPU registers as
+/// `asm!` operands only with its `vfp2` target feature, which also claims double precision the
+/// Cortex-M4F lacks, so values pass through core registers and the FPU registers used are
+/// saved and restored around the instructions.
 #[cfg(all(
     not(any(test, feature = "std")),
     target_arch = "arm",
     target_abi = "eabihf"
 ))]
-#[inline(always)]
 #[allow(unsafe_code)]
-fn vsqrt8(sum: f32, q: &[f32; 8]) -> f32 {
-    let out: u32;
-    // SAFETY: reads the eight floats of `q` (a valid, 4-byte-aligned array, as `VLDM` needs);
-    // `s0`–`s8` are pushed before use and popped after, so every FPU register the compiler
-    // allocated keeps its value; the stack is used only between the push and the pop, below
-    // `sp` as the ABI allows; no flags (VSQRT may set FPSCR's sticky exception bits, which
-    // nothing here reads).
-    unsafe {
-        core::arch::asm!(
-            "vpush {{s0-s8}}",
-            "vldmia {q}, {{s0-s7}}",
-            "vmov s8, {sum}",
-            "vsqrt.f32 s0, s0",
-            "vadd.f32 s8, s8, s0",
-            "vsqrt.f32 s1, s1",
-            "vadd.f32 s8, s8, s1",
-            "vsqrt.f32 s2, s2",
-            "vadd.f32 s8, s8, s2",
-            "vsqrt.f32 s3, s3",
-            "vadd.f32 s8, s8, s3",
-            "vsqrt.f32 s4, s4",
-            "vadd.f32 s8, s8, s4",
-            "vsqrt.f32 s5, s5",
-            "vadd.f32 s8, s8, s5",
-            "vsqrt.f32 s6, s6",
-            "vadd.f32 s8, s8, s6",
-            "vsqrt.f32 s7, s7",
-            "vadd.f32 s8, s8, s7",
-            "vmov {out}, s8",
-            "vpop {{s0-s8}}",
-            q = in(reg) q.as_ptr(),
-            sum = in(reg) sum.to_bits(),
-            out = lateout(reg) out,
-            options(readonly, preserves_flags)
-        );
+mod imp {
+    /// One root: `s0` saved in a core register and restored, five instructions in all.
+    #[inline(always)]
+    pub(super) fn sqrt(x: f32) -> f32 {
+        let root: u32;
+        // SAFETY: the instructions touch only core registers the compiler allocated for them
+        // and `s0`, which they restore: no memory, no stack, no flags (VSQRT may set FPSCR's
+        // sticky exception bits, which nothing here reads). Every `eabihf` ARM target has a
+        // VFP unit with VMOV and VSQRT.F32.
+        unsafe {
+            core::arch::asm!(
+                "vmov {save}, s0",
+                "vmov s0, {x}",
+                "vsqrt.f32 s0, s0",
+                "vmov {root}, s0",
+                "vmov s0, {save}",
+                x = in(reg) x.to_bits(),
+                root = lateout(reg) root,
+                save = out(reg) _,
+                options(pure, nomem, nostack, preserves_flags)
+            );
+        }
+        f32::from_bits(root)
     }
-    f32::from_bits(out)
+
+    #[inline(always)]
+    pub(super) fn sum_sqrt(squares: &[f32]) -> f32 {
+        let (eights, rest) = squares.as_chunks::<8>();
+        let sum = eights.iter().fold(0.0, sqrt8);
+        rest.iter().fold(sum, |sum, &q| sum + sqrt(q))
+    }
+
+    /// `sum + √q[0] + √q[1] + … + √q[7]`, added in that order: the eight values go into
+    /// `s0`–`s7` and the sum into `s8`, which are saved on the stack and restored (`VPUSH`,
+    /// `VPOP`).
+    #[inline(always)]
+    fn sqrt8(sum: f32, q: &[f32; 8]) -> f32 {
+        let out: u32;
+        // SAFETY: reads the eight floats of `q` (a valid, 4-byte-aligned array, as `VLDM`
+        // needs); `s0`–`s8` are pushed before use and popped after, so every FPU register the
+        // compiler allocated keeps its value; the stack is used only between the push and the
+        // pop, below `sp` as the ABI allows; no flags (VSQRT may set FPSCR's sticky exception
+        // bits, which nothing here reads).
+        unsafe {
+            core::arch::asm!(
+                "vpush {{s0-s8}}",
+                "vldmia {q}, {{s0-s7}}",
+                "vmov s8, {sum}",
+                "vsqrt.f32 s0, s0",
+                "vadd.f32 s8, s8, s0",
+                "vsqrt.f32 s1, s1",
+                "vadd.f32 s8, s8, s1",
+                "vsqrt.f32 s2, s2",
+                "vadd.f32 s8, s8, s2",
+                "vsqrt.f32 s3, s3",
+                "vadd.f32 s8, s8, s3",
+                "vsqrt.f32 s4, s4",
+                "vadd.f32 s8, s8, s4",
+                "vsqrt.f32 s5, s5",
+                "vadd.f32 s8, s8, s5",
+                "vsqrt.f32 s6, s6",
+                "vadd.f32 s8, s8, s6",
+                "vsqrt.f32 s7, s7",
+                "vadd.f32 s8, s8, s7",
+                "vmov {out}, s8",
+                "vpop {{s0-s8}}",
+                q = in(reg) q.as_ptr(),
+                sum = in(reg) sum.to_bits(),
+                out = lateout(reg) out,
+                options(readonly, preserves_flags)
+            );
+        }
+        f32::from_bits(out)
+    }
 }

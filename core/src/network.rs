@@ -283,6 +283,16 @@ impl Net<'_, '_> {
         self.weights.layer(layer)
     }
 
+    /// A stored layer's weights and requantizations, with `activation`.
+    fn int8_layer(&self, layer: Dense, activation: Activation) -> Layer<'_> {
+        let t = self.layer(layer);
+        Layer {
+            weights: t.weights,
+            requant: t.requant,
+            activation,
+        }
+    }
+
     /// The skeleton encoder on the target: per joint a two-layer MLP over its rest features,
     /// averaged over each segment's joints, then a linear layer.
     fn skeleton(&self, buffers: &mut Buffers<'_>) {
@@ -423,12 +433,7 @@ impl Net<'_, '_> {
                 *x = int8::quantize(*real, scale);
             }
         }
-        let features = self.layer(Dense::MotionFeatures);
-        let first = Layer {
-            weights: features.weights,
-            requant: features.requant,
-            activation: Activation::Leaky,
-        };
+        let first = self.int8_layer(Dense::MotionFeatures, Activation::Leaky);
         let mut hidden = [0i8; MAX_JOINTS * MAX_FEATURES];
         let motion_bias = &*buffers.motion_bias;
         int8::linear(
@@ -440,11 +445,7 @@ impl Net<'_, '_> {
             &mut hidden[..m * d],
         )?;
         let output = self.layer(Dense::MotionOutput);
-        let embed = Layer {
-            weights: output.weights,
-            requant: output.requant,
-            activation: Activation::Identity,
-        };
+        let embed = self.int8_layer(Dense::MotionOutput, Activation::Identity);
         let rows = |k: usize| &hidden[k * d..(k + 1) * d];
         let bias = |_| output.bias_row(t);
         int8::linear(&mut buffers.work, m, rows, bias, &embed, buffers.joints)?;
@@ -529,11 +530,7 @@ impl Net<'_, '_> {
     fn tokens(&self, buffers: &mut Buffers<'_>) -> Result<(), NetworkError> {
         let d = self.d;
         let output = self.layer(Dense::Output);
-        let layer = Layer {
-            weights: output.weights,
-            requant: output.requant,
-            activation: Activation::Identity,
-        };
+        let layer = self.int8_layer(Dense::Output, Activation::Identity);
         let contexts = buffers.b.chunks_exact(WINDOW * d);
         for (s, (context, out)) in contexts
             .zip(buffers.a.chunks_exact_mut(WINDOW * d))
@@ -558,19 +555,21 @@ impl Net<'_, '_> {
                     stride,
                     input: &[i8],
                     out: &mut [i8]| {
-            let t = self.layer(layer);
             let shape = int8::Conv {
                 channels: SEGMENTS * d,
                 groups: SEGMENTS,
                 kernel,
                 stride,
             };
-            let layer = Layer {
-                weights: t.weights,
-                requant: t.requant,
-                activation,
-            };
-            int8::conv1d(work, input, &shape, &layer, t.bias, out)
+            let bias = self.layer(layer).bias;
+            int8::conv1d(
+                work,
+                input,
+                &shape,
+                &self.int8_layer(layer, activation),
+                bias,
+                out,
+            )
         };
         conv(
             &mut buffers.work,
@@ -668,12 +667,7 @@ impl Net<'_, '_> {
         pose[0] = start * self.prior.scale() + correction * h;
         // Every bone's correction at once: bone `k` (row `k - 1`) reads its segment's feature.
         let bones = n - 1;
-        let features = self.layer(Dense::DecoderFeatures);
-        let layer = Layer {
-            weights: features.weights,
-            requant: features.requant,
-            activation: Activation::Leaky,
-        };
+        let layer = self.int8_layer(Dense::DecoderFeatures, Activation::Leaky);
         let mut hidden = [0i8; MAX_JOINTS * MAX_FEATURES];
         let input = |i: usize| feature(usize::from(self.bone_segments[i + 1]));
         let bias = |i: usize| &buffers.decoder_bias[(i + 1) * d..(i + 2) * d];
