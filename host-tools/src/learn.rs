@@ -17,6 +17,7 @@ use posecoach_train::infer::Retargeter;
 use posecoach_train::losses::Switches;
 use posecoach_train::metrics::{self, Baseline, Method, Table};
 use posecoach_train::model::TeacherConfig;
+use posecoach_train::prior::PriorKind;
 use posecoach_train::quantize;
 use posecoach_train::train::{StepLosses, TrainConfig, Trainer, BATCH, LEARNING_RATE};
 use serde_json::{json, Value};
@@ -128,6 +129,10 @@ pub struct TrainArgs {
     /// Also write the teacher alone here at the end (what `--weights` needs; small).
     #[arg(long)]
     teacher: Option<PathBuf>,
+    /// Correct the analytic retargeter's bone directions (as the device's network does)
+    /// instead of the rotation transfer.
+    #[arg(long)]
+    chords: bool,
     #[command(flatten)]
     ablations: Ablations,
     /// Print one JSON object instead of text.
@@ -137,12 +142,19 @@ pub struct TrainArgs {
 
 pub fn train(args: &TrainArgs) -> Result<String> {
     let device = Device::flex().autodiff();
+    let prior = match args.chords {
+        true => PriorKind::Chords,
+        false => PriorKind::Rotations,
+    };
     let config = TrainConfig {
+        teacher: TeacherConfig {
+            prior,
+            ..TeacherConfig::DEFAULT
+        },
         batch: args.batch,
         learning_rate: args.learning_rate,
         switches: args.ablations.switches(),
         seed: args.seed,
-        ..TrainConfig::default()
     };
     let trainer = match &args.resume {
         Some(path) => Trainer::load(path, &device)
@@ -166,6 +178,7 @@ pub const STUDENT: TeacherConfig = TeacherConfig {
     features: 16,
     heads: 2,
     kernel: 3,
+    prior: PriorKind::Chords,
 };
 
 #[derive(clap::Args)]
@@ -216,6 +229,7 @@ pub fn distill(args: &DistillArgs) -> Result<String> {
         features: args.features,
         heads: args.heads,
         kernel: args.kernel,
+        prior: STUDENT.prior,
     };
     if sizes.heads == 0
         || !sizes.features.is_multiple_of(2 * sizes.heads)

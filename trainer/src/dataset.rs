@@ -216,13 +216,16 @@ pub struct Pair {
 }
 
 /// What training sees: a window of a clip on a character, and a target skeleton (no ground
-/// truth: training is unsupervised).
+/// truth: training is unsupervised), and the same window on the source's body in the
+/// target's format (its reconstruction across formats: the same take as two keypoint sets).
 #[derive(Clone, Debug)]
 pub struct Example {
     /// The source motion.
     pub window: Window,
     /// The skeleton to retarget it onto.
     pub target: Skeleton,
+    /// The source motion on the source's body in the target's format.
+    pub twin: Window,
 }
 
 /// Clip frames at [`CLIP_RATE_HZ`] that resample to one [`WINDOW`].
@@ -307,10 +310,15 @@ impl Pool {
         let club = clip.has_club();
         let source = Character::new(Body::sample(variation, rng.rng()), from, club)?;
         let target = Character::new(Body::sample(variation, rng.rng()), onto, club)?;
-        let motion = clip.slice(start, frames)?.on(&source)?;
+        let slice = clip.slice(start, frames)?;
+        let twin = match onto == from {
+            true => source.clone(),
+            false => Character::new(source.body.clone(), onto, club)?,
+        };
         Ok(Example {
-            window: Window::new(&motion, 0)?,
+            window: Window::new(&slice.on(&source)?, 0)?,
             target: target.skeleton,
+            twin: Window::new(&slice.on(&twin)?, 0)?,
         })
     }
 

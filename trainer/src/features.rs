@@ -242,7 +242,7 @@ pub struct Batch {
     pub motion: Tensor<4>,
     /// The target skeletons.
     pub target: Skeletons,
-    /// The analytic retargeter from source onto target.
+    /// The geometric solutions from source onto target that the teacher corrects.
     pub prior: Prior,
 }
 

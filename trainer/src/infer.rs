@@ -9,15 +9,16 @@
 //! [`WINDOW`]-frame windows, the last one ending at the last frame (so it may overlap its
 //! neighbour, whose frames it replaces); a motion shorter than a window holds its last frame.
 //! Each window's root trajectory starts at its first frame ([`crate::features`]), so the
-//! source's root there, scaled as the analytic retargeter scales it, is added back.
+//! source's root there, scaled as the network's prior scales the trajectory, is added back.
 //!
 //! A weights blob ([`posecoach_core::weights`]) runs the same way through the core's int8
 //! network ([`posecoach_core::network`]), which cuts and holds windows as this module does.
 
-use crate::clip::motion;
+use crate::clip::{leg_length, motion};
 use crate::error::Error;
 use crate::features::{Batch, Window, RATE_HZ, WINDOW};
 use crate::model::{Teacher, TeacherConfig};
+use crate::prior::PriorKind;
 use crate::train::{load_teacher, TrainConfig};
 use burn::prelude::Device;
 use posecoach_adapters::io::Motion;
@@ -97,6 +98,7 @@ impl Retargeter {
                 features: a.d(),
                 heads: usize::from(a.heads),
                 kernel: usize::from(a.kernel),
+                prior: PriorKind::Chords,
             },
             seed: header.training.seed,
             ..TrainConfig::default()
@@ -130,7 +132,15 @@ impl Retargeter {
                 actual: 0,
             });
         }
-        let scale = Analytic::new(&source.skeleton, target)?.scale();
+        let analytic = Analytic::new(&source.skeleton, target)?;
+        let prior = match &self.model {
+            Model::Float { teacher, .. } => teacher.prior(),
+            Model::Int8 { .. } => PriorKind::Chords,
+        };
+        let scale = match prior {
+            PriorKind::Chords => analytic.scale(),
+            PriorKind::Rotations => leg_length(target) / leg_length(&source.skeleton),
+        };
         let phases = ((source.rate_hz / RATE_HZ).round() as usize).clamp(1, MAX_PHASES);
         let fine = held(&source.resampled(RATE_HZ * phases as f32), WINDOW * phases);
         let (length, m) = (fine.frames(), target.len());
@@ -272,6 +282,43 @@ mod tests {
                 .map(|(a, b)| (a - b).norm())
                 .fold(0.0, f32::max);
             assert!(gap < 1e-4 * target.height(), "{rate_hz} Hz: {gap} m");
+        }
+    }
+
+    #[test]
+    fn an_untrained_rotation_teacher_moves_the_root_by_the_ratio_of_leg_lengths() {
+        let device = Device::flex();
+        device.seed(4);
+        let config = TeacherConfig {
+            prior: PriorKind::Rotations,
+            ..TeacherConfig::TINY
+        };
+        let retargeter = Retargeter {
+            model: Model::Float {
+                teacher: Box::new(config.init(&device)),
+                device,
+            },
+            name: "untrained".into(),
+            config: TrainConfig {
+                teacher: config,
+                ..TrainConfig::default()
+            },
+            steps: 0,
+        };
+        let source = character(Format::GolfMarkers, 3).skeleton;
+        let target = character(Format::Cmu31, 4).skeleton;
+        let scale = leg_length(&target) / leg_length(&source);
+        for (frames, rate_hz) in [(150, 60.0), (90, 30.0)] {
+            let mut m = wave_frames(&source, frames);
+            m.rate_hz = rate_hz;
+            let out = retargeter.retarget(&m, &target).unwrap();
+            for f in 0..frames {
+                let gap = (out.frame(f)[0] - m.frame(f)[0] * scale).norm();
+                assert!(
+                    gap < 1e-4 * target.height(),
+                    "{rate_hz} Hz frame {f}: {gap} m"
+                );
+            }
         }
     }
 

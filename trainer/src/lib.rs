@@ -16,7 +16,8 @@
 //! - [`metrics`]: evaluation against the ground truth, and the baselines' table.
 //! - [`features`]: motion windows and target T-poses as padded, batched tensors.
 //! - [`fk`]: differentiable forward kinematics.
-//! - [`prior`]: the analytic retargeter as tensors, which the teacher corrects.
+//! - [`prior`]: the geometric solutions the teacher corrects (the rotation transfer, the
+//!   analytic retargeter's chords).
 //! - [`model`]: the teacher network.
 //! - [`losses`]: the training losses.
 //! - [`discriminator`]: the adversarial loss's discriminator.

@@ -103,27 +103,45 @@ pub struct Reconstruction {
 
 impl Reconstruction {
     /// The terms for `predicted` against `truth`, both `[B, T, J, 3]` on `skeletons`: squared
-    /// errors summed over X, Y, Z and averaged over frames and bones (the trajectory over
-    /// frames). In heights, which is the paper's `/h²` on the last two terms; the first is
+    /// errors summed over X, Y, Z and averaged over each window's frames and bones (the
+    /// trajectory over its frames), then over windows. In heights, which is the paper's `/h²` on the last two terms; the first is
     /// divided by `h²` as well, so that all three weigh the same on tall and short characters.
     pub fn new(predicted: Tensor<4>, truth: Tensor<4>, skeletons: &Skeletons) -> Reconstruction {
+        let [b, _, j, _] = predicted.dims();
+        let device = predicted.device();
+        let (windows, joints) = (Tensor::ones([b], &device), Tensor::ones([b, j], &device));
+        Reconstruction::masked(predicted, truth, skeletons, windows, joints)
+    }
+
+    /// [`Reconstruction::new`] over the windows where `windows` (`[B]`) is 1 and, of their
+    /// bones, those where `joints` (`[B, J]`) is 1. Each window's mean weighs the same and a
+    /// window not counted adds zero, so the means of a batch's parts, weighted by their
+    /// windows, add up to the whole batch's.
+    pub fn masked(
+        predicted: Tensor<4>,
+        truth: Tensor<4>,
+        skeletons: &Skeletons,
+        windows: Tensor<1>,
+        joints: Tensor<2>,
+    ) -> Reconstruction {
         let [b, t, j, _] = predicted.dims();
-        let bones = skeletons.bones.clone().reshape([b, 1, j, 1]);
-        let samples = bones.clone().sum().mul_scalar(t as f32);
-        let over_bones =
-            |p: Tensor<4>, q: Tensor<4>| ((p - q).square() * bones.clone()).sum() / samples.clone();
+        let bones = (skeletons.bones.clone() * joints).reshape([b, 1, j, 1]);
+        let samples = bones.clone().sum_dim(2).reshape([b]).mul_scalar(t as f32);
+        let weight = (windows.clone() / samples.add_scalar(EPSILON)).div_scalar(b as f32);
+        let per_window = |x: Tensor<4>| x.sum_dim(3).sum_dim(2).sum_dim(1).reshape([b]);
+        let over_bones = |p: Tensor<4>, q: Tensor<4>| {
+            (per_window((p - q).square() * bones.clone()) * weight.clone()).sum()
+        };
         let from_root = |p: Tensor<4>| p.clone() - p.narrow(2, 0, 1);
         let root = |p: Tensor<4>| p.narrow(2, 0, 1);
+        let trajectory = per_window((root(predicted.clone()) - root(truth.clone())).square());
         Reconstruction {
             parent: over_bones(
                 skeletons.from_parent(predicted.clone()),
                 skeletons.from_parent(truth.clone()),
             ),
-            root_relative: over_bones(from_root(predicted.clone()), from_root(truth.clone())),
-            trajectory: (root(predicted) - root(truth))
-                .square()
-                .sum()
-                .div_scalar((b * t) as f32),
+            root_relative: over_bones(from_root(predicted), from_root(truth)),
+            trajectory: (trajectory * windows).sum().div_scalar((b * t) as f32),
         }
     }
 
@@ -135,19 +153,31 @@ impl Reconstruction {
     }
 }
 
-/// The cycle loss: `back` (`A → B → A`) reconstructs `source` (`A`, `[B, T, J, 3]` on
-/// `skeletons`), and the motion features of `A → B` (`back.features`) equal those of `A`
-/// (`forth.features`) in L1.
+/// The cycle loss over the windows where `windows` (`[B]`) is 1 (each window's mean weighing
+/// the same, the others adding zero): `back` (`A → B → A`) reconstructs `source` (`A`,
+/// `[B, T, J, 3]` on `skeletons`), and the motion features of `A → B` (`back.features`)
+/// equal those of `A` (`forth.features`) in L1.
 pub fn cycle(
     forth: &Retargeted,
     back: &Retargeted,
     source: Tensor<4>,
     skeletons: &Skeletons,
+    windows: Tensor<1>,
 ) -> Tensor<1> {
-    let positions = Reconstruction::new(back.positions.clone(), source, skeletons).total();
-    let features = (forth.features.clone() - back.features.clone())
-        .abs()
-        .mean();
+    let [b, channels, t] = forth.features.dims();
+    let joints = Tensor::ones(skeletons.bones.dims(), &source.device());
+    let positions = Reconstruction::masked(
+        back.positions.clone(),
+        source,
+        skeletons,
+        windows.clone(),
+        joints,
+    )
+    .total();
+    let features = ((forth.features.clone() - back.features.clone()).abs()
+        * windows.reshape([b, 1, 1]))
+    .sum()
+    .div_scalar((b * channels * t) as f32);
     positions + features
 }
 
@@ -298,6 +328,35 @@ mod tests {
         assert!(value(Reconstruction::new(moved.clone(), p.clone(), s).total()) > 0.0);
         assert!(value(effectors(moved.clone(), s, p.clone(), s)) > 0.0);
         assert!(value(joint_distances(moved, s, p, s)) > 1e-4);
+    }
+
+    #[test]
+    fn a_reconstruction_counts_only_the_windows_it_is_given() {
+        let b = batch(Format::H36m17);
+        let p = b.positions.clone();
+        let moved = p.clone() * p.clone().add_scalar(1.0);
+        let two = |x: Tensor<4>| Tensor::cat(vec![x.clone(), x], 0);
+        let skeletons = Batch::reconstruction(
+            &[
+                window(&b.source.skeletons[0]),
+                window(&b.source.skeletons[0]),
+            ],
+            &Device::flex(),
+        )
+        .unwrap()
+        .source;
+        let both = Tensor::cat(vec![moved.clone(), p.clone()], 0);
+        let weights = |w: [f32; 2]| Tensor::<1>::from_floats(w, &Device::flex());
+        let all = Tensor::ones(skeletons.bones.dims(), &Device::flex());
+        let loss = |w| {
+            let r =
+                Reconstruction::masked(both.clone(), two(p.clone()), &skeletons, w, all.clone());
+            value(r.total())
+        };
+        let alone = value(Reconstruction::new(moved, p.clone(), &b.source).total());
+        assert_eq!(loss(weights([0.0, 1.0])), 0.0);
+        assert!((loss(weights([1.0, 0.0])) - 0.5 * alone).abs() <= 1e-5 * alone);
+        assert!((loss(weights([1.0, 1.0])) - 0.5 * alone).abs() <= 1e-5 * alone);
     }
 
     #[test]

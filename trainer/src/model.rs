@@ -3,10 +3,11 @@
 //! ```text
 //! target T-pose [B,J,6] ──SE──▶ [B,S,d] ─────────────────┐ (added at every time step)
 //! source motion [B,T,J,6] ⊕ T-pose ──ME──▶ [B,S·d,T/4] ──(+)──▶ MD ──▶ Δq [B,J,T,4], Δroot [B,T,3]
-//! source positions ──analytic prior──▶ q₀, root₀ ──(q₀·Δq, root₀ + Δroot)──FK(target)─▶ [B,T,J,3]
+//! source positions ──prior──▶ q₀, root₀ ──(q₀·Δq, root₀ + Δroot)──FK(target)─▶ [B,T,J,3]
 //! ```
 //!
-//! The decoder corrects the analytic retargeter's solution rather than replacing it
+//! The decoder corrects a geometric solution, the rotation transfer or the analytic
+//! retargeter's chords, rather than replacing it
 //! ([`crate::prior`]): trained from scratch for 22 000 steps, the same network stayed 3–10×
 //! further from the ground truth than the analytic retargeter.
 //!
@@ -19,6 +20,7 @@
 
 use crate::features::{Batch, Skeletons, MOTION_CHANNELS, REST_CHANNELS, SEGMENTS, WINDOW};
 use crate::fk;
+use crate::prior::PriorKind;
 use crate::quantize::{Calibration, Point};
 use burn::module::Param;
 use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig};
@@ -60,6 +62,8 @@ pub struct TeacherConfig {
     pub heads: usize,
     /// Kernel size of the temporal convolutions (odd, so that padding keeps lengths).
     pub kernel: usize,
+    /// The geometric solution the decoder corrects.
+    pub prior: PriorKind,
 }
 
 impl TeacherConfig {
@@ -68,17 +72,20 @@ impl TeacherConfig {
         features: 32,
         heads: 2,
         kernel: 3,
+        prior: PriorKind::Rotations,
     };
     /// A tiny teacher for tests.
     pub const TINY: TeacherConfig = TeacherConfig {
         features: 8,
         heads: 2,
         kernel: 3,
+        prior: PriorKind::Chords,
     };
 
     /// A randomly initialized teacher on `device` (seed it with `device.seed`).
     pub fn init(&self, device: &Device) -> Teacher {
         Teacher {
+            prior: self.prior,
             skeleton: SkeletonEncoder::new(self, device),
             motion: MotionEncoder::new(self, device),
             decoder: Decoder::new(self, device),
@@ -120,12 +127,19 @@ pub struct Retargeted {
 /// The teacher network.
 #[derive(Module, Debug)]
 pub struct Teacher {
+    #[module(skip)]
+    prior: PriorKind,
     skeleton: SkeletonEncoder,
     motion: MotionEncoder,
     decoder: Decoder,
 }
 
 impl Teacher {
+    /// The geometric solution it corrects.
+    pub fn prior(&self) -> PriorKind {
+        self.prior
+    }
+
     /// The batch's motions retargeted onto its targets.
     pub fn forward(&self, batch: &Batch) -> Retargeted {
         self.forward_observed(batch, None)
@@ -148,7 +162,12 @@ impl Teacher {
         let fused = features.clone() + skeleton.reshape([b, channels, 1]);
         observe(cal, Point::Fused, &fused);
         let (raw, correction) = self.decoder.forward(fused, &batch.target, cal);
-        let (prior, root) = batch.prior.solve(batch.positions.clone(), &batch.target);
+        let (prior, root) = batch.prior.solve(
+            self.prior,
+            batch.positions.clone(),
+            &batch.source,
+            &batch.target,
+        );
         let root = root + correction;
         let rotations = fk::multiply(prior, fk::normalize(raw));
         let positions = fk::forward(rotations.clone(), root.clone(), &batch.target);
@@ -468,10 +487,9 @@ impl MotionEncoder {
 /// MD: two stages of linear ×2 upsampling and a convolution within segments; then, per
 /// target joint, an MLP from its segment's feature and its rest offset and position to a raw
 /// quaternion, and a linear layer from all segments to a root offset. Both are corrections
-/// of the analytic retargeter's solution ([`crate::prior`]): each bone's rotation is the
-/// analytic one times the correction, the root trajectory the analytic one plus the offset.
-/// Their last layers start at zero (the correction at the identity), so an untrained teacher
-/// is the analytic retargeter and training starts from the baseline it must beat.
+/// of the prior's solution ([`crate::prior`]): each bone's rotation is the prior's times the
+/// correction, the root trajectory the prior's plus the offset. Their last layers start at
+/// zero (the correction at the identity), so an untrained teacher is its prior.
 #[derive(Module, Debug)]
 struct Decoder {
     upsample: Interpolate1d,

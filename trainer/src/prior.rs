@@ -1,23 +1,51 @@
-//! The analytic retargeter ([`posecoach_core::retarget::Analytic`]) as differentiable tensors:
-//! the solution the teacher's decoder corrects.
+//! The geometric solution the teacher's decoder corrects, in one of two kinds ([`PriorKind`]).
 //!
-//! Each target bone turns by the smallest rotation that takes a rest chord of the target onto
-//! the corresponding chord of the source ([`Analytic::chord`]); the root follows the source's,
-//! scaled by the ratio of leg lengths. A chord is a linear function of the source positions
-//! (a row with +1 at its end and −1 at its start), so the whole solution is a few products
-//! and differentiates through the cycle's second pass like any other input.
+//! **Chords**: the analytic retargeter ([`posecoach_core::retarget::Analytic`]) as
+//! differentiable tensors. Each target bone turns by the smallest rotation that takes a rest
+//! chord of the target onto the corresponding chord of the source ([`Analytic::chord`]). A
+//! chord is a linear function of the source positions (a row with +1 at its end and −1 at its
+//! start), so the whole solution is a few products and differentiates through the cycle's
+//! second pass like any other input.
+//!
+//! **Rotations**: the source's rotations estimated from its positions and its own rest pose
+//! ([`Rotations`]: bone directions exact, twists as the format's standard T-pose gives them),
+//! applied to the target's rest offsets through canonical names ([`counterparts`]; a target
+//! joint without one keeps its parent's global rotation). Bone directions copy the source's
+//! turned by the difference of the rest poses, which the chords cannot see: where the rest
+//! poses differ, this is what separates the analytic retargeter from the ground truth.
+//! Inverse kinematics is not a tensor operation, so this solution is a constant of the
+//! positions it is given: no gradient flows through it (the decoder's correction still
+//! differentiates through its inputs).
+//!
+//! Both move the root as the source's, scaled by the ratio of leg lengths: the analytic
+//! retargeter's (to the toes where both skeletons have them) for the chords, from the root to
+//! the ankles for the rotations ([`leg_length`]: a body's is the same in every format, so
+//! its trajectory does not depend on the keypoints a capture has).
 
+use crate::clip::{counterparts, leg_length, Rotations};
 use crate::error::Error;
 use crate::features::Skeletons;
 use crate::fk;
 use burn::prelude::{Device, Tensor, TensorData};
 use posecoach_core::retarget::Analytic;
+use posecoach_core::{Quat, Vec3};
 
 /// Added to a chord's squared length before its square root, so that a chord of zero (a bone
 /// without one) stays finite, gradient included.
 const LENGTH_EPSILON: f32 = 1e-12;
 
-/// The analytic solution of one side of a batch onto the other.
+/// Which geometric solution the decoder corrects.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PriorKind {
+    /// The analytic retargeter: bone directions copied.
+    #[default]
+    Chords,
+    /// The source's rotations, estimated from its positions and its own rest pose, applied to
+    /// the target's rest offsets.
+    Rotations,
+}
+
+/// The geometric solutions of one side of a batch onto the other.
 #[derive(Clone, Debug)]
 pub struct Prior {
     /// `[B, J, J']` per target joint its source chord: +1 at the end, −1 at the start (a zero
@@ -26,9 +54,15 @@ pub struct Prior {
     /// `[B, J, 1, 4]` the target's unit rest chords as pure quaternions, negated (zero where
     /// there is no chord).
     rest: Tensor<4>,
-    /// `[B, 1, J']` the source root, times the scale of the trajectory from source heights to
-    /// target heights.
+    /// `[B, 1, J']` the source root, times the analytic retargeter's scale of the trajectory
+    /// from source heights to target heights.
     root: Tensor<3>,
+    /// `[B, 1, J']` the same with the scale of the ratio of ankle leg lengths ([`leg_length`]).
+    root_by_legs: Tensor<3>,
+    /// Per pair, each target joint's source counterpart ([`counterparts`]).
+    counterparts: Vec<Vec<Option<usize>>>,
+    /// Per pair, the source's rotation estimator.
+    rotations: Vec<Rotations>,
 }
 
 impl Prior {
@@ -37,7 +71,7 @@ impl Prior {
     ///
     /// # Errors
     /// [`Error::Mismatch`] if the sides differ in length; [`Error::Retarget`] for a source
-    /// without legs.
+    /// without legs; else as [`Rotations::new`].
     pub fn new(source: &Skeletons, target: &Skeletons, device: &Device) -> Result<Prior, Error> {
         if source.len() != target.len() {
             return Err(Error::Mismatch {
@@ -49,11 +83,17 @@ impl Prior {
         let mut chords = vec![0.0; b * onto * from];
         let mut rest = vec![0.0; b * onto * 4];
         let mut root = vec![0.0; b * from];
+        let mut root_by_legs = vec![0.0; b * from];
+        let mut matches = Vec::with_capacity(b);
+        let mut rotations = Vec::with_capacity(b);
         let pairs = source.skeletons.iter().zip(&target.skeletons);
         for (i, (s, t)) in pairs.enumerate() {
             let analytic = Analytic::new(s, t)?;
-            root[i * from + analytic.root()] =
-                analytic.scale() * source.heights[i] / target.heights[i];
+            matches.push(counterparts(s, t));
+            rotations.push(Rotations::new(s)?);
+            let heights = source.heights[i] / target.heights[i];
+            root[i * from + analytic.root()] = analytic.scale() * heights;
+            root_by_legs[i * from + analytic.root()] = leg_length(t) / leg_length(s) * heights;
             for k in 0..t.len() {
                 let Some(chord) = analytic.chord(k) else {
                     continue;
@@ -69,16 +109,39 @@ impl Prior {
             chords: Tensor::from_data(TensorData::new(chords, [b, onto, from]), device),
             rest: Tensor::from_data(TensorData::new(rest, [b, onto, 1, 4]), device),
             root: Tensor::from_data(TensorData::new(root, [b, 1, from]), device),
+            root_by_legs: Tensor::from_data(TensorData::new(root_by_legs, [b, 1, from]), device),
+            counterparts: matches,
+            rotations,
         })
     }
 
-    /// The analytic retargeting of source `positions` (`[B, T, J', 3]`, source heights):
-    /// each target bone's rotation relative to its parent (`[B, J, T, 4]`, as [`fk`] takes
-    /// them) and the root trajectory (`[B, T, 3]`, target heights).
-    pub fn solve(&self, positions: Tensor<4>, target: &Skeletons) -> (Tensor<4>, Tensor<3>) {
+    /// The `kind` of solution for source `positions` (`[B, T, J', 3]` on `source`, source
+    /// heights): each target bone's rotation relative to its parent (`[B, J, T, 4]`, as [`fk`]
+    /// takes them) and the root trajectory (`[B, T, 3]`, target heights).
+    pub fn solve(
+        &self,
+        kind: PriorKind,
+        positions: Tensor<4>,
+        source: &Skeletons,
+        target: &Skeletons,
+    ) -> (Tensor<4>, Tensor<3>) {
+        let [b, t, _, _] = positions.dims();
+        let scaled = match kind {
+            PriorKind::Chords => &self.root,
+            PriorKind::Rotations => &self.root_by_legs,
+        };
+        let root = Skeletons::select(scaled, positions.clone()).reshape([b, t, 3]);
+        let global = match kind {
+            PriorKind::Chords => self.chord_globals(positions),
+            PriorKind::Rotations => self.transferred_globals(positions, source, target),
+        };
+        (fk::local(global, target), root)
+    }
+
+    /// `[B, J, T, 4]` each target bone's global rotation by the chords.
+    fn chord_globals(&self, positions: Tensor<4>) -> Tensor<4> {
         let [b, t, _, _] = positions.dims();
         let [_, j, _] = self.chords.dims();
-        let root = Skeletons::select(&self.root, positions.clone()).reshape([b, t, 3]);
         let chords = Skeletons::select(&self.chords, positions).swap_dims(1, 2);
         let length = chords
             .clone()
@@ -94,16 +157,67 @@ impl Prior {
         // (0, d)·(0, −r) = (d·r, r × d): plus the identity, twice the half-way quaternion.
         let identity = Tensor::<1>::from_floats(fk::IDENTITY, &pure.device()).reshape([1, 1, 1, 4]);
         let rest = self.rest.clone().expand([b, j, t, 4]);
-        let global = fk::normalize(fk::multiply(pure, rest) + identity);
-        (fk::local(global, target), root)
+        fk::normalize(fk::multiply(pure, rest) + identity)
+    }
+
+    /// `[B, J, T, 4]` each target bone's global rotation by the rotation transfer; the root's
+    /// is the identity, as [`fk`] has it.
+    fn transferred_globals(
+        &self,
+        positions: Tensor<4>,
+        source: &Skeletons,
+        target: &Skeletons,
+    ) -> Tensor<4> {
+        let device = positions.device();
+        let [b, t, from, _] = positions.dims();
+        let onto = target.joints();
+        let values = positions
+            .into_data()
+            .try_to_vec::<f32>()
+            .unwrap_or_default();
+        let mut out = vec![0.0; b * onto * t * 4];
+        out.chunks_exact_mut(4).for_each(|q| q[0] = 1.0);
+        if values.len() != b * t * from * 3 {
+            return Tensor::from_data(TensorData::new(out, [b, onto, t, 4]), &device);
+        }
+        let mut frame = vec![Vec3::zeros(); from];
+        let mut source_global = vec![Quat::identity(); from];
+        let mut global = vec![Quat::identity(); onto];
+        let pairs = self.counterparts.iter().zip(&self.rotations);
+        for (i, (matches, rotations)) in pairs.enumerate() {
+            let n = source.skeletons[i].len();
+            let m = target.skeletons[i].len();
+            for f in 0..t {
+                for (k, p) in frame[..n].iter_mut().enumerate() {
+                    let at = ((i * t + f) * from + k) * 3;
+                    *p = Vec3::new(values[at], values[at + 1], values[at + 2]);
+                }
+                if rotations.globals(&frame[..n], &mut source_global).is_err() {
+                    continue;
+                }
+                global[0] = source_global[0];
+                for k in 1..m {
+                    let parent = target.skeletons[i].parent(k).unwrap_or(0);
+                    global[k] = matches[k].map_or(global[parent], |c| source_global[c]);
+                }
+                for (k, g) in global[..m].iter().enumerate() {
+                    let q = if k == 0 { Quat::identity() } else { *g };
+                    let at = ((i * onto + k) * t + f) * 4;
+                    out[at..at + 4].copy_from_slice(&[q.w, q.i, q.j, q.k]);
+                }
+            }
+        }
+        Tensor::from_data(TensorData::new(out, [b, onto, t, 4]), &device)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::clip::testing::wave_frames;
+    use crate::clip::{standard_skeleton, Clip};
     use crate::features::testing::{character, window};
-    use crate::features::Batch;
+    use crate::features::{Batch, Window, RATE_HZ, WINDOW};
     use posecoach_core::format::Format;
     use posecoach_core::Vec3;
 
@@ -126,7 +240,12 @@ mod tests {
             .collect();
         let onto: Vec<_> = bodies.iter().collect();
         let batch = Batch::new(&windows, &onto, &device).unwrap();
-        let (rotations, root) = batch.prior.solve(batch.positions.clone(), &batch.target);
+        let (rotations, root) = batch.prior.solve(
+            PriorKind::Chords,
+            batch.positions.clone(),
+            &batch.source,
+            &batch.target,
+        );
         let positions = fk::forward(rotations, root, &batch.target);
         let [_, frames, joints, _] = positions.dims();
         let got = positions.to_data().try_to_vec::<f32>().unwrap();
@@ -146,5 +265,61 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_rotation_prior_recovers_the_ground_truth_where_the_chords_miss_the_rest_poses() {
+        let device = Device::flex();
+        let pairs = [
+            (Format::H36m17, Format::H36m17),
+            (Format::Cmu31, Format::Coco17),
+            (Format::Bandai22, Format::H36m17),
+        ];
+        let mut windows = Vec::new();
+        let mut truths = Vec::new();
+        let mut bodies = Vec::new();
+        for (i, &(from, onto)) in pairs.iter().enumerate() {
+            let standard = standard_skeleton(&character(from, 20 + i as u64).skeleton).unwrap();
+            let motion = wave_frames(&standard, 3 * WINDOW);
+            let clip = Clip::from_motion("wave", &motion).unwrap();
+            let source = character(from, i as u64);
+            let target = character(onto, 10 + i as u64);
+            windows.push(Window::new(&clip.on(&source).unwrap(), 0).unwrap());
+            truths.push(clip.on(&target).unwrap().resampled(RATE_HZ));
+            bodies.push(target.skeleton);
+        }
+        let onto: Vec<_> = bodies.iter().collect();
+        let batch = Batch::new(&windows, &onto, &device).unwrap();
+        let error = |kind: PriorKind| {
+            let (rotations, root) =
+                batch
+                    .prior
+                    .solve(kind, batch.positions.clone(), &batch.source, &batch.target);
+            let positions = fk::forward(rotations, root, &batch.target);
+            let [_, frames, joints, _] = positions.dims();
+            let got = positions.to_data().try_to_vec::<f32>().unwrap();
+            let (mut sum, mut count) = (0.0, 0.0);
+            for (i, (truth, target)) in truths.iter().zip(&bodies).enumerate() {
+                let h = target.height();
+                let at = |f: usize, k: usize| {
+                    let p = &got[((i * frames + f) * joints + k) * 3..][..3];
+                    Vec3::new(p[0], p[1], p[2]) * h
+                };
+                for f in 0..frames {
+                    let truth = truth.frame(f);
+                    for k in 1..target.len() {
+                        let gap = (at(f, k) - at(f, 0)) - (truth[k] - truth[0]);
+                        sum += gap.norm() / h;
+                        count += 1.0;
+                    }
+                }
+            }
+            sum / count
+        };
+        let (rotations, chords) = (error(PriorKind::Rotations), error(PriorKind::Chords));
+        assert!(
+            rotations < 0.3 * chords && rotations < 0.004,
+            "rotations {rotations}, chords {chords} (heights)"
+        );
     }
 }

@@ -18,6 +18,7 @@ use crate::dataset::{Pool, Split, SplitRng, Structure, FORMATS};
 use crate::error::Error;
 use crate::features::{Batch, Window, MOTION_CHANNELS, RATE_HZ, REST_CHANNELS, SEGMENTS, WINDOW};
 use crate::model::{Dense as Layer, Parameters, Teacher, TeacherConfig};
+use crate::prior::PriorKind;
 use burn::prelude::{Device, Tensor};
 use posecoach_core::int8::{self, Requant};
 use posecoach_core::weights::{
@@ -297,7 +298,8 @@ fn apply(layer: &Layer, x: &[f32]) -> Vec<f32> {
 /// The weights blob of `model` (sizes `config`) with activation `scales`.
 ///
 /// # Errors
-/// [`Error::Checkpoint`] for sizes the core cannot run or a scale out of range.
+/// [`Error::Checkpoint`] for sizes or a prior the core cannot run (it corrects the chords:
+/// [`PriorKind::Chords`]) or a scale out of range.
 pub fn export(
     model: &Teacher,
     config: &TeacherConfig,
@@ -312,6 +314,13 @@ pub fn export(
         segments: SEGMENTS as u16,
         rate_hz: RATE_HZ,
     };
+    if config.prior != PriorKind::Chords {
+        return Err(Error::Checkpoint(
+            "the core's network corrects the chords (the analytic retargeter); this one \
+             corrects the rotation transfer: distill it into a student first"
+                .into(),
+        ));
+    }
     if !architecture.is_supported() {
         return Err(Error::Checkpoint(format!(
             "sizes {config:?} are not what the core runs (at most {} features)",
