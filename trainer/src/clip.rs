@@ -139,11 +139,10 @@ impl Clip {
             .zip(positions.chunks_exact_mut(m))
         {
             globals(&self.skeleton, local, &mut source_global);
+            transfer(target, &counterpart, &source_global, &mut global);
             out[0] = root * scale;
-            global[0] = source_global[0];
             for k in 1..m {
                 let parent = target.parent(k).unwrap_or(0);
-                global[k] = counterpart[k].map_or(global[parent], |c| source_global[c]);
                 out[k] = out[parent] + global[k] * target.offset(k);
             }
         }
@@ -177,6 +176,25 @@ fn globals(skeleton: &Skeleton, local: &[Quat], out: &mut [Quat]) {
             Some(p) => out[p] * local[k],
             None => local[k],
         };
+    }
+}
+
+/// Each `target` joint's global rotation from the source's, `source_global`, through
+/// `counterpart` ([`counterparts`]): a joint without a counterpart keeps its parent's.
+///
+/// # Panics
+/// If `counterpart` or `global` is shorter than `target`, or a counterpart is beyond
+/// `source_global`.
+pub fn transfer(
+    target: &Skeleton,
+    counterpart: &[Option<usize>],
+    source_global: &[Quat],
+    global: &mut [Quat],
+) {
+    global[0] = source_global[0];
+    for k in 1..target.len() {
+        let parent = target.parent(k).unwrap_or(0);
+        global[k] = counterpart[k].map_or(global[parent], |c| source_global[c]);
     }
 }
 

@@ -14,7 +14,7 @@
 //! A weights blob ([`posecoach_core::weights`]) runs the same way through the core's int8
 //! network ([`posecoach_core::network`]), which cuts and holds windows as this module does.
 
-use crate::clip::{leg_length, motion};
+use crate::clip::motion;
 use crate::error::Error;
 use crate::features::{Batch, Window, RATE_HZ, WINDOW};
 use crate::model::{Teacher, TeacherConfig};
@@ -23,7 +23,6 @@ use crate::train::{load_teacher, TrainConfig};
 use burn::prelude::Device;
 use posecoach_adapters::io::Motion;
 use posecoach_core::network;
-use posecoach_core::retarget::Analytic;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::weights::{self, Weights};
 use posecoach_core::Vec3;
@@ -132,15 +131,11 @@ impl Retargeter {
                 actual: 0,
             });
         }
-        let analytic = Analytic::new(&source.skeleton, target)?;
         let prior = match &self.model {
             Model::Float { teacher, .. } => teacher.prior(),
             Model::Int8 { .. } => PriorKind::Chords,
         };
-        let scale = match prior {
-            PriorKind::Chords => analytic.scale(),
-            PriorKind::Rotations => leg_length(target) / leg_length(&source.skeleton),
-        };
+        let scale = prior.trajectory_scale(&source.skeleton, target)?;
         let phases = ((source.rate_hz / RATE_HZ).round() as usize).clamp(1, MAX_PHASES);
         let fine = held(&source.resampled(RATE_HZ * phases as f32), WINDOW * phases);
         let (length, m) = (fine.frames(), target.len());
@@ -249,6 +244,7 @@ fn fitted(mut m: Motion, frames: usize) -> Motion {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::clip::leg_length;
     use crate::clip::testing::wave_frames;
     use crate::features::testing::character;
     use posecoach_core::format::Format;

@@ -22,12 +22,13 @@
 //! the ankles for the rotations ([`leg_length`]: a body's is the same in every format, so
 //! its trajectory does not depend on the keypoints a capture has).
 
-use crate::clip::{counterparts, leg_length, Rotations};
+use crate::clip::{counterparts, leg_length, transfer, Rotations};
 use crate::error::Error;
 use crate::features::Skeletons;
 use crate::fk;
 use burn::prelude::{Device, Tensor, TensorData};
-use posecoach_core::retarget::Analytic;
+use posecoach_core::retarget::{Analytic, RetargetError};
+use posecoach_core::skeleton::Skeleton;
 use posecoach_core::{Quat, Vec3};
 
 /// Added to a chord's squared length before its square root, so that a chord of zero (a bone
@@ -43,6 +44,25 @@ pub enum PriorKind {
     /// The source's rotations, estimated from its positions and its own rest pose, applied to
     /// the target's rest offsets.
     Rotations,
+}
+
+impl PriorKind {
+    /// The factor this prior moves the root by, from `source`'s metres to `target`'s.
+    ///
+    /// # Errors
+    /// [`Error::Retarget`] for a source without legs.
+    pub fn trajectory_scale(self, source: &Skeleton, target: &Skeleton) -> Result<f32, Error> {
+        Ok(match self {
+            PriorKind::Chords => Analytic::new(source, target)?.scale(),
+            PriorKind::Rotations => {
+                let legs = leg_length(source);
+                if legs <= f32::EPSILON {
+                    return Err(Error::Retarget(RetargetError::DegenerateSource));
+                }
+                leg_length(target) / legs
+            }
+        })
+    }
 }
 
 /// The geometric solutions of one side of a batch onto the other.
@@ -92,8 +112,9 @@ impl Prior {
             matches.push(counterparts(s, t));
             rotations.push(Rotations::new(s)?);
             let heights = source.heights[i] / target.heights[i];
-            root[i * from + analytic.root()] = analytic.scale() * heights;
-            root_by_legs[i * from + analytic.root()] = leg_length(t) / leg_length(s) * heights;
+            let scale = |kind: PriorKind| kind.trajectory_scale(s, t).map(|k| k * heights);
+            root[i * from + analytic.root()] = scale(PriorKind::Chords)?;
+            root_by_legs[i * from + analytic.root()] = scale(PriorKind::Rotations)?;
             for k in 0..t.len() {
                 let Some(chord) = analytic.chord(k) else {
                     continue;
@@ -195,11 +216,7 @@ impl Prior {
                 if rotations.globals(&frame[..n], &mut source_global).is_err() {
                     continue;
                 }
-                global[0] = source_global[0];
-                for k in 1..m {
-                    let parent = target.skeletons[i].parent(k).unwrap_or(0);
-                    global[k] = matches[k].map_or(global[parent], |c| source_global[c]);
-                }
+                transfer(&target.skeletons[i], matches, &source_global, &mut global);
                 for (k, g) in global[..m].iter().enumerate() {
                     let q = if k == 0 { Quat::identity() } else { *g };
                     let at = ((i * onto + k) * t + f) * 4;
