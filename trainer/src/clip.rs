@@ -28,6 +28,7 @@
 use crate::bodies::Character;
 use crate::error::Error;
 use posecoach_adapters::io::Motion;
+use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::format::{t_pose, Format};
 use posecoach_core::joint::Joint;
 use posecoach_core::kinematics::{self, inverse, LengthError};
@@ -336,13 +337,14 @@ impl Rotations {
                 actual: global.len(),
             }));
         }
-        let mut local = vec![Quat::identity(); n];
-        let mut posed = vec![Vec3::zeros(); n];
-        inverse(&self.own, frame, &mut local)?;
+        let mut local = [Quat::identity(); MAX_JOINTS];
+        let mut posed = [Vec3::zeros(); MAX_JOINTS];
+        let (local, posed) = (&mut local[..n], &mut posed[..n]);
+        inverse(&self.own, frame, local)?;
         for _ in 0..CONVENTION_ROUNDS {
-            kinematics::forward(&self.standard, &local, frame[0], &mut posed)?;
-            inverse(&self.standard, &posed, &mut local)?;
-            globals(&self.own, &local, global);
+            kinematics::forward(&self.standard, local, frame[0], posed)?;
+            inverse(&self.standard, posed, local)?;
+            globals(&self.own, local, global);
             for k in 1..n {
                 let parent = self.own.parent(k).unwrap_or(0);
                 let observed = frame[k] - frame[parent];

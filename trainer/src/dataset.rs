@@ -311,14 +311,18 @@ impl Pool {
         let source = Character::new(Body::sample(variation, rng.rng()), from, club)?;
         let target = Character::new(Body::sample(variation, rng.rng()), onto, club)?;
         let slice = clip.slice(start, frames)?;
+        let window = Window::new(&slice.on(&source)?, 0)?;
         let twin = match onto == from {
-            true => source.clone(),
-            false => Character::new(source.body.clone(), onto, club)?,
+            true => window.clone(),
+            false => {
+                let twin = Character::new(source.body, onto, club)?;
+                Window::new(&slice.on(&twin)?, 0)?
+            }
         };
         Ok(Example {
-            window: Window::new(&slice.on(&source)?, 0)?,
+            window,
             target: target.skeleton,
-            twin: Window::new(&slice.on(&twin)?, 0)?,
+            twin,
         })
     }
 
