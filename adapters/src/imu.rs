@@ -33,7 +33,7 @@
 //! use posecoach_core::joint::Joint;
 //! use posecoach_core::wire::{ImuSample, SensorLayout, SensorPlacement};
 //!
-//! let skeleton = Format::H36m17.default_skeleton().unwrap();
+//! let skeleton = Skeleton::standard(Format::H36m17).unwrap();
 //! let mut layout = SensorLayout { sensors: Default::default() };
 //! let placement = SensorPlacement { sensor: 0, joint: Joint::Pelvis, mounting_q14: [16384, 0, 0, 0] };
 //! layout.sensors.push(placement).unwrap();
@@ -590,7 +590,7 @@ mod tests {
     const TOLERANCE_M: f32 = 1e-4;
 
     fn skeleton() -> Skeleton {
-        Format::H36m17.default_skeleton().unwrap()
+        Skeleton::standard(Format::H36m17).unwrap()
     }
 
     fn layout(joints: &[(u8, Joint)]) -> SensorLayout {
@@ -737,7 +737,7 @@ mod tests {
     fn bad_samples_are_errors_and_the_adapter_carries_on() {
         let s = skeleton();
         let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 60.0).unwrap();
-        let other = Format::Coco17.default_skeleton().unwrap();
+        let other = Skeleton::standard(Format::Coco17).unwrap();
         assert_eq!(
             adapter.push(&other, &still(3, 0), |_, _| {}),
             Err(ImuError::SkeletonMismatch)

@@ -16,8 +16,6 @@
 
 pub mod fusion;
 pub mod imu;
-#[cfg(feature = "std")]
-pub mod io;
 pub mod log;
 #[cfg(any(test, feature = "lsm6ds3"))]
 pub mod lsm6ds3;

@@ -38,7 +38,7 @@ use posecoach_core::score::{self, Detected, Report, ScoreError};
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
 use posecoach_core::weights::{Architecture, Weights};
 use posecoach_core::wire::{
-    Config, ImuSample, Message, NackReason, PoseFrame, SensorLayout, StudentProfile, SwingReport,
+    Config, ImuSample, Message, NackReason, PoseFrame, SensorLayout, StudentProfile,
 };
 use posecoach_core::{config::MAX_JOINTS, Vec3};
 
@@ -276,7 +276,7 @@ impl Outcome<'_> {
     pub fn reply(&self, message: &Message) -> Option<Message> {
         match self {
             Outcome::Scored { swing, report, .. } => {
-                Some(Message::SwingReport(SwingReport::new(swing.number, report)))
+                Some(Message::SwingReport(report.to_wire(swing.number)))
             }
             Outcome::Unscored { .. } => None,
             Outcome::Refused(why) => Some(Message::Nack {
@@ -523,7 +523,7 @@ impl<'b> Session<'b> {
         format
             .map_keypoints(&keypoints[..profile.joints_mm.len()], &mut joints)
             .map_err(|_| Refusal::ProfileFormat(format))?;
-        let template = format.default_skeleton().map_err(Refusal::Profile)?;
+        let template = Skeleton::standard(format).map_err(Refusal::Profile)?;
         let lengths: [f32; MAX_JOINTS] = core::array::from_fn(|k| {
             (k < template.len())
                 .then(|| template.parent(k))
@@ -919,9 +919,8 @@ fn stream_skeleton(student: &Skeleton, format: Format) -> Result<Skeleton, Refus
     if format == student.format() {
         return Ok(student.clone());
     }
-    let standard = format
-        .default_skeleton()
-        .map_err(|_| Refusal::Stream(StreamError::Format(format)))?;
+    let standard =
+        Skeleton::standard(format).map_err(|_| Refusal::Stream(StreamError::Format(format)))?;
     let scale = student.leg_length() / standard.leg_length().max(f32::EPSILON);
     let lengths: [f32; MAX_JOINTS] =
         core::array::from_fn(|k| standard.offsets().get(k).map_or(0.0, |o| o.norm() * scale));
@@ -940,7 +939,7 @@ mod tests {
         assert_eq!(frames_at(110, 60.000_057, 30), 55);
         assert_eq!(frames_at(110, 60.0, 120), 219);
         assert_eq!(frames_at(0, 60.0, 30), 0);
-        let skeleton = Format::H36m17.default_skeleton().unwrap();
+        let skeleton = Skeleton::standard(Format::H36m17).unwrap();
         let positions = [Vec3::zeros(); 17 * 4];
         let coach = Coach {
             skeleton: &skeleton,

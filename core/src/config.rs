@@ -1,9 +1,18 @@
-//! Capacity constants: every fixed-size buffer in the core is sized by one of these.
+//! Capacity constants shared across modules: the limits that more than one module (or the wire
+//! and the report it carries) must agree on.
 //!
-//! Each constant's RAM cost is listed in the README's "Configuration" section.
+//! A limit that only one module uses lives beside it (`dtw::MAX_ANCHORS`, `wire::MAX_FRAME`,
+//! `weights::MAX_HEADER`, ...); `docs/ARCHITECTURE.md` lists them all, and the README's
+//! "Configuration" section gives each one's RAM cost.
 
 /// Most joints one skeleton may have (BlazePose-33 landmarks and CMU-31 fit).
 pub const MAX_JOINTS: usize = 40;
 
 /// Longest swing, in frames, that can be scored (4.2 s at 60 Hz, 8.5 s at 30 Hz).
 pub const MAX_SWING_FRAMES: usize = 256;
+
+/// Joint deviations a report keeps per swing event, largest first.
+pub const DEVIATIONS_PER_EVENT: usize = 3;
+
+/// Most deviations a report holds, and a `SwingReport` carries (every one of the 8 events).
+pub const MAX_DEVIATIONS: usize = 8 * DEVIATIONS_PER_EVENT;

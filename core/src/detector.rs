@@ -13,7 +13,7 @@
 //! use posecoach_core::format::Format;
 //! use posecoach_core::Vec3;
 //!
-//! let skeleton = Format::H36m17.default_skeleton().unwrap();
+//! let skeleton = Skeleton::standard(Format::H36m17).unwrap();
 //! let mut storage = [Vec3::zeros(); 17 * 240];
 //! let mut detector = SwingDetector::new(&skeleton, DetectorConfig::full_swing(60.0), &mut storage).unwrap();
 //! let mut rest = [Vec3::zeros(); 17];
@@ -359,7 +359,7 @@ mod tests {
 
     #[test]
     fn bad_setup_and_frames_are_errors() {
-        let s = Format::H36m17.default_skeleton().unwrap();
+        let s = Skeleton::standard(Format::H36m17).unwrap();
         let mut small = [Vec3::zeros(); 17 * 60];
         assert_eq!(
             SwingDetector::new(&s, DetectorConfig::full_swing(RATE_HZ), &mut small).err(),
@@ -389,7 +389,7 @@ mod tests {
 
     #[test]
     fn a_window_across_the_ring_s_end_reads_in_order_and_the_ring_is_restored() {
-        let s = Format::H36m17.default_skeleton().unwrap();
+        let s = Skeleton::standard(Format::H36m17).unwrap();
         let capacity = (2.0 * RATE_HZ) as usize;
         let mut storage = vec![Vec3::zeros(); capacity * 17];
         let mut d =

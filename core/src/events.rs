@@ -538,7 +538,7 @@ mod tests {
         fn arbitrary_motion_never_panics(
             values in proptest::collection::vec(-3.0f32..3.0, 17 * 3 * 60..17 * 3 * 120),
         ) {
-            let h36m = Format::H36m17.default_skeleton().unwrap();
+            let h36m = Skeleton::standard(Format::H36m17).unwrap();
             let frames = values.len() / (17 * 3);
             let positions: Vec<Vec3> = values[..frames * 17 * 3].chunks_exact(3).map(Vec3::from_column_slice).collect();
             if let Ok(events) = detect(&h36m, &positions, RATE_HZ) {
@@ -550,7 +550,7 @@ mod tests {
 
     #[test]
     fn bad_input_is_an_error_not_a_panic() {
-        let h36m = Format::H36m17.default_skeleton().unwrap();
+        let h36m = Skeleton::standard(Format::H36m17).unwrap();
         let still = standing(&h36m, 90);
         assert_eq!(detect(&h36m, &still, 0.0), Err(EventError::Rate));
         assert_eq!(detect(&h36m, &still, f32::NAN), Err(EventError::Rate));
@@ -563,7 +563,7 @@ mod tests {
             Err(EventError::Length)
         );
         assert_eq!(detect(&h36m, &still, RATE_HZ), Err(EventError::NoSwing));
-        let coco = Format::Coco17.default_skeleton().unwrap();
+        let coco = Skeleton::standard(Format::Coco17).unwrap();
         let mut nan = standing(&coco, 90);
         nan[40].x = f32::NAN;
         assert_eq!(detect(&coco, &nan, RATE_HZ), Err(EventError::NonFinite));

@@ -16,9 +16,7 @@
 //! assert_eq!(Format::detect(&["Hips", "LHipJoint", "LeftUpLeg"]), None);
 //! ```
 
-use crate::config::MAX_JOINTS;
 use crate::joint::Joint;
-use crate::skeleton::{Skeleton, SkeletonError};
 use crate::Vec3;
 
 /// A keypoint format.
@@ -607,36 +605,6 @@ impl Format {
         }
         Ok(())
     }
-
-    /// The format's skeleton in the default 1.75 m T-pose (for canonical, the 22 body joints).
-    ///
-    /// # Errors
-    /// Only for [`Format::Custom`], which has no joint table.
-    pub fn default_skeleton(self) -> Result<Skeleton, SkeletonError> {
-        let mut parents = [None; MAX_JOINTS];
-        let mut positions = [Vec3::zeros(); MAX_JOINTS];
-        let mut joints = [None; MAX_JOINTS];
-        let n = match self {
-            Format::Canonical => {
-                let body = Joint::ALL.iter().filter(|j| !j.is_club());
-                for (i, &j) in body.enumerate() {
-                    parents[i] = j.parent().map(Joint::index);
-                    positions[i] = t_pose(j);
-                    joints[i] = Some(j);
-                }
-                Joint::ALL.len() - 2
-            }
-            _ => {
-                for (i, j) in self.joints().iter().enumerate() {
-                    parents[i] = j.parent.map(usize::from);
-                    positions[i] = j.place.position();
-                    joints[i] = j.joint;
-                }
-                self.joints().len()
-            }
-        };
-        Skeleton::from_rest_positions(self, &parents[..n], &positions[..n], &joints[..n])
-    }
 }
 
 impl core::fmt::Display for Format {
@@ -648,11 +616,12 @@ impl core::fmt::Display for Format {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::skeleton::Skeleton;
 
     #[test]
     fn every_built_in_table_is_a_valid_skeleton_of_plausible_height() {
         for format in Format::BUILT_IN.into_iter().chain([Format::Canonical]) {
-            let skeleton = match format.default_skeleton() {
+            let skeleton = match Skeleton::standard(format) {
                 Ok(s) => s,
                 Err(e) => panic!("{format}: {e}"),
             };

@@ -11,7 +11,7 @@
 //! use posecoach_core::kinematics::{forward, inverse};
 //! use posecoach_core::{Quat, Vec3};
 //!
-//! let skeleton = Format::H36m17.default_skeleton().unwrap();
+//! let skeleton = Skeleton::standard(Format::H36m17).unwrap();
 //! let mut rest = [Vec3::zeros(); 17];
 //! skeleton.rest_positions(&mut rest);
 //! let mut local = [Quat::identity(); 17];
@@ -257,7 +257,7 @@ mod tests {
             raw in prop::collection::vec(prop::array::uniform4(-1.0f32..1.0), MAX_JOINTS),
             root in prop::array::uniform3(-3.0f32..3.0),
         ) {
-            let skeleton = format.default_skeleton().unwrap();
+            let skeleton = Skeleton::standard(format).unwrap();
             let n = skeleton.len();
             let local = testing::rotations(&raw[..n]);
             let mut positions = [Vec3::zeros(); MAX_JOINTS];
@@ -274,7 +274,7 @@ mod tests {
 
     #[test]
     fn inverse_of_rest_pose_is_nearly_identity() {
-        let skeleton = Format::Smpl24.default_skeleton().unwrap();
+        let skeleton = Skeleton::standard(Format::Smpl24).unwrap();
         let mut rest = [Vec3::zeros(); 24];
         skeleton.rest_positions(&mut rest);
         let mut local = [Quat::identity(); 24];
@@ -286,7 +286,7 @@ mod tests {
 
     #[test]
     fn short_slices_are_errors() {
-        let skeleton = Format::Coco17.default_skeleton().unwrap();
+        let skeleton = Skeleton::standard(Format::Coco17).unwrap();
         let mut out = [Vec3::zeros(); 3];
         assert_eq!(
             forward(&skeleton, &[Quat::identity(); 15], Vec3::zeros(), &mut out),

@@ -18,7 +18,6 @@
 //! - [`format`](mod@format): built-in keypoint formats mapped onto the vocabulary.
 //! - [`skeleton`]: joints, parents, rest offsets, body segments, end effectors, height.
 //! - [`kinematics`]: forward and inverse kinematics with per-bone rotations.
-//! - [`normalize`]: parent-relative positions and the height-normalized root trajectory.
 //! - [`retarget`]: the analytic retargeter.
 //! - [`detector`]: which stretch of a live pose stream is a swing.
 //! - [`events`]: the eight swing events.
@@ -48,7 +47,6 @@ pub mod joint;
 pub mod kinematics;
 pub mod math;
 pub mod network;
-pub mod normalize;
 pub mod reference;
 pub mod retarget;
 pub mod score;

@@ -828,8 +828,8 @@ mod tests {
             (Format::GolfMarkers, Format::Cmu31, 130),
         ] {
             let (source, target) = (
-                from.default_skeleton().unwrap(),
-                onto.default_skeleton().unwrap(),
+                Skeleton::standard(from).unwrap(),
+                Skeleton::standard(onto).unwrap(),
             );
             let frames_in = motion(&source, frames);
             let out = run(&bytes, &source, &target, &frames_in).unwrap();
@@ -852,8 +852,8 @@ mod tests {
     fn corrections_keep_the_targets_bones_and_move_the_pose() {
         let bytes = blob(STUDENT, 6, false);
         let (source, target) = (
-            Format::Cmu31.default_skeleton().unwrap(),
-            Format::H36m17.default_skeleton().unwrap(),
+            Skeleton::standard(Format::Cmu31).unwrap(),
+            Skeleton::standard(Format::H36m17).unwrap(),
         );
         let frames = motion(&source, 64);
         let out = run(&bytes, &source, &target, &frames).unwrap();
@@ -887,8 +887,8 @@ mod tests {
         let weights =
             Weights::from_bytes(&bytemuck::cast_slice::<u32, u8>(&words)[..bytes.len()]).unwrap();
         let (source, target) = (
-            Format::H36m17.default_skeleton().unwrap(),
-            Format::H36m17.default_skeleton().unwrap(),
+            Skeleton::standard(Format::H36m17).unwrap(),
+            Skeleton::standard(Format::H36m17).unwrap(),
         );
         let mut frames = motion(&source, 10);
         let need = scratch_len(weights.architecture(), 17, 17);

@@ -251,7 +251,7 @@ mod tests {
     use crate::blob::Aligned;
 
     fn swing() -> (Skeleton, Vec<Vec3>) {
-        let skeleton = Format::H36m17.default_skeleton().unwrap();
+        let skeleton = Skeleton::standard(Format::H36m17).unwrap();
         let mut rest = vec![Vec3::zeros(); skeleton.len()];
         skeleton.rest_positions(&mut rest);
         let positions = (0..5)

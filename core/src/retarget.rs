@@ -20,8 +20,8 @@
 //! use posecoach_core::retarget::Analytic;
 //! use posecoach_core::Vec3;
 //!
-//! let coach = Format::Cmu31.default_skeleton().unwrap();
-//! let student = Format::H36m17.default_skeleton().unwrap();
+//! let coach = Skeleton::standard(Format::Cmu31).unwrap();
+//! let student = Skeleton::standard(Format::H36m17).unwrap();
 //! let retarget = Analytic::new(&coach, &student).unwrap();
 //! let mut frame = [Vec3::zeros(); 31];
 //! coach.rest_positions(&mut frame);
@@ -250,7 +250,7 @@ mod tests {
             raw in prop::collection::vec(prop::array::uniform4(-1.0f32..1.0), MAX_JOINTS),
             root in prop::array::uniform3(-3.0f32..3.0),
         ) {
-            let skeleton = format.default_skeleton().unwrap();
+            let skeleton = Skeleton::standard(format).unwrap();
             let frame = pose(&skeleton, &raw, root);
             let retarget = Analytic::new(&skeleton, &skeleton).unwrap();
             let mut out = [Vec3::zeros(); MAX_JOINTS];
@@ -266,8 +266,8 @@ mod tests {
             onto in prop::sample::select(Format::BUILT_IN.to_vec()),
             raw in prop::collection::vec(prop::array::uniform4(-1.0f32..1.0), MAX_JOINTS),
         ) {
-            let source = from.default_skeleton().unwrap();
-            let target = onto.default_skeleton().unwrap();
+            let source = Skeleton::standard(from).unwrap();
+            let target = Skeleton::standard(onto).unwrap();
             let frame = pose(&source, &raw, [0.0, 1.0, 0.0]);
             let retarget = Analytic::new(&source, &target).unwrap();
             let mut out = [Vec3::zeros(); MAX_JOINTS];
@@ -286,8 +286,8 @@ mod tests {
             onto in prop::sample::select(Format::BUILT_IN.to_vec()),
             raw in prop::collection::vec(prop::array::uniform4(-1.0f32..1.0), MAX_JOINTS),
         ) {
-            let source = from.default_skeleton().unwrap();
-            let target = onto.default_skeleton().unwrap();
+            let source = Skeleton::standard(from).unwrap();
+            let target = Skeleton::standard(onto).unwrap();
             let frame = pose(&source, &raw, [0.0, 1.0, 0.0]);
             let retarget = Analytic::new(&source, &target).unwrap();
             let mut out = [Vec3::zeros(); MAX_JOINTS];
@@ -307,7 +307,7 @@ mod tests {
 
     #[test]
     fn root_trajectory_scales_with_leg_length() {
-        let coach = Format::H36m17.default_skeleton().unwrap();
+        let coach = Skeleton::standard(Format::H36m17).unwrap();
         let mut offsets = [Vec3::zeros(); 17];
         offsets[..17].copy_from_slice(coach.offsets());
         for o in &mut offsets {
@@ -328,8 +328,8 @@ mod tests {
     #[test]
     fn leg_ratio_compares_the_same_chain() {
         // Golf joint centres reach the toes, H36M only the ankles: compare pelvis-to-ankle.
-        let golf = Format::GolfMarkers.default_skeleton().unwrap();
-        let h36m = Format::H36m17.default_skeleton().unwrap();
+        let golf = Skeleton::standard(Format::GolfMarkers).unwrap();
+        let h36m = Skeleton::standard(Format::H36m17).unwrap();
         let retarget = Analytic::new(&golf, &h36m).unwrap();
         let ankle = |s: &Skeleton| s.chain_length(s.index_of(Joint::LeftAnkle).unwrap());
         assert!((retarget.scale() - ankle(&h36m) / ankle(&golf)).abs() < 1e-6);
@@ -341,7 +341,7 @@ mod tests {
 
     #[test]
     fn non_finite_input_is_an_error() {
-        let s = Format::Coco17.default_skeleton().unwrap();
+        let s = Skeleton::standard(Format::Coco17).unwrap();
         let retarget = Analytic::new(&s, &s).unwrap();
         let mut frame = [Vec3::zeros(); 15];
         frame[4].y = f32::NAN;

@@ -19,12 +19,13 @@
 //!   (the side it leans out to, past the hips), `up` = +Y; each swing in its own frame, so a pelvis that moves toward
 //!   the ball is reported as the pelvis moving.
 
-use crate::config::MAX_SWING_FRAMES;
+use crate::config::{DEVIATIONS_PER_EVENT, MAX_DEVIATIONS, MAX_SWING_FRAMES};
 use crate::dtw::{self, Band, DtwError, Sequence};
 use crate::events::{self, Event, EventError, Side, SwingEvents};
 use crate::joint::Joint;
 use crate::math::norm;
 use crate::skeleton::Skeleton;
+use crate::wire::{SwingReport, WireDeviation};
 use crate::Vec3;
 use heapless::Vec as HVec;
 
@@ -32,16 +33,12 @@ use heapless::Vec as HVec;
 pub const TEMPO_TOLERANCE: f32 = 0.15;
 /// Joint deviations at or below this (metres) are not reported.
 pub const SPATIAL_THRESHOLD_M: f32 = 0.05;
-/// Deviations reported per event, largest first.
-pub const DEVIATIONS_PER_EVENT: usize = 3;
 /// Height fraction of mean error at which the score is `100 / e`.
 pub const SCORE_SCALE: f32 = 0.1;
 /// Most advice items a report holds.
 pub const MAX_ADVICE: usize = 8;
 /// Longest warping path a report holds.
 pub const MAX_PATH: usize = 2 * MAX_SWING_FRAMES - 1;
-/// Most deviations a report holds (every event).
-pub const MAX_DEVIATIONS: usize = 8 * DEVIATIONS_PER_EVENT;
 
 /// A swing phase between two events.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -261,6 +258,35 @@ pub struct Report {
     pub spatial: HVec<Deviation, MAX_DEVIATIONS>,
     /// The most important advice first.
     pub advice: HVec<Advice, MAX_ADVICE>,
+}
+
+impl Report {
+    /// The wire form of swing number `swing`'s report: durations in milliseconds saturate at
+    /// 65.534 s, offsets at ±32.767 m, the score is rounded to hundredths.
+    pub fn to_wire(&self, swing: u32) -> SwingReport {
+        let frames = |events: &SwingEvents| {
+            Event::ALL.map(|e| events.frame(e).map_or(u16::MAX, |f| f as u16))
+        };
+        let ms = |s: f32| libm::roundf(s * 1000.0).clamp(0.0, f32::from(u16::MAX - 1)) as u16;
+        let mm = |m: f32| libm::roundf(m * 1000.0).clamp(-32767.0, 32767.0) as i16;
+        SwingReport {
+            swing,
+            score_centi: libm::roundf(self.score * 100.0).clamp(0.0, 10000.0) as u16,
+            student_events: frames(&self.student_events),
+            coach_events: frames(&self.coach_events),
+            phases_ms: self.tempo.map(|t| [ms(t.student_s), ms(t.coach_s)]),
+            deviations: self
+                .spatial
+                .iter()
+                .map(|d| WireDeviation {
+                    event: d.event as u8,
+                    joint: d.joint.index() as u8,
+                    direction: d.direction as u8,
+                    offset_mm: d.offset_m.map(mm),
+                })
+                .collect(),
+        }
+    }
 }
 
 /// Why a swing could not be scored.

@@ -9,7 +9,7 @@
 //! use posecoach_core::format::Format;
 //! use posecoach_core::skeleton::{Segment, Skeleton};
 //!
-//! let skeleton = Format::H36m17.default_skeleton().unwrap();
+//! let skeleton = Skeleton::standard(Format::H36m17).unwrap();
 //! assert_eq!(skeleton.len(), 17);
 //! assert!(skeleton.height() > 1.6 && skeleton.height() < 1.9);
 //! let pelvis = 0;
@@ -17,7 +17,7 @@
 //! ```
 
 use crate::config::MAX_JOINTS;
-use crate::format::Format;
+use crate::format::{t_pose, Format};
 use crate::joint::{Joint, JOINT_COUNT};
 use crate::math::norm;
 use crate::Vec3;
@@ -237,6 +237,36 @@ impl Skeleton {
         skeleton.segments = skeleton.cut_segments();
         skeleton.height = skeleton.measure_height();
         Ok(skeleton)
+    }
+
+    /// `format`'s skeleton in its standard 1.75 m T-pose (for canonical, the 22 body joints).
+    ///
+    /// # Errors
+    /// Only for [`Format::Custom`], which has no joint table.
+    pub fn standard(format: Format) -> Result<Skeleton, SkeletonError> {
+        let mut parents = [None; MAX_JOINTS];
+        let mut positions = [Vec3::zeros(); MAX_JOINTS];
+        let mut joints = [None; MAX_JOINTS];
+        let n = match format {
+            Format::Canonical => {
+                let body = Joint::ALL.iter().filter(|j| !j.is_club());
+                for (i, &j) in body.enumerate() {
+                    parents[i] = j.parent().map(Joint::index);
+                    positions[i] = t_pose(j);
+                    joints[i] = Some(j);
+                }
+                Joint::ALL.len() - 2
+            }
+            _ => {
+                for (i, j) in format.joints().iter().enumerate() {
+                    parents[i] = j.parent.map(usize::from);
+                    positions[i] = j.place.position();
+                    joints[i] = j.joint;
+                }
+                format.joints().len()
+            }
+        };
+        Skeleton::from_rest_positions(format, &parents[..n], &positions[..n], &joints[..n])
     }
 
     /// Builds a skeleton from rest (T-pose) joint positions instead of offsets.
@@ -527,7 +557,7 @@ mod tests {
     use super::*;
 
     fn h36m() -> Skeleton {
-        match Format::H36m17.default_skeleton() {
+        match Skeleton::standard(Format::H36m17) {
             Ok(s) => s,
             Err(e) => unreachable!("{e}"),
         }
@@ -571,7 +601,7 @@ mod tests {
             Pelvis, LeftHip, LeftAnkle, RightHip, RightAnkle, Thorax, HeadTop, LeftWrist,
             RightWrist,
         ];
-        let rest: std::vec::Vec<Vec3> = joints.iter().map(|&j| crate::format::t_pose(j)).collect();
+        let rest: std::vec::Vec<Vec3> = joints.iter().map(|&j| t_pose(j)).collect();
         let s = Skeleton::canonical(&joints, &rest).unwrap();
         assert_eq!(s.parent(2), Some(1));
         assert_eq!(s.parent(5), Some(0));

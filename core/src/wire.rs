@@ -29,10 +29,9 @@
 //! assert_eq!(decoder.counters().frames_ok, 1);
 //! ```
 
-use crate::events::{Event, SwingEvents};
+use crate::config::MAX_DEVIATIONS;
 use crate::format::Format;
 use crate::joint::Joint;
-use crate::score::{Report, MAX_DEVIATIONS};
 use heapless::Vec as HVec;
 use serde::{Deserialize, Serialize};
 
@@ -168,35 +167,6 @@ pub struct SwingReport {
     pub phases_ms: [[u16; 2]; 3],
     /// The deviations, largest per event first.
     pub deviations: HVec<WireDeviation, MAX_DEVIATIONS>,
-}
-
-impl SwingReport {
-    /// The wire form of swing number `swing`'s report: durations in milliseconds saturate at
-    /// 65.534 s, offsets at ±32.767 m, the score is rounded to hundredths.
-    pub fn new(swing: u32, report: &Report) -> SwingReport {
-        let frames = |events: &SwingEvents| {
-            Event::ALL.map(|e| events.frame(e).map_or(u16::MAX, |f| f as u16))
-        };
-        let ms = |s: f32| libm::roundf(s * 1000.0).clamp(0.0, f32::from(u16::MAX - 1)) as u16;
-        let mm = |m: f32| libm::roundf(m * 1000.0).clamp(-32767.0, 32767.0) as i16;
-        SwingReport {
-            swing,
-            score_centi: libm::roundf(report.score * 100.0).clamp(0.0, 10000.0) as u16,
-            student_events: frames(&report.student_events),
-            coach_events: frames(&report.coach_events),
-            phases_ms: report.tempo.map(|t| [ms(t.student_s), ms(t.coach_s)]),
-            deviations: report
-                .spatial
-                .iter()
-                .map(|d| WireDeviation {
-                    event: d.event as u8,
-                    joint: d.joint.index() as u8,
-                    direction: d.direction as u8,
-                    offset_mm: d.offset_m.map(mm),
-                })
-                .collect(),
-        }
-    }
 }
 
 /// Why a message was refused.

@@ -2,7 +2,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use posecoach_adapters::io::{bvh::Bvh, Motion};
+use posecoach_io::{bvh::Bvh, Motion};
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {

@@ -2,7 +2,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use posecoach_adapters::io::{c3d::C3d, golf, Motion};
+use posecoach_io::{c3d::C3d, golf, Motion};
 
 fuzz_target!(|data: &[u8]| {
     if let Ok(c3d) = C3d::parse(data) {

@@ -3,7 +3,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use posecoach_adapters::io::{csv, Motion};
+use posecoach_io::{csv, Motion};
 use posecoach_adapters::log::{header, LogReader};
 use posecoach_adapters::session::{BufferLens, Coach, OwnedBuffers, Session};
 use posecoach_core::config::MAX_JOINTS;

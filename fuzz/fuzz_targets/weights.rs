@@ -9,6 +9,7 @@ mod blob_input;
 use blob_input::{aligned, view, with_and_without_crc};
 use libfuzzer_sys::fuzz_target;
 use posecoach_core::format::Format;
+use posecoach_core::skeleton::Skeleton;
 use posecoach_core::network::{self, retarget};
 use posecoach_core::weights::{max_len, write, Dense, Table, Weights};
 use posecoach_core::Vec3;
@@ -46,8 +47,8 @@ fn check(data: &[u8]) {
     }
     // A short swing of a cross-format pair through every layer.
     let (source, target) = (
-        Format::Cmu31.default_skeleton().unwrap(),
-        Format::H36m17.default_skeleton().unwrap(),
+        Skeleton::standard(Format::Cmu31).unwrap(),
+        Skeleton::standard(Format::H36m17).unwrap(),
     );
     let mut rest = vec![Vec3::zeros(); source.len()];
     source.rest_positions(&mut rest);

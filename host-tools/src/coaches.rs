@@ -111,7 +111,7 @@ pub fn session<R>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use posecoach_adapters::io;
+    use posecoach_io as io;
     use std::path::Path;
 
     /// The blobs are what `posecoach reference` makes of the real swings in

@@ -1,9 +1,9 @@
 //! `posecoach inspect`: what a motion file or a weights blob holds.
 
 use anyhow::{Context, Result};
-use posecoach_adapters::io::{self, Motion};
 use posecoach_core::skeleton::Segment;
 use posecoach_core::weights::{self, Dense, Table, Weights};
+use posecoach_io::{self as io, Motion};
 use serde_json::{json, Value};
 use std::path::PathBuf;
 

@@ -9,9 +9,9 @@ use crate::inspect;
 use anyhow::{bail, Context, Result};
 use burn::prelude::Device;
 use indicatif::{ProgressBar, ProgressStyle};
-use posecoach_adapters::io;
 use posecoach_core::network;
 use posecoach_core::weights::{self, Training, Weights};
+use posecoach_io as io;
 use posecoach_train::dataset::Pool;
 use posecoach_train::infer::Retargeter;
 use posecoach_train::losses::Switches;
@@ -612,7 +612,9 @@ fn write_golden(
     let student = match student {
         Some(path) => io::load(path)?.skeleton,
         None => {
-            let standard = posecoach_core::format::Format::H36m17.default_skeleton()?;
+            let standard = posecoach_core::skeleton::Skeleton::standard(
+                posecoach_core::format::Format::H36m17,
+            )?;
             let scale = GOLDEN_HEIGHT_M / standard.height();
             let offsets: Vec<_> = standard.offsets().iter().map(|o| o * scale).collect();
             let parents: Vec<_> = (0..standard.len()).map(|k| standard.parent(k)).collect();

@@ -1,7 +1,9 @@
 //! The `posecoach` command-line tool's commands, as a library so that tests replay logs and
 //! score swings through exactly the code the tool runs.
 //!
-//! Each command module has clap `Args` and a `run` that returns the text to print.
+//! Each command module has clap `Args` and a `run` that returns the text to print. The `learn`
+//! feature adds the `learn` module's commands (train, distill, export, finetune, eval) and float
+//! teacher weights on `score` and `retarget` (through [`teacher`]).
 
 pub mod bench;
 pub mod bridge;
@@ -10,6 +12,7 @@ pub mod demo;
 pub mod device_sim;
 pub mod html;
 pub mod inspect;
+#[cfg(feature = "learn")]
 pub mod learn;
 pub mod reference;
 pub mod replay;
@@ -17,4 +20,5 @@ pub mod retarget;
 pub mod score;
 pub mod synth;
 pub mod synth_imu;
+pub mod teacher;
 pub mod tpose;

@@ -3,9 +3,10 @@
 //! Every command returns its output as text (a readable summary, or one JSON object with
 //! `--json`) and `main` prints it.
 
+#[cfg(feature = "learn")]
+use posecoach_cli::learn;
 use posecoach_cli::{
-    bench, bridge, demo, device_sim, inspect, learn, reference, replay, retarget, score, synth,
-    tpose,
+    bench, bridge, demo, device_sim, inspect, reference, replay, retarget, score, synth, tpose,
 };
 
 use clap::{Parser, Subcommand};
@@ -48,19 +49,25 @@ enum Command {
     /// Run the device's pipeline on the host, speaking the wire protocol over a serial port.
     DeviceSim(device_sim::Args),
     /// Train the learned retargeter (the teacher network) on motion data, unsupervised.
+    #[cfg(feature = "learn")]
     Train(learn::TrainArgs),
     /// Distill a trained teacher into a smaller network (for the device) on the teacher's outputs.
+    #[cfg(feature = "learn")]
     Distill(learn::DistillArgs),
     /// Quantize a distilled network to int8 and write the device's weights blob (.pcw).
+    #[cfg(feature = "learn")]
     Export(learn::ExportArgs),
     /// Fine-tune a trained teacher to one student's body.
+    #[cfg(feature = "learn")]
     Finetune(learn::FinetuneArgs),
     /// Evaluate retargeters on held-out characters and motions against the ground truth.
+    #[cfg(feature = "learn")]
     Eval(learn::EvalArgs),
 }
 
 // glibc's malloc makes training steps several times slower (page faults on every large
-// tensor); mimalloc keeps freed pages.
+// tensor); mimalloc keeps freed pages. Scoring does not need it.
+#[cfg(feature = "learn")]
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
@@ -78,10 +85,15 @@ fn main() -> ExitCode {
         Command::SynthLog(args) => synth::run(&args),
         Command::Bridge(args) => bridge::run(&args),
         Command::DeviceSim(args) => device_sim::run(&args),
+        #[cfg(feature = "learn")]
         Command::Train(args) => learn::train(&args),
+        #[cfg(feature = "learn")]
         Command::Distill(args) => learn::distill(&args),
+        #[cfg(feature = "learn")]
         Command::Export(args) => learn::export(&args),
+        #[cfg(feature = "learn")]
         Command::Finetune(args) => learn::finetune(&args),
+        #[cfg(feature = "learn")]
         Command::Eval(args) => learn::eval(&args),
     };
     match result {

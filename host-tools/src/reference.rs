@@ -1,7 +1,7 @@
 //! `posecoach reference`: a coach's swing stored as the device stores it (a `.pcr` blob).
 
 use anyhow::{bail, Context, Result};
-use posecoach_adapters::io;
+use posecoach_io as io;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]

@@ -1,8 +1,8 @@
 //! `posecoach retarget`: the coach's motion on the student's skeleton.
 
-use anyhow::{Context, Result};
-use posecoach_adapters::io;
-use posecoach_train::infer::Retargeter;
+use crate::teacher;
+use anyhow::Result;
+use posecoach_io as io;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -20,7 +20,8 @@ pub struct Args {
     /// Use the analytic retargeter (bone-direction copy): the default without `--weights`.
     #[arg(long, conflicts_with = "weights")]
     analytic: bool,
-    /// Use the learned retargeter in this teacher file or checkpoint (`posecoach train`).
+    /// Use the learned retargeter in this teacher file or checkpoint (`posecoach train`; needs
+    /// the `learn` feature).
     #[arg(long)]
     weights: Option<PathBuf>,
     /// Print one JSON object instead of text.
@@ -32,11 +33,10 @@ pub fn run(args: &Args) -> Result<String> {
     let coach = io::load(&args.coach)?;
     let student = io::load(&args.student_tpose)?;
     let (virtual_swing, method) = match &args.weights {
-        Some(path) => {
-            let teacher =
-                Retargeter::load(path).with_context(|| format!("loading {}", path.display()))?;
-            (teacher.retarget(&coach, &student.skeleton)?, "teacher")
-        }
+        Some(path) => (
+            teacher::retarget(path, &coach, &student.skeleton)?,
+            "teacher",
+        ),
         None => (
             coach
                 .retarget_analytic(&student)

@@ -1,11 +1,10 @@
 //! `posecoach score`: a student's swing against the coach's, retargeted onto the student.
 
-use crate::html;
+use crate::{html, teacher};
 use anyhow::{anyhow, bail, Context, Result};
-use posecoach_adapters::io::{self, Motion};
 use posecoach_core::events::SwingEvents;
 use posecoach_core::score::{self, Advice, Report};
-use posecoach_train::infer::Retargeter;
+use posecoach_io::{self as io, Motion};
 use serde_json::{json, Map, Value};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -25,7 +24,8 @@ pub struct Args {
     /// without `--weights`.
     #[arg(long, conflicts_with = "weights")]
     analytic: bool,
-    /// Retarget the coach with the learned retargeter in this teacher file or checkpoint.
+    /// Retarget the coach with the learned retargeter in this teacher file or checkpoint (needs
+    /// the `learn` feature).
     #[arg(long)]
     weights: Option<PathBuf>,
     /// DTW band radius in frames at the scoring rate.
@@ -66,9 +66,7 @@ pub fn run(args: &Args) -> Result<String> {
     };
     let student = on_body(&student, "student")?;
     let virtual_coach = match &args.weights {
-        Some(path) => Retargeter::load(path)
-            .with_context(|| format!("loading {}", path.display()))?
-            .retarget(&coach, &body.skeleton)?,
+        Some(path) => teacher::retarget(path, &coach, &body.skeleton)?,
         None => on_body(&coach, "coach")?,
     };
     let (student, virtual_coach) = (

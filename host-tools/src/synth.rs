@@ -13,13 +13,13 @@
 
 use crate::synth_imu::{self, ImuNoise};
 use anyhow::{bail, Context, Result};
-use posecoach_adapters::io::{self, csv, Motion};
 use posecoach_adapters::log;
 use posecoach_core::events::{self, SwingKind};
 use posecoach_core::format::{Format, Source};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{self, Config, Message, PoseFrame, StudentProfile, MAX_FRAME};
 use posecoach_core::Vec3;
+use posecoach_io::{self as io, csv, Motion};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};

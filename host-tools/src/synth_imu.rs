@@ -15,11 +15,11 @@
 //! would. Sample `k` of every sensor is stamped `k / rate` seconds, in layout order.
 
 use posecoach_adapters::fusion::G;
-use posecoach_adapters::io::Motion;
 use posecoach_core::joint::Joint;
 use posecoach_core::kinematics::{forward, inverse, swing};
 use posecoach_core::wire::{ImuSample, SensorLayout, SensorPlacement, MAX_SENSORS};
 use posecoach_core::{Quat, Vec3};
+use posecoach_io::Motion;
 use rand::Rng;
 use rand_distr::{Distribution, Normal, UnitSphere};
 use std::f32::consts::{PI, TAU};
@@ -328,8 +328,8 @@ pub fn default_layout(skeleton: &posecoach_core::skeleton::Skeleton) -> SensorLa
 mod tests {
     use super::*;
     use posecoach_adapters::imu::{ImuAdapter, CALIBRATION_S};
-    use posecoach_adapters::io;
     use posecoach_core::skeleton::Skeleton;
+    use posecoach_io as io;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
     use std::path::Path;

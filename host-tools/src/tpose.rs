@@ -1,9 +1,9 @@
 //! `posecoach tpose`: a format's standard T-pose scaled to a height, as a student file.
 
 use anyhow::{bail, Result};
-use posecoach_adapters::io::{self, Motion};
 use posecoach_core::format::Format;
 use posecoach_core::skeleton::Skeleton;
+use posecoach_io::{self as io, Motion};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -29,7 +29,7 @@ pub fn run(args: &Args) -> Result<String> {
     if !(0.5..=2.5).contains(&args.height) {
         bail!("height {} m is outside 0.5..2.5 m", args.height);
     }
-    let standard = format.default_skeleton()?;
+    let standard = Skeleton::standard(format)?;
     let scale = args.height / standard.height();
     let mut positions = vec![posecoach_core::Vec3::zeros(); standard.len()];
     standard.rest_positions(&mut positions);

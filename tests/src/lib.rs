@@ -79,7 +79,7 @@ impl Warp {
     }
 
     /// `motion` played on the warped timeline, linearly interpolated between frames.
-    pub fn apply(&self, motion: &posecoach_adapters::io::Motion) -> posecoach_adapters::io::Motion {
+    pub fn apply(&self, motion: &posecoach_io::Motion) -> posecoach_io::Motion {
         let last = motion.frames() - 1;
         let frames = self.forward(last as f32).floor() as usize + 1;
         let positions = (0..frames)
@@ -93,7 +93,7 @@ impl Warp {
                     .collect::<Vec<_>>()
             })
             .collect();
-        posecoach_adapters::io::Motion {
+        posecoach_io::Motion {
             positions,
             missing: vec![false; frames * motion.skeleton.len()],
             ..motion.clone()
@@ -107,12 +107,12 @@ impl Warp {
 /// Returns the motion and its events by construction: address, top, impact (the pose of
 /// address again) and finish, in frames.
 pub fn synthetic_putt(
-    golfer: &posecoach_adapters::io::Motion,
+    golfer: &posecoach_io::Motion,
     back_deg: f32,
     back_s: f32,
     through_deg: f32,
     through_s: f32,
-) -> (posecoach_adapters::io::Motion, [f32; 4]) {
+) -> (posecoach_io::Motion, [f32; 4]) {
     use posecoach_core::joint::Joint;
     use posecoach_core::{Quat, Vec3};
     const RATE_HZ: f32 = 60.0;
@@ -182,7 +182,7 @@ pub fn synthetic_putt(
         impact,
         still as f32 + back + through,
     ];
-    let motion = posecoach_adapters::io::Motion {
+    let motion = posecoach_io::Motion {
         rate_hz: RATE_HZ,
         missing: vec![false; positions.len()],
         positions,

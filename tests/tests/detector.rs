@@ -2,10 +2,10 @@
 //! waggle, the real driver swing, a practice half swing and the real iron swing, joined by
 //! eased blends and still holds at 60 Hz. Exactly the two real swings must come out.
 
-use posecoach_adapters::io::{self, Motion};
 use posecoach_core::detector::{DetectorConfig, SwingDetector};
 use posecoach_core::events::{detect, SwingKind};
 use posecoach_core::Vec3;
+use posecoach_io::{self as io, Motion};
 use posecoach_tests::fixture;
 
 const RATE_HZ: f32 = 60.0;

@@ -6,8 +6,8 @@
 //! arm horizontal; top = club and hands reverse; impact = club head back at the ball;
 //! mid-follow-through = shaft horizontal after impact; finish = hands highest after impact.
 
-use posecoach_adapters::io;
 use posecoach_core::events::{detect, Event, Side};
+use posecoach_io as io;
 use posecoach_tests::{fixture, Warp};
 
 /// Allowed distance from a hand label, in frames at 60 Hz.

@@ -1,9 +1,9 @@
 //! Regenerates the derived fixtures in `tests/fixtures` from `../shared/data`:
 //! `cargo test -p posecoach-tests --test fixtures -- --ignored`. Their provenance is this code.
 
-use posecoach_adapters::io::bvh::Bvh;
-use posecoach_adapters::io::c3d::{C3d, Storage};
-use posecoach_adapters::io::{csv, golf, Motion};
+use posecoach_io::bvh::Bvh;
+use posecoach_io::c3d::{C3d, Storage};
+use posecoach_io::{csv, golf, Motion};
 use posecoach_tests::{fixture, shared_data};
 
 /// The first `frames` frames of a BVH clip, every `step`-th frame, with the same hierarchy.

@@ -1,8 +1,8 @@
 //! Every real file in `../shared/data` and every committed fixture imports with a plausible
 //! height.
 
-use posecoach_adapters::io;
-use posecoach_adapters::io::c3d::C3d;
+use posecoach_io as io;
+use posecoach_io::c3d::C3d;
 use posecoach_tests::{files, fixture, shared_data};
 use std::path::Path;
 

@@ -1,12 +1,15 @@
 //! The int8 retargeter: the committed weights against their golden vectors, and `export`,
 //! `inspect` and `eval` on them through the command line.
 
-use posecoach_adapters::io;
-use posecoach_cli::{inspect, learn};
 use posecoach_core::network;
 use posecoach_core::weights::Weights;
-use posecoach_tests::parse;
+use posecoach_io as io;
 use std::path::PathBuf;
+#[cfg(feature = "learn")]
+use {
+    posecoach_cli::{inspect, learn},
+    posecoach_tests::parse,
+};
 
 fn repo(path: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -53,6 +56,8 @@ fn committed_weights_reproduce_their_golden_vectors_bit_for_bit() {
     }
 }
 
+/// Needs the `learn` feature (export and eval).
+#[cfg(feature = "learn")]
 #[test]
 fn export_writes_weights_that_inspect_reads_and_eval_ranks() {
     let Some(data) = posecoach_tests::shared_data("export_writes_weights") else {

@@ -1,10 +1,11 @@
 //! The learned retargeter through the command line: `retarget`, `score` and `eval` with
 //! `--weights`, on the committed teacher or a tiny untrained one written the way
-//! `posecoach train --teacher` does.
+//! `posecoach train --teacher` does. Runs with the `learn` feature.
+#![cfg(feature = "learn")]
 
 use burn::prelude::Device;
-use posecoach_adapters::io;
 use posecoach_cli::{learn, retarget, score};
+use posecoach_io as io;
 use posecoach_tests::parse;
 use posecoach_train::model::TeacherConfig;
 use posecoach_train::train::{TrainConfig, Trainer};

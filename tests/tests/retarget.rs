@@ -1,6 +1,6 @@
 //! Cross-format analytic retargeting, written as BVH and CSV and read back.
 
-use posecoach_adapters::io::{self, Motion};
+use posecoach_io::{self as io, Motion};
 use posecoach_tests::{fixture, shared_data};
 use std::path::Path;
 

@@ -4,11 +4,11 @@
 //! tour swing at 60 Hz) by a transformation in this file: a phase time-warped 20-40 %, or one
 //! joint moved 8-15 cm around one event along an axis of the golfer's stance frame.
 
-use posecoach_adapters::io::{self, Motion};
 use posecoach_core::events::Event;
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{score, scratch_len, Advice, Direction, Phase, Report, Verdict};
 use posecoach_core::Vec3;
+use posecoach_io::{self as io, Motion};
 use posecoach_tests::{fixture, Warp};
 
 /// Band radius in frames at 60 Hz.

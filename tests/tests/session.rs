@@ -1,11 +1,12 @@
 //! The session's refusals: each bad message is refused with its reason and leaves the session
 //! as it was.
 
-use posecoach_adapters::io;
 use posecoach_adapters::session::{BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session};
 use posecoach_core::format::Format;
+use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{Config, Message, PoseFrame, StudentProfile};
 use posecoach_core::Vec3;
+use posecoach_io as io;
 use posecoach_tests::fixture;
 
 fn outcomes(session: &mut Session<'_>, message: &Message) -> Vec<Refusal> {
@@ -19,7 +20,7 @@ fn outcomes(session: &mut Session<'_>, message: &Message) -> Vec<Refusal> {
 }
 
 fn profile(height: f32) -> Message {
-    let skeleton = Format::H36m17.default_skeleton().unwrap();
+    let skeleton = Skeleton::standard(Format::H36m17).unwrap();
     let mut rest = vec![Vec3::zeros(); skeleton.len()];
     skeleton.rest_positions(&mut rest);
     let scale = height / skeleton.height();
@@ -145,7 +146,7 @@ fn a_stream_in_another_format_is_mapped_onto_the_profile() {
     let coach = io::load(&fixture("golf_driver_60hz.csv")).unwrap();
     let student = io::load(&fixture("h36m17_tpose.csv")).unwrap();
     let on_h36m = coach.retarget_analytic(&student).unwrap();
-    let h36m = Format::H36m17.default_skeleton().unwrap();
+    let h36m = Skeleton::standard(Format::H36m17).unwrap();
     let h36m = io::Motion {
         skeleton: h36m.clone(),
         names: vec![String::new(); h36m.len()],
@@ -159,7 +160,7 @@ fn a_stream_in_another_format_is_mapped_onto_the_profile() {
         },
     };
     let on_h36m = on_h36m.retarget_analytic(&h36m).unwrap();
-    let cmu = Format::Cmu31.default_skeleton().unwrap();
+    let cmu = Skeleton::standard(Format::Cmu31).unwrap();
     let cmu = io::Motion {
         skeleton: cmu.clone(),
         names: vec![String::new(); cmu.len()],

@@ -27,7 +27,6 @@
 
 use crate::bodies::Character;
 use crate::error::Error;
-use posecoach_adapters::io::Motion;
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::format::{t_pose, Format};
 use posecoach_core::joint::Joint;
@@ -35,6 +34,7 @@ use posecoach_core::kinematics::{self, inverse, LengthError};
 use posecoach_core::retarget::RetargetError;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::{Quat, Vec3};
+use posecoach_io::Motion;
 
 /// A motion as rotations on its source skeleton.
 #[derive(Clone, Debug, PartialEq)]
@@ -441,7 +441,7 @@ mod tests {
             let clip = Clip::from_motion("wave", &rested).unwrap();
             let gap = largest_gap(&source, &clip.on_skeleton(&rested.skeleton).unwrap());
             assert!(gap <= SAME_M, "{format}: {gap} m");
-            let standard = format.default_skeleton().unwrap();
+            let standard = Skeleton::standard(format).unwrap();
             let mut a = vec![Vec3::zeros(); standard.len()];
             let mut b = a.clone();
             standard.rest_positions(&mut a);

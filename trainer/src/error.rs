@@ -1,11 +1,11 @@
 //! The one error type of the training data pipeline, wrapping the core's and the adapters'.
 
 use crate::golfgen::GenError;
-use posecoach_adapters::io::FileError;
 use posecoach_core::events::EventError;
 use posecoach_core::kinematics::LengthError;
 use posecoach_core::retarget::RetargetError;
 use posecoach_core::skeleton::SkeletonError;
+use posecoach_io::FileError;
 use std::fmt;
 
 /// Why a character, clip, pair or metric could not be made.

@@ -29,10 +29,10 @@
 use crate::error::Error;
 use crate::prior::Prior;
 use burn::prelude::{Bool, Device, Tensor, TensorData};
-use posecoach_adapters::io::Motion;
 use posecoach_core::joint::{Joint, JOINT_COUNT};
 use posecoach_core::skeleton::{EndEffector, Segment, Skeleton, SkeletonError};
 use posecoach_core::Vec3;
+use posecoach_io::Motion;
 
 /// Frames in a window.
 pub const WINDOW: usize = 64;

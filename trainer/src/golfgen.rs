@@ -36,12 +36,12 @@
 //! assert_eq!(swing.motion.rate_hz, 60.0);
 //! ```
 
-use posecoach_adapters::io::Motion;
 use posecoach_core::events::{Side, SwingKind};
 use posecoach_core::joint::Joint;
 use posecoach_core::kinematics::{forward, swing, LengthError};
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
 use posecoach_core::{Quat, Vec3};
+use posecoach_io::Motion;
 use rand::Rng;
 use rand_distr::{Distribution, Normal};
 use std::f32::consts::PI;

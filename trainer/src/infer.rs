@@ -21,11 +21,11 @@ use crate::model::{Teacher, TeacherConfig};
 use crate::prior::PriorKind;
 use crate::train::{load_teacher, TrainConfig};
 use burn::prelude::Device;
-use posecoach_adapters::io::Motion;
 use posecoach_core::network;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::weights::{self, Weights};
 use posecoach_core::Vec3;
+use posecoach_io::Motion;
 use std::path::Path;
 
 /// Most interleaved streams a motion is split into (a 240 Hz capture: 8).

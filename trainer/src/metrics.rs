@@ -17,11 +17,11 @@ use crate::clip::{motion, standard_rest, Clip};
 use crate::dataset::{pair_on, Pair, Pool, Split, SplitRng, Structure};
 use crate::error::Error;
 use crate::infer::Retargeter;
-use posecoach_adapters::io::Motion;
 use posecoach_core::events;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
+use posecoach_io::Motion;
 
 /// A foot counts as planted within this height above its lowest point (metres)...
 pub const CONTACT_HEIGHT_M: f32 = 0.03;

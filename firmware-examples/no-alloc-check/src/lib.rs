@@ -7,6 +7,7 @@
 use posecoach_adapters::log::LogReader;
 use posecoach_adapters::session::{Buffers, Session};
 use posecoach_core::format::Format;
+use posecoach_core::skeleton::Skeleton;
 use posecoach_core::retarget::Analytic;
 use posecoach_core::Vec3;
 
@@ -15,8 +16,8 @@ use posecoach_core::Vec3;
 #[no_mangle]
 pub extern "C" fn posecoach_no_alloc_check() -> i32 {
     let (Ok(source), Ok(target)) = (
-        Format::Cmu31.default_skeleton(),
-        Format::H36m17.default_skeleton(),
+        Skeleton::standard(Format::Cmu31),
+        Skeleton::standard(Format::H36m17),
     ) else {
         return -1;
     };

@@ -12,7 +12,7 @@
 use posecoach_core::Vec3;
 use std::fmt;
 
-use super::c3d::{max_gap_frames, C3d, Frame};
+use crate::c3d::{max_gap_frames, C3d, Frame};
 
 /// Canonical joint names produced, in output order, and how each is estimated:
 /// - pelvis: mean of the four waist markers; hips: Bell/Davis-style regression from the waist
@@ -123,7 +123,7 @@ fn marker(name: &str) -> usize {
 /// Joint centres ([`GOLF_JOINTS`]) from the markers.
 ///
 /// The [`GOLF_MARKERS`] are gap-filled first ([`C3d::fill_gaps`] over at most
-/// [`MAX_GAP_S`](super::c3d::MAX_GAP_S));
+/// [`MAX_GAP_S`](crate::c3d::MAX_GAP_S));
 /// the shoulder-top markers are then rigid-filled ([`C3d::fill_rigid`]) from ShoulderBack,
 /// BackLeft/BackRight and UArmHigh of the same side (RShoulderTop is missing in 80–86 % of the
 /// frames, LShoulderTop in frames 0–109 of the iron trial). A joint is invalid in a frame when
@@ -258,7 +258,7 @@ fn hip_centres([left, right, lback, rback]: [Vec3; 4]) -> Option<[Vec3; 2]> {
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
     use super::*;
-    use crate::io::c3d::tests::data_dir;
+    use crate::c3d::tests::data_dir;
 
     const TOLERANCE: f32 = 1e-6;
     const FRAMES: usize = 3;

@@ -1,8 +1,8 @@
 //! A recorded motion on the host: a skeleton, joint names and frames of positions, and its
 //! conversion from and to BVH.
 
-use super::bvh::{Bvh, Channel};
-use super::golf::{JointCentres, GOLF_JOINTS};
+use crate::bvh::{Bvh, Channel};
+use crate::golf::{JointCentres, GOLF_JOINTS};
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::reference::{self, Reference, ReferenceError};
@@ -257,7 +257,7 @@ impl Motion {
         let n = GOLF_JOINTS.len();
         let mut positions = centres.positions.clone();
         let missing: Vec<bool> = centres.valid.iter().map(|&v| !v).collect();
-        let template = Format::GolfMarkers.default_skeleton()?;
+        let template = Skeleton::standard(Format::GolfMarkers)?;
         let skeleton = measured_skeleton(&template, &positions, &missing)?;
         hold_missing(n, &mut positions, &missing);
         Ok(Motion {
@@ -413,7 +413,7 @@ mod tests {
 
     #[test]
     fn resampling_interpolates_in_time() {
-        let skeleton = Format::Canonical.default_skeleton().unwrap();
+        let skeleton = Skeleton::standard(Format::Canonical).unwrap();
         let n = skeleton.len();
         let positions: Vec<Vec3> = (0..3 * n)
             .map(|i| Vec3::new((i / n) as f32, 0.0, 0.0))

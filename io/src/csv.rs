@@ -6,7 +6,7 @@
 //! T-pose: the skeleton is that pose. With more rows the skeleton takes its bone directions
 //! from the standard T-pose and its bone lengths from the mean over the frames.
 
-use super::motion::{hold_missing, measured_skeleton, Motion};
+use crate::motion::{hold_missing, measured_skeleton, Motion};
 use posecoach_core::format::t_pose;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
