@@ -398,7 +398,7 @@ fn a_port_pulled_mid_swing_loses_and_repeats_nothing() {
 
 #[test]
 fn the_readme_examples_are_messages() {
-    let readme = include_str!("../../README.md");
+    let readme = include_str!("../../docs/PROTOCOL.md");
     let section = &readme[readme.find("## Serial bridge").unwrap()..];
     let block = section.split("```json\n").nth(1).unwrap();
     let block = &block[..block.find("```").unwrap()];
