@@ -31,6 +31,7 @@
 //! use posecoach_adapters::imu::ImuAdapter;
 //! use posecoach_core::format::Format;
 //! use posecoach_core::joint::Joint;
+//! use posecoach_core::skeleton::Skeleton;
 //! use posecoach_core::wire::{ImuSample, SensorLayout, SensorPlacement};
 //!
 //! let skeleton = Skeleton::standard(Format::H36m17).unwrap();

@@ -11,6 +11,7 @@
 //! ```
 //! use posecoach_core::detector::{DetectorConfig, SwingDetector};
 //! use posecoach_core::format::Format;
+//! use posecoach_core::skeleton::Skeleton;
 //! use posecoach_core::Vec3;
 //!
 //! let skeleton = Skeleton::standard(Format::H36m17).unwrap();

@@ -10,25 +10,25 @@
 //! the origin). The accumulated distance is classic DTW: `D(i, j) = cost(i, j) +
 //! min(D(i-1, j-1), D(i-1, j), D(i, j-1))`, ties going diagonal, then `a` advancing, then `b`.
 //!
-//! The [`Band`] is a Sakoe-Chiba window of `radius` columns around a guide line through
-//! anchor cells: with no anchors the guide is the diagonal from `(0, 0)` to `(n-1, m-1)`;
+//! The [`Band`] is laid over a pair of sequences as a [`Window`]: `radius` columns around a
+//! guide line through anchor cells: with no anchors the guide is the diagonal from `(0, 0)` to `(n-1, m-1)`;
 //! with matched swing events as anchors each phase is banded around its own diagonal. Only
 //! banded cells are computed: two rows of accumulated cost and 2 bits per banded cell for the
 //! path, all in caller-provided scratch (see [`scratch_len`]). When the band covers the whole
 //! matrix the result equals full DTW exactly.
 //!
 //! ```
-//! use posecoach_core::dtw::{align, scratch_len, Band, Sequence};
+//! use posecoach_core::dtw::{align, scratch_len, Band, Sequence, Window};
 //!
 //! // One joint moving along x (channels x, y, z); `b` lingers on its second frame.
 //! let a = [0.0, 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
 //! let b = [0.0, 1.0, 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
 //! let (a, b) = (Sequence::new(&a, 1).unwrap(), Sequence::new(&b, 1).unwrap());
-//! let band = Band::global(1);
-//! let len = scratch_len(a.frames(), b.frames(), &band).unwrap();
+//! let window = Window::new(Band::global(1), &[]).unwrap();
+//! let len = scratch_len(a.frames(), b.frames(), &window).unwrap();
 //! let (mut cost, mut steps) = (vec![0.0; len.cost], vec![0u8; len.path_bytes]);
 //! let mut path = [(0u16, 0u16); 7];
-//! let result = align(&a, &b, &[], &band, &mut cost, &mut steps, &mut path).unwrap();
+//! let result = align(&a, &b, &[], &window, &mut cost, &mut steps, &mut path).unwrap();
 //! assert_eq!(result.distance, 0.0);
 //! assert_eq!(&path[..result.path_len], &[(0, 0), (1, 1), (1, 2), (2, 3)]);
 //! ```
@@ -196,33 +196,66 @@ fn check_shape(len: usize, per_frame: usize, joints: usize) -> Result<(), DtwErr
     Ok(())
 }
 
-/// A Sakoe-Chiba band around a guide line through anchor cells.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The DTW band: `radius` columns either side of a guide line that runs through the matched
+/// swing events, one diagonal per phase (`anchored`), or along the whole diagonal. One setting
+/// from `posecoach score --band R [--global-band]` and the wire's `Config` to [`Window::new`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Band {
+    /// Columns (frames of the second sequence) either side of the guide.
+    pub radius: u16,
+    /// The guide runs through anchors (swing events) rather than along the diagonal.
+    pub anchored: bool,
+}
+
+impl Band {
+    /// The default: 10 frames either side of the event-anchored guide (±0.17 s at 60 Hz).
+    pub const DEFAULT: Band = Band {
+        radius: 10,
+        anchored: true,
+    };
+
+    /// A band of `radius` columns around the diagonal.
+    pub const fn global(radius: u16) -> Band {
+        Band {
+            radius,
+            anchored: false,
+        }
+    }
+}
+
+impl Default for Band {
+    fn default() -> Band {
+        Band::DEFAULT
+    }
+}
+
+/// A [`Band`] laid over one pair of sequences: a Sakoe-Chiba window around the guide through
+/// its anchor cells.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Window {
     radius: u16,
     anchors: [(u16, u16); MAX_ANCHORS],
     anchor_count: u8,
 }
 
-impl Band {
-    /// A band of `radius` columns around the diagonal from `(0, 0)` to `(n-1, m-1)`.
-    pub const fn global(radius: u16) -> Band {
-        Band {
-            radius,
-            anchors: [(0, 0); MAX_ANCHORS],
-            anchor_count: 0,
-        }
-    }
-
-    /// A band of `radius` columns around the piecewise-linear guide through `anchors`
-    /// (matched frames `(i in a, j in b)`, e.g. swing events), each segment its own diagonal.
+impl Window {
+    /// `band` around the piecewise-linear guide through `anchors` (matched frames `(i in a, j
+    /// in b)`, e.g. swing events), each segment its own diagonal; a global band ignores them.
     ///
     /// # Errors
-    /// [`DtwError::Anchors`] for more than [`MAX_ANCHORS`] anchors or anchors that do not
-    /// increase strictly in both coordinates. [`align`] also requires them strictly inside the
-    /// matrix: `0 < i < n-1` and `0 < j < m-1`.
-    pub fn anchored(radius: u16, anchors: &[(u16, u16)]) -> Result<Band, DtwError> {
-        let mut band = Band::global(radius);
+    /// [`DtwError::Anchors`] for an anchored band with more than [`MAX_ANCHORS`] anchors or
+    /// anchors that do not increase strictly in both coordinates. [`align`] also requires them
+    /// strictly inside the matrix: `0 < i < n-1` and `0 < j < m-1`.
+    pub fn new(band: Band, anchors: &[(u16, u16)]) -> Result<Window, DtwError> {
+        let mut window = Window {
+            radius: band.radius,
+            anchors: [(0, 0); MAX_ANCHORS],
+            anchor_count: 0,
+        };
+        if !band.anchored {
+            return Ok(window);
+        }
         if anchors.len() > MAX_ANCHORS
             || anchors
                 .windows(2)
@@ -230,12 +263,12 @@ impl Band {
         {
             return Err(DtwError::Anchors);
         }
-        band.anchors[..anchors.len()].copy_from_slice(anchors);
-        band.anchor_count = anchors.len() as u8;
-        Ok(band)
+        window.anchors[..anchors.len()].copy_from_slice(anchors);
+        window.anchor_count = anchors.len() as u8;
+        Ok(window)
     }
 
-    /// The anchors given to [`Band::anchored`].
+    /// The anchors the window's guide runs through.
     pub fn anchors(&self) -> &[(u16, u16)] {
         &self.anchors[..self.anchor_count as usize]
     }
@@ -345,21 +378,21 @@ pub struct ScratchLen {
     pub cells: usize,
 }
 
-/// Scratch needed to align `n` frames with `m` frames in `band`.
+/// Scratch needed to align `n` frames with `m` frames in `window`.
 ///
 /// # Errors
 /// [`DtwError::SequenceShape`] for an empty sequence, [`DtwError::Anchors`] for anchors
 /// outside the matrix.
-pub fn scratch_len(n: usize, m: usize, band: &Band) -> Result<ScratchLen, DtwError> {
-    Ok(layout(n, m, band)?.0)
+pub fn scratch_len(n: usize, m: usize, window: &Window) -> Result<ScratchLen, DtwError> {
+    Ok(layout(n, m, window)?.0)
 }
 
 /// [`scratch_len`] and the width of an accumulated-cost row in the cost scratch.
-fn layout(n: usize, m: usize, band: &Band) -> Result<(ScratchLen, usize), DtwError> {
+fn layout(n: usize, m: usize, window: &Window) -> Result<(ScratchLen, usize), DtwError> {
     if n == 0 || m == 0 {
         return Err(DtwError::SequenceShape);
     }
-    let guide = band.guide(n, m).ok_or(DtwError::Anchors)?;
+    let guide = window.guide(n, m).ok_or(DtwError::Anchors)?;
     // Accumulated-cost rows must reach from one column before the previous row's start to
     // one column after this row's end.
     let (mut cells, mut span, mut prev_lo) = (0, 0, 0);
@@ -396,7 +429,7 @@ const DIAGONAL: u8 = 0;
 const ADVANCE_A: u8 = 1;
 const ADVANCE_B: u8 = 2;
 
-/// Aligns `a` to `b` within `band` and writes the warping path, `(frame of a, frame of b)`
+/// Aligns `a` to `b` within `window` and writes the warping path, `(frame of a, frame of b)`
 /// from `(0, 0)` to the last frames, into `path` (which needs `a.frames() + b.frames() - 1`
 /// entries at most).
 ///
@@ -408,7 +441,7 @@ pub fn align(
     a: &Sequence<'_>,
     b: &Sequence<'_>,
     weights: &[f32],
-    band: &Band,
+    window: &Window,
     cost: &mut [f32],
     steps: &mut [u8],
     path: &mut [(u16, u16)],
@@ -432,8 +465,8 @@ pub fn align(
         return Err(DtwError::Weights);
     }
     let (n, m) = (a.frames(), b.frames());
-    let guide = band.guide(n, m).ok_or(DtwError::Anchors)?;
-    let (len, width) = layout(n, m, band)?;
+    let guide = window.guide(n, m).ok_or(DtwError::Anchors)?;
+    let (len, width) = layout(n, m, window)?;
     let short = |which: u8, needed: usize| DtwError::Scratch { which, needed };
     if cost.len() < len.cost {
         return Err(short(0, len.cost));
@@ -798,13 +831,13 @@ mod tests {
         a: &Sequence<'_>,
         b: &Sequence<'_>,
         weights: &[f32],
-        band: &Band,
+        window: &Window,
     ) -> (Alignment, Vec<(u16, u16)>) {
-        let len = scratch_len(a.frames(), b.frames(), band).unwrap();
+        let len = scratch_len(a.frames(), b.frames(), window).unwrap();
         let mut cost = vec![0.0; len.cost];
         let mut steps = vec![0u8; len.path_bytes];
         let mut path = vec![(0, 0); a.frames() + b.frames() - 1];
-        let r = align(a, b, weights, band, &mut cost, &mut steps, &mut path).unwrap();
+        let r = align(a, b, weights, window, &mut cost, &mut steps, &mut path).unwrap();
         path.truncate(r.path_len);
         (r, path)
     }
@@ -845,9 +878,9 @@ mod tests {
             let (fa, fb) = (frames(&a), frames(&b));
             let (ca, cb) = (channels(&fa, joints), channels(&fb, joints));
             let weights: &[f32] = if weighted && w.iter().sum::<f32>() > 0.0 { &w } else { &[] };
-            let band = Band::global(radius);
-            let rooted = run(&Sequence::rooted(&fa, joints).unwrap(), &Sequence::rooted(&fb, joints).unwrap(), weights, &band);
-            let copied = run(&Sequence::new(&ca, joints).unwrap(), &Sequence::new(&cb, joints).unwrap(), weights, &band);
+            let window = Window::new(Band::global(radius), &[]).unwrap();
+            let rooted = run(&Sequence::rooted(&fa, joints).unwrap(), &Sequence::rooted(&fb, joints).unwrap(), weights, &window);
+            let copied = run(&Sequence::new(&ca, joints).unwrap(), &Sequence::new(&cb, joints).unwrap(), weights, &window);
             prop_assert_eq!(rooted.0.distance.to_bits(), copied.0.distance.to_bits());
             prop_assert_eq!(rooted.1, copied.1);
         }
@@ -857,7 +890,7 @@ mod tests {
             let (a, b) = (Sequence::new(&a, joints).unwrap(), Sequence::new(&b, joints).unwrap());
             let weights: &[f32] = if weighted && w.iter().sum::<f32>() > 0.0 { &w } else { &[] };
             let (expected, expected_path) = naive(&a, &b, weights);
-            let (got, path) = run(&a, &b, weights, &Band::global(u16::MAX));
+            let (got, path) = run(&a, &b, weights, &Window::new(Band::global(u16::MAX), &[]).unwrap());
             prop_assert_eq!(got.distance, expected);
             prop_assert_eq!(path, expected_path);
         }
@@ -879,8 +912,8 @@ mod tests {
                     anchors.push((i, j));
                 }
             }
-            let band = Band::anchored(radius, &anchors).unwrap();
-            let guide = band.guide(n, m).unwrap();
+            let window = Window::new(Band { radius, anchored: true }, &anchors).unwrap();
+            let guide = window.guide(n, m).unwrap();
             let mut previous = (0, 0);
             for i in 0..n {
                 let (lo, hi) = guide.row(i);
@@ -894,7 +927,7 @@ mod tests {
                 let (lo, hi) = guide.row(i as usize);
                 prop_assert!(lo <= j as usize && j as usize <= hi, "anchor outside the band");
             }
-            let (banded, path) = run(&a, &b, &[], &band);
+            let (banded, path) = run(&a, &b, &[], &window);
             prop_assert_eq!(path[0], (0, 0));
             prop_assert_eq!(*path.last().unwrap(), ((n - 1) as u16, (m - 1) as u16));
             for w in path.windows(2) {
@@ -925,7 +958,12 @@ mod tests {
         );
         for weights in [&[][..], &[0.5, 2.0]] {
             let (expected, expected_path) = naive(&a, &b, weights);
-            let (got, path) = run(&a, &b, weights, &Band::global(u16::MAX));
+            let (got, path) = run(
+                &a,
+                &b,
+                weights,
+                &Window::new(Band::global(u16::MAX), &[]).unwrap(),
+            );
             assert_eq!(got.distance, expected);
             assert_eq!(path, expected_path);
         }
@@ -940,7 +978,7 @@ mod tests {
         );
         assert_eq!(Sequence::new(&a, 0).err(), Some(DtwError::SequenceShape));
         let (s1, s2) = (Sequence::new(&a, 1).unwrap(), Sequence::new(&a, 2).unwrap());
-        let band = Band::global(2);
+        let window = Window::new(Band::global(2), &[]).unwrap();
         let mut path = [(0, 0); 8];
         let positions = [Vec3::zeros(); 2];
         let rooted = Sequence::rooted(&positions, 1).unwrap();
@@ -949,7 +987,7 @@ mod tests {
                 &s1,
                 &rooted,
                 &[],
-                &band,
+                &window,
                 &mut [0.0; 8],
                 &mut [0; 8],
                 &mut path
@@ -961,7 +999,15 @@ mod tests {
             Some(DtwError::SequenceShape)
         );
         assert_eq!(
-            align(&s1, &s2, &[], &band, &mut [0.0; 8], &mut [0; 8], &mut path),
+            align(
+                &s1,
+                &s2,
+                &[],
+                &window,
+                &mut [0.0; 8],
+                &mut [0; 8],
+                &mut path
+            ),
             Err(DtwError::JointMismatch { a: 1, b: 2 })
         );
         assert_eq!(
@@ -969,23 +1015,45 @@ mod tests {
                 &s1,
                 &s1,
                 &[1.0, 1.0],
-                &band,
+                &window,
                 &mut [0.0; 8],
                 &mut [0; 8],
                 &mut path
             ),
             Err(DtwError::Weights)
         );
-        let needed = scratch_len(2, 2, &band).unwrap().cost;
+        let needed = scratch_len(2, 2, &window).unwrap().cost;
         assert_eq!(
-            align(&s1, &s1, &[], &band, &mut [0.0; 1], &mut [0; 8], &mut path),
+            align(
+                &s1,
+                &s1,
+                &[],
+                &window,
+                &mut [0.0; 1],
+                &mut [0; 8],
+                &mut path
+            ),
             Err(DtwError::Scratch { which: 0, needed })
         );
         assert_eq!(
-            Band::anchored(1, &[(3, 3), (2, 4)]).err(),
+            Window::new(
+                Band {
+                    radius: 1,
+                    anchored: true
+                },
+                &[(3, 3), (2, 4)]
+            )
+            .err(),
             Some(DtwError::Anchors)
         );
-        let edge = Band::anchored(1, &[(0, 1)]).unwrap();
+        let edge = Window::new(
+            Band {
+                radius: 1,
+                anchored: true,
+            },
+            &[(0, 1)],
+        )
+        .unwrap();
         assert_eq!(scratch_len(2, 2, &edge).err(), Some(DtwError::Anchors));
     }
 }

@@ -8,6 +8,7 @@
 //!
 //! ```
 //! use posecoach_core::format::Format;
+//! use posecoach_core::skeleton::Skeleton;
 //! use posecoach_core::kinematics::{forward, inverse};
 //! use posecoach_core::{Quat, Vec3};
 //!

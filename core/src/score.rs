@@ -20,7 +20,7 @@
 //!   the ball is reported as the pelvis moving.
 
 use crate::config::{DEVIATIONS_PER_EVENT, MAX_DEVIATIONS, MAX_SWING_FRAMES};
-use crate::dtw::{self, Band, DtwError, Sequence};
+use crate::dtw::{self, Band, DtwError, Sequence, Window};
 use crate::events::{self, Event, EventError, Side, SwingEvents};
 use crate::joint::Joint;
 use crate::math::norm;
@@ -476,9 +476,8 @@ fn closest_coach_pose<'c>(
 }
 
 /// Scores `student` (frames × skeleton joints at `student_hz`) against the coach's virtual
-/// swing `coach` (on the same skeleton, at `coach_hz`), with a DTW band of `radius` frames
-/// around the event-anchored guide (`anchored`) or the diagonal: [`compare`] after detecting
-/// both swings' events.
+/// swing `coach` (on the same skeleton, at `coach_hz`), aligned within `band`: [`compare`]
+/// after detecting both swings' events.
 ///
 /// # Errors
 /// [`ScoreError`] when events cannot be found, a swing is too long or the scratch (see
@@ -490,8 +489,7 @@ pub fn score(
     student_hz: f32,
     coach: &[Vec3],
     coach_hz: f32,
-    radius: u16,
-    anchored: bool,
+    band: Band,
     floats: &mut [f32],
     bytes: &mut [u8],
 ) -> Result<Report, ScoreError> {
@@ -503,7 +501,7 @@ pub fn score(
         detect(student, student_hz, true)?,
         detect(coach, coach_hz, false)?,
     );
-    compare(skeleton, &student, &coach, radius, anchored, floats, bytes)
+    compare(skeleton, &student, &coach, band, floats, bytes)
 }
 
 /// A swing with its events: frames × skeleton joints at `hz`.
@@ -541,8 +539,7 @@ pub fn compare(
     skeleton: &Skeleton,
     student: &Detected<'_>,
     coach: &Detected<'_>,
-    radius: u16,
-    anchored: bool,
+    band: Band,
     floats: &mut [f32],
     bytes: &mut [u8],
 ) -> Result<Report, ScoreError> {
@@ -575,23 +572,20 @@ pub fn compare(
 
     // Alignment, on the swings where they lie (each joint measured from its frame's root).
     let mut anchors: HVec<(u16, u16), 8> = HVec::new();
-    if anchored {
-        for event in Event::ALL {
-            let (Some(i), Some(j)) = (student_events.frame(event), coach_events.frame(event))
-            else {
-                continue;
-            };
-            let after_last = anchors
-                .last()
-                .is_none_or(|&(pi, pj)| i > pi as usize && j > pj as usize);
-            if i > 0 && j > 0 && i + 1 < n && j + 1 < m && after_last {
-                // Eight events fit the eight slots.
-                let _ = anchors.push((i as u16, j as u16));
-            }
+    for event in Event::ALL {
+        let (Some(i), Some(j)) = (student_events.frame(event), coach_events.frame(event)) else {
+            continue;
+        };
+        let after_last = anchors
+            .last()
+            .is_none_or(|&(pi, pj)| i > pi as usize && j > pj as usize);
+        if i > 0 && j > 0 && i + 1 < n && j + 1 < m && after_last {
+            // Eight events fit the eight slots.
+            let _ = anchors.push((i as u16, j as u16));
         }
     }
-    let band = Band::anchored(radius, &anchors)?;
-    let len = dtw::scratch_len(n, m, &band)?;
+    let window = Window::new(band, &anchors)?;
+    let len = dtw::scratch_len(n, m, &window)?;
     let cost = &mut floats[..len.cost];
     let steps = &mut bytes[..len.path_bytes];
     let mut path_buf = [(0u16, 0u16); MAX_PATH];
@@ -599,7 +593,7 @@ pub fn compare(
         &Sequence::rooted(student, joints)?,
         &Sequence::rooted(coach, joints)?,
         &[],
-        &band,
+        &window,
         cost,
         steps,
         &mut path_buf[..(n + m - 1).min(MAX_PATH)],

@@ -30,6 +30,7 @@
 //! ```
 
 use crate::config::MAX_DEVIATIONS;
+use crate::dtw::Band;
 use crate::format::Format;
 use crate::joint::Joint;
 use heapless::Vec as HVec;
@@ -115,10 +116,8 @@ pub struct SensorLayout {
 pub struct Config {
     /// Rate swings are resampled to, Hz.
     pub model_rate_hz: u16,
-    /// DTW band radius, frames at that rate.
-    pub band_radius: u16,
-    /// Band per phase between events (true) or one band around the diagonal.
-    pub anchored: bool,
+    /// The DTW band, in frames at that rate (on the wire, its radius then its `anchored` flag).
+    pub band: Band,
 }
 
 /// What a device has counted since it started.
@@ -426,10 +425,9 @@ mod tests {
             )),
             any::<u16>().prop_map(|coach| Message::CoachSelect { coach }),
             (any::<u16>(), any::<u16>(), any::<bool>()).prop_map(
-                |(model_rate_hz, band_radius, anchored)| Message::Config(Config {
+                |(model_rate_hz, radius, anchored)| Message::Config(Config {
                     model_rate_hz,
-                    band_radius,
-                    anchored
+                    band: Band { radius, anchored }
                 })
             ),
             (
@@ -598,6 +596,18 @@ mod tests {
             encode(&Message::Ack { seq: 1 }, &mut short),
             Err(EncodeError::TooLong)
         );
+    }
+
+    #[test]
+    fn a_config_carries_its_band_as_radius_then_flag() {
+        // Version 1, variant 4, model rate 60, radius 10 (varints), anchored (one byte).
+        let f = frame(&Message::Config(Config {
+            model_rate_hz: 60,
+            band: Band::DEFAULT,
+        }));
+        let mut payload = f[..f.len() - 1].to_vec();
+        let n = cobs::decode_in_place(&mut payload).unwrap();
+        assert_eq!(&payload[..n - 4], &[1, 4, 60, 10, 1]);
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! `posecoach bench`: speed of the core's hot paths, measured against a reference in the same run.
 
 use anyhow::{bail, Result};
-use posecoach_core::dtw::{align, scratch_len, Band, Sequence};
+use posecoach_core::dtw::{align, scratch_len, Band, Sequence, Window};
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -26,9 +26,9 @@ struct DtwArgs {
     /// Values per frame (3 per joint).
     #[arg(long, default_value_t = 51)]
     dims: usize,
-    /// Band radius in frames.
+    /// DTW band radius in frames (a global band: random walks have no events).
     #[arg(long, default_value_t = 20)]
-    radius: u16,
+    band: u16,
     /// Seed of the random walk.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -101,23 +101,23 @@ fn dtw(args: &DtwArgs) -> Result<String> {
     let (ab, bb) = (to_channels(&a, args.dims), to_channels(&b, args.dims));
     let joints = args.dims / 3;
     let (sa, sb) = (Sequence::new(&ab, joints)?, Sequence::new(&bb, joints)?);
-    let band = Band::global(args.radius);
-    let len = scratch_len(args.n, args.n, &band)?;
+    let window = Window::new(Band::global(args.band), &[])?;
+    let len = scratch_len(args.n, args.n, &window)?;
     let mut cost = vec![0.0; len.cost];
     let mut steps = vec![0u8; len.path_bytes];
     let mut path = vec![(0u16, 0u16); 2 * args.n - 1];
 
     let mut calls = 0u32;
-    let mut result = align(&sa, &sb, &[], &band, &mut cost, &mut steps, &mut path)?;
+    let mut result = align(&sa, &sb, &[], &window, &mut cost, &mut steps, &mut path)?;
     let budget = Duration::from_secs_f64(args.seconds);
     let start = Instant::now();
     while start.elapsed() < budget || calls < 10 {
-        result = align(&sa, &sb, &[], &band, &mut cost, &mut steps, &mut path)?;
+        result = align(&sa, &sb, &[], &window, &mut cost, &mut steps, &mut path)?;
         calls += 1;
     }
     let per_call = start.elapsed().as_secs_f64() / f64::from(calls);
     let report = json!({
-        "n": args.n, "dims": args.dims, "radius": args.radius, "cells": len.cells,
+        "n": args.n, "dims": args.dims, "band": args.band, "cells": len.cells,
         "calls": calls, "us_per_call": per_call * 1e6, "ns_per_cell": per_call * 1e9 / len.cells as f64,
         "distance": result.distance, "path_len": result.path_len,
         "scratch_bytes": len.cost * 4 + len.path_bytes,
@@ -126,8 +126,8 @@ fn dtw(args: &DtwArgs) -> Result<String> {
         format!("{report}\n")
     } else {
         format!(
-            "banded DTW, n = {}, dims = {}, radius = {}: {} cells, {:.1} us per call with the path, {:.2} ns per cell ({} calls); scratch {} bytes\n",
-            args.n, args.dims, args.radius, len.cells, per_call * 1e6, per_call * 1e9 / len.cells as f64, calls,
+            "banded DTW, n = {}, dims = {}, band = {}: {} cells, {:.1} us per call with the path, {:.2} ns per cell ({} calls); scratch {} bytes\n",
+            args.n, args.dims, args.band, len.cells, per_call * 1e6, per_call * 1e9 / len.cells as f64, calls,
             len.cost * 4 + len.path_bytes,
         )
     })

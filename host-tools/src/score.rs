@@ -2,6 +2,7 @@
 
 use crate::{html, teacher};
 use anyhow::{anyhow, bail, Context, Result};
+use posecoach_core::dtw::Band;
 use posecoach_core::events::SwingEvents;
 use posecoach_core::score::{self, Advice, Report};
 use posecoach_io::{self as io, Motion};
@@ -29,7 +30,7 @@ pub struct Args {
     #[arg(long)]
     weights: Option<PathBuf>,
     /// DTW band radius in frames at the scoring rate.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = Band::DEFAULT.radius)]
     band: u16,
     /// One band around the whole diagonal instead of one per phase between the events.
     #[arg(long)]
@@ -73,7 +74,11 @@ pub fn run(args: &Args) -> Result<String> {
         student.resampled(args.rate),
         virtual_coach.resampled(args.rate),
     );
-    let report = score_swings(&student, &virtual_coach, args.band, !args.global_band)?;
+    let band = Band {
+        radius: args.band,
+        anchored: !args.global_band,
+    };
+    let report = score_swings(&student, &virtual_coach, band)?;
     let json = to_json(&report);
     if let Some(path) = &args.report {
         let retargeter = match &args.weights {
@@ -123,7 +128,7 @@ pub fn write_report(path: &Path, json: &Value, html: impl FnOnce() -> String) ->
 }
 
 /// Scores `student` against `coach`, both on the student's skeleton.
-pub fn score_swings(student: &Motion, coach: &Motion, band: u16, anchored: bool) -> Result<Report> {
+pub fn score_swings(student: &Motion, coach: &Motion, band: Band) -> Result<Report> {
     let len = score::scratch_len(student.frames(), coach.frames());
     let (mut floats, mut bytes) = (vec![0.0; len.floats], vec![0u8; len.bytes]);
     Ok(score::score(
@@ -133,7 +138,6 @@ pub fn score_swings(student: &Motion, coach: &Motion, band: u16, anchored: bool)
         &coach.positions,
         coach.rate_hz,
         band,
-        anchored,
         &mut floats,
         &mut bytes,
     )?)

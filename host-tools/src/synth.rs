@@ -14,6 +14,7 @@
 use crate::synth_imu::{self, ImuNoise};
 use anyhow::{bail, Context, Result};
 use posecoach_adapters::log;
+use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, SwingKind};
 use posecoach_core::format::{Format, Source};
 use posecoach_core::skeleton::Skeleton;
@@ -222,8 +223,7 @@ pub fn run(args: &Args) -> Result<String> {
         Message::StudentProfile(profile),
         Message::Config(Config {
             model_rate_hz: args.model_rate,
-            band_radius: 10,
-            anchored: true,
+            band: Band::DEFAULT,
         }),
         Message::CoachSelect { coach: args.coach },
     ] {

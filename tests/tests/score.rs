@@ -4,6 +4,7 @@
 //! tour swing at 60 Hz) by a transformation in this file: a phase time-warped 20-40 %, or one
 //! joint moved 8-15 cm around one event along an axis of the golfer's stance frame.
 
+use posecoach_core::dtw::Band;
 use posecoach_core::events::Event;
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{score, scratch_len, Advice, Direction, Phase, Report, Verdict};
@@ -11,8 +12,8 @@ use posecoach_core::Vec3;
 use posecoach_io::{self as io, Motion};
 use posecoach_tests::{fixture, Warp};
 
-/// Band radius in frames at 60 Hz.
-const RADIUS: u16 = 10;
+/// The default band: 10 frames at 60 Hz around the event-anchored guide.
+const BAND: Band = Band::DEFAULT;
 
 fn driver() -> Motion {
     io::load(&fixture("golf_driver_60hz.csv")).unwrap()
@@ -27,8 +28,7 @@ fn run(student: &Motion, coach: &Motion) -> Report {
         student.rate_hz,
         &coach.positions,
         coach.rate_hz,
-        RADIUS,
-        true,
+        BAND,
         &mut floats,
         &mut bytes,
     )
@@ -296,8 +296,7 @@ fn putts_are_scored_like_putts() {
         60.0,
         &golfer.positions,
         60.0,
-        RADIUS,
-        true,
+        BAND,
         &mut floats,
         &mut bytes,
     );

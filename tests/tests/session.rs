@@ -2,6 +2,7 @@
 //! as it was.
 
 use posecoach_adapters::session::{BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session};
+use posecoach_core::dtw::Band;
 use posecoach_core::format::Format;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{Config, Message, PoseFrame, StudentProfile};
@@ -59,8 +60,10 @@ fn bad_messages_are_refused_and_change_nothing() {
     for (rate, band) in [(120, 10), (60, 0), (5, 10)] {
         let config = Message::Config(Config {
             model_rate_hz: rate,
-            band_radius: band,
-            anchored: true,
+            band: Band {
+                radius: band,
+                anchored: true,
+            },
         });
         let expected = if rate == 120 {
             Refusal::Buffers
@@ -236,8 +239,7 @@ fn a_network_borrows_the_ring_at_its_rate() {
     for rate in [30, 60] {
         let config = Config {
             model_rate_hz: rate,
-            band_radius: 10,
-            anchored: true,
+            band: Band::DEFAULT,
         };
         let frames = coaches[0].frames_at(rate);
         let lens = BufferLens::new(17, frames, rate).with_network(a, 17, n, frames);

@@ -1,6 +1,7 @@
 //! The wire protocol's bytes are pinned: one frame of every message kind, compared with a
 //! committed stream (`fixtures/wire_messages.bin`, which also seeds the decoder's fuzz target).
 
+use posecoach_core::dtw::Band;
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::wire::{
@@ -35,8 +36,7 @@ fn every_message() -> Vec<Message> {
         Message::CoachSelect { coach: 4 },
         Message::Config(Config {
             model_rate_hz: 60,
-            band_radius: 10,
-            anchored: true,
+            band: Band::DEFAULT,
         }),
         Message::SwingReport(SwingReport {
             swing: 3,
