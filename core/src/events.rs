@@ -153,6 +153,19 @@ impl SwingEvents {
         }
     }
 
+    /// These events counted from frame `start` instead of 0: the events of the stretch that
+    /// begins there (`start` at most the address; a later one clamps events before it to 0).
+    pub fn from_frame(&self, start: usize) -> SwingEvents {
+        let start = start.min(usize::from(u16::MAX - 1)) as u16;
+        SwingEvents {
+            frames: self.frames.map(|f| match f {
+                ABSENT => ABSENT,
+                f => f.saturating_sub(start),
+            }),
+            ..*self
+        }
+    }
+
     /// Frame of the address (every swing has one).
     pub fn address(&self) -> usize {
         self.frames[Event::Address as usize] as usize

@@ -17,6 +17,7 @@
 //!
 //! ```
 //! use posecoach_core::format::Format;
+//! use posecoach_core::skeleton::Skeleton;
 //! use posecoach_core::retarget::Analytic;
 //! use posecoach_core::Vec3;
 //!
@@ -31,7 +32,7 @@
 
 use crate::config::MAX_JOINTS;
 use crate::joint::Joint;
-use crate::kinematics::{check_len, swing, LengthError};
+use crate::kinematics::{swing, LengthError};
 use crate::skeleton::Skeleton;
 use crate::{Quat, Vec3};
 
@@ -82,11 +83,75 @@ pub struct Chord {
     pub rest: Vec3,
 }
 
-/// A precomputed joint correspondence from one skeleton onto another.
+/// The analytic retargeter: a [`Fit`] and the target skeleton it poses.
 #[derive(Clone, Debug)]
 pub struct Analytic<'a> {
-    source: &'a Skeleton,
     target: &'a Skeleton,
+    fit: Fit,
+}
+
+impl<'a> Analytic<'a> {
+    /// Prepares the correspondence from `source` onto `target`.
+    ///
+    /// # Errors
+    /// [`RetargetError::DegenerateSource`] if the source's legs have zero length.
+    pub fn new(source: &Skeleton, target: &'a Skeleton) -> Result<Self, RetargetError> {
+        Ok(Analytic {
+            target,
+            fit: Fit::new(source, target)?,
+        })
+    }
+
+    /// Ratio of target to source leg length applied to the root trajectory.
+    pub fn scale(&self) -> f32 {
+        self.fit.scale
+    }
+
+    /// The source joint whose trajectory, times [`Analytic::scale`], is the target root's.
+    pub fn root(&self) -> usize {
+        self.fit.counterpart[0] as usize
+    }
+
+    /// The chord that turns the bone into target joint `k`, as [`Analytic::frame`] does; `None`
+    /// for a bone that keeps its rest direction (out of the root without an anchored joint
+    /// below it), for the root and for `k` out of range.
+    pub fn chord(&self, k: usize) -> Option<Chord> {
+        let fit = &self.fit;
+        let mut k = k;
+        while (1..self.target.len()).contains(&k) {
+            match fit.driver[k] {
+                NONE => k = self.target.parent(k)?,
+                d => {
+                    let d = d as usize;
+                    return Some(Chord {
+                        from: fit.counterpart[fit.anchor[d] as usize] as usize,
+                        to: fit.counterpart[d] as usize,
+                        rest: fit.rest_chord[d],
+                    });
+                }
+            }
+        }
+        None
+    }
+
+    /// Retargets one source frame into `out` (target joint order).
+    ///
+    /// # Errors
+    /// [`RetargetError::Length`] for a frame shorter than the source skeleton or an output
+    /// shorter than the target; [`RetargetError::NonFinite`] for a NaN or infinite input.
+    pub fn frame(&self, source: &[Vec3], out: &mut [Vec3]) -> Result<(), RetargetError> {
+        self.fit.frame(self.target, source, out)
+    }
+}
+
+/// The analytic retargeter's correspondence from one skeleton onto another, owning neither:
+/// what a session keeps, made once per student profile, for every pose frame that follows.
+#[derive(Clone, Debug)]
+pub struct Fit {
+    /// Joints of the source skeleton.
+    source_len: usize,
+    /// Joints of the target skeleton.
+    target_len: usize,
     /// Per target joint: its source counterpart, or `NONE`.
     counterpart: [u8; MAX_JOINTS],
     /// Per anchored target joint: its nearest anchored proper ancestor.
@@ -99,12 +164,12 @@ pub struct Analytic<'a> {
     scale: f32,
 }
 
-impl<'a> Analytic<'a> {
-    /// Prepares the correspondence from `source` onto `target`.
+impl Fit {
+    /// The correspondence from `source` onto `target`.
     ///
     /// # Errors
     /// [`RetargetError::DegenerateSource`] if the source's legs have zero length.
-    pub fn new(source: &'a Skeleton, target: &'a Skeleton) -> Result<Self, RetargetError> {
+    pub fn new(source: &Skeleton, target: &Skeleton) -> Result<Fit, RetargetError> {
         let (source_legs, target_legs) = leg_lengths(source, target);
         if source_legs <= f32::EPSILON {
             return Err(RetargetError::DegenerateSource);
@@ -142,9 +207,9 @@ impl<'a> Analytic<'a> {
             anchor[k] = a as u8;
             rest_chord[k] = rest[k] - rest[a];
         }
-        Ok(Analytic {
-            source,
-            target,
+        Ok(Fit {
+            source_len: source.len(),
+            target_len: target.len(),
             counterpart,
             anchor,
             driver,
@@ -153,53 +218,41 @@ impl<'a> Analytic<'a> {
         })
     }
 
-    /// Ratio of target to source leg length applied to the root trajectory.
-    pub fn scale(&self) -> f32 {
-        self.scale
-    }
-
-    /// The source joint whose trajectory, times [`Analytic::scale`], is the target root's.
-    pub fn root(&self) -> usize {
-        self.counterpart[0] as usize
-    }
-
-    /// The chord that turns the bone into target joint `k`, as [`Analytic::frame`] does; `None`
-    /// for a bone that keeps its rest direction (out of the root without an anchored joint
-    /// below it), for the root and for `k` out of range.
-    pub fn chord(&self, k: usize) -> Option<Chord> {
-        let mut k = k;
-        while (1..self.target.len()).contains(&k) {
-            match self.driver[k] {
-                NONE => k = self.target.parent(k)?,
-                d => {
-                    let d = d as usize;
-                    return Some(Chord {
-                        from: self.counterpart[self.anchor[d] as usize] as usize,
-                        to: self.counterpart[d] as usize,
-                        rest: self.rest_chord[d],
-                    });
-                }
-            }
-        }
-        None
-    }
-
-    /// Retargets one source frame into `out` (target joint order).
+    /// Retargets one source frame into `out`, posing `target`: the skeleton this fit was made
+    /// for (another of the same length is posed with this fit's rotations, wrongly).
     ///
     /// # Errors
-    /// [`RetargetError::Length`] for a frame shorter than the source skeleton or an output
-    /// shorter than the target; [`RetargetError::NonFinite`] for a NaN or infinite input.
-    pub fn frame(&self, source: &[Vec3], out: &mut [Vec3]) -> Result<(), RetargetError> {
-        check_len(self.source, source.len())?;
-        check_len(self.target, out.len())?;
-        if let Some(joint) = source[..self.source.len()]
+    /// [`RetargetError::Length`] for a `target` other than the fit's length, a frame shorter
+    /// than the source skeleton or an output shorter than the target;
+    /// [`RetargetError::NonFinite`] for a NaN or infinite input.
+    pub fn frame(
+        &self,
+        target: &Skeleton,
+        source: &[Vec3],
+        out: &mut [Vec3],
+    ) -> Result<(), RetargetError> {
+        let short = |expected: usize, actual: usize| {
+            (actual < expected).then_some(RetargetError::Length(LengthError { expected, actual }))
+        };
+        let n = self.target_len;
+        if let Some(e) = short(self.source_len, source.len())
+            .or(short(n, out.len()))
+            .or(
+                (target.len() != n).then_some(RetargetError::Length(LengthError {
+                    expected: n,
+                    actual: target.len(),
+                })),
+            )
+        {
+            return Err(e);
+        }
+        if let Some(joint) = source[..self.source_len]
             .iter()
             .position(|p| !p.iter().all(|v| v.is_finite()))
         {
             return Err(RetargetError::NonFinite { joint });
         }
         let at = |k: u8| source[self.counterpart[k as usize] as usize];
-        let n = self.target.len();
         let mut rotation = [Quat::identity(); MAX_JOINTS];
         // Anchored joints first: a joint between two anchors follows the one below it.
         for k in (1..n).filter(|&k| self.driver[k] as usize == k) {
@@ -207,12 +260,12 @@ impl<'a> Analytic<'a> {
         }
         out[0] = at(0) * self.scale;
         for k in 1..n {
-            let parent = self.target.parent(k).unwrap_or(0);
+            let parent = target.parent(k).unwrap_or(0);
             rotation[k] = match self.driver[k] {
                 NONE => rotation[parent],
                 d => rotation[d as usize],
             };
-            out[k] = out[parent] + rotation[k] * self.target.offset(k);
+            out[k] = out[parent] + rotation[k] * target.offset(k);
         }
         Ok(())
     }

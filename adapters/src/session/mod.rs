@@ -22,31 +22,43 @@
 //! Only full swings are detected (the detector wants the hands fast and high); putts are scored
 //! from files on the host.
 
+//!
+//! The session's rooms, one file each under `session/`: `coach.rs` (the coach reference at the
+//! model rate and the virtual coach made from it), `buffers.rs` (the caller's buffers and
+//! their sizing), `refusal.rs` (refusals and their `Nack`s); the state machine is here.
+
+mod buffers;
+mod coach;
+mod refusal;
+
+#[cfg(feature = "std")]
+pub use buffers::OwnedBuffers;
+pub use buffers::{BufferLens, Buffers};
+pub use coach::{frames_at, Coach, SAME_RATE};
+pub use refusal::Refusal;
+
 use crate::fusion::FusionError;
 use crate::imu::{ImuAdapter, ImuError};
 use crate::pose_stream::{PoseStream, StreamConfig, StreamCounters, StreamError, StreamEvent};
+use coach::same_rate;
 use core::ops::Range;
 use posecoach_core::config::MAX_SWING_FRAMES;
-use posecoach_core::detector::{DetectorConfig, DetectorError, SwingDetector, SwingWindow};
+use posecoach_core::detector::{DetectorConfig, SwingDetector, SwingWindow};
+use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, EventError, SwingEvents, STILL_S};
 use posecoach_core::format::Format;
 use posecoach_core::math::norm;
-use posecoach_core::network::{self, NetworkError};
-use posecoach_core::reference::Reference;
-use posecoach_core::retarget::Analytic;
+use posecoach_core::retarget::Fit;
 use posecoach_core::score::{self, Detected, Report, ScoreError};
-use posecoach_core::skeleton::{Skeleton, SkeletonError};
-use posecoach_core::weights::{Architecture, Weights};
-use posecoach_core::wire::{
-    Config, ImuSample, Message, NackReason, PoseFrame, SensorLayout, StudentProfile,
-};
+use posecoach_core::skeleton::Skeleton;
+use posecoach_core::weights::Weights;
+use posecoach_core::wire::{Config, ImuSample, Message, PoseFrame, SensorLayout, StudentProfile};
 use posecoach_core::{config::MAX_JOINTS, Vec3};
 
 /// Settings until a `Config` message arrives.
 pub const DEFAULT_CONFIG: Config = Config {
     model_rate_hz: 60,
-    band_radius: 10,
-    anchored: true,
+    band: Band::DEFAULT,
 };
 /// Seconds of frames the detector keeps.
 pub const RING_S: f32 = 6.0;
@@ -55,169 +67,6 @@ pub const RING_S: f32 = 6.0;
 pub const SWING_MARGIN_S: f32 = STILL_S;
 /// Lowest and highest model rates, Hz.
 pub const RATES_HZ: (u16, u16) = (20, 120);
-
-/// A stored coach reference swing.
-#[derive(Clone, Copy, Debug)]
-pub struct Coach<'c> {
-    /// The coach's skeleton.
-    pub skeleton: &'c Skeleton,
-    /// Frames × joints of `skeleton`.
-    pub positions: &'c [Vec3],
-    /// Frame rate, Hz.
-    pub rate_hz: f32,
-}
-
-impl<'c> From<&'c Reference<'c>> for Coach<'c> {
-    /// A stored reference ([`posecoach_core::reference`]) as the session takes it.
-    fn from(reference: &'c Reference<'c>) -> Coach<'c> {
-        Coach {
-            skeleton: reference.skeleton(),
-            positions: reference.positions(),
-            rate_hz: reference.rate_hz(),
-        }
-    }
-}
-
-impl Coach<'_> {
-    fn frames(&self) -> usize {
-        self.positions.len() / self.skeleton.len().max(1)
-    }
-
-    /// Its frames at `rate_hz`, as the session keeps the virtual coach
-    /// ([`frames_at`]).
-    pub fn frames_at(&self, rate_hz: u16) -> usize {
-        frames_at(self.frames(), self.rate_hz, rate_hz)
-    }
-
-    /// Where frame `k` at `rate_hz` falls among the coach's own frames: the frame before and
-    /// the fraction of the way to the next. Rates within [`SAME_RATE`] of each other are the
-    /// same rate (a 60.00006 Hz capture is a 60 Hz one): the frames are then used as they are.
-    fn source_of(&self, k: usize, rate_hz: u16) -> (usize, f32) {
-        if same_rate(self.rate_hz, rate_hz) {
-            return (k, 0.0);
-        }
-        let t = k as f32 * self.rate_hz / f32::from(rate_hz);
-        let i = (t as usize).min(self.frames().saturating_sub(1));
-        (i, t - i as f32)
-    }
-}
-
-/// Relative difference under which two frame rates are one.
-pub const SAME_RATE: f32 = 1e-3;
-
-const fn same_rate(coach_hz: f32, rate_hz: u16) -> bool {
-    let ratio = coach_hz / rate_hz as f32;
-    ratio > 1.0 - SAME_RATE && ratio < 1.0 + SAME_RATE
-}
-
-/// Frames a coach reference of `frames` frames at `coach_hz` has at the model rate `rate_hz`:
-/// the session retargets the coach at the model rate (interpolating its frames), so that the
-/// student's and the coach's swings are compared frame for frame; the same frames when the
-/// rates are the same ([`SAME_RATE`]).
-pub const fn frames_at(frames: usize, coach_hz: f32, rate_hz: u16) -> usize {
-    if frames == 0 || same_rate(coach_hz, rate_hz) {
-        return frames;
-    }
-    ((frames - 1) as f32 * rate_hz as f32 / coach_hz) as usize + 1
-}
-
-/// Lengths of the buffers a session needs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct BufferLens {
-    /// Positions of the detector's history.
-    pub ring: usize,
-    /// Positions of the virtual coach.
-    pub coach: usize,
-    /// Scoring floats.
-    pub floats: usize,
-    /// Scoring bytes.
-    pub bytes: usize,
-}
-
-impl BufferLens {
-    /// For students of up to `joints` joints, coaches of up to `coach_frames` frames at the
-    /// model rate ([`frames_at`]) and model rates up to `rate_hz`.
-    pub const fn new(joints: usize, coach_frames: usize, rate_hz: u16) -> BufferLens {
-        let ring_frames = (RING_S * rate_hz as f32) as usize;
-        // A swing is scored in the ring, so it is never longer than the ring.
-        let swing = if ring_frames < MAX_SWING_FRAMES {
-            ring_frames
-        } else {
-            MAX_SWING_FRAMES
-        };
-        let scratch = score::scratch_len(swing, coach_frames);
-        BufferLens {
-            ring: joints * ring_frames,
-            coach: joints * coach_frames,
-            floats: scratch.floats,
-            bytes: scratch.bytes,
-        }
-    }
-
-    /// These lengths with a ring that also holds, while the session is set up, the int8
-    /// network `a`'s input (`coach_frames` frames of a coach of `coach_joints` joints) and
-    /// its scratch, for students of up to `joints` joints.
-    pub const fn with_network(
-        self,
-        a: &Architecture,
-        joints: usize,
-        coach_joints: usize,
-        coach_frames: usize,
-    ) -> BufferLens {
-        let bytes = network::scratch_len(a, coach_joints, joints);
-        let ring = coach_frames * coach_joints + bytes.div_ceil(core::mem::size_of::<Vec3>());
-        BufferLens {
-            ring: if ring > self.ring { ring } else { self.ring },
-            ..self
-        }
-    }
-}
-
-/// The caller's buffers, at least [`BufferLens`] long.
-#[derive(Debug)]
-pub struct Buffers<'b> {
-    /// The detector's history.
-    pub ring: &'b mut [Vec3],
-    /// The virtual coach.
-    pub coach: &'b mut [Vec3],
-    /// Scoring floats.
-    pub floats: &'b mut [f32],
-    /// Scoring bytes.
-    pub bytes: &'b mut [u8],
-}
-
-/// [`Buffers`] of the given lengths on the heap, for host tools and tests.
-#[cfg(feature = "std")]
-#[derive(Clone, Debug)]
-pub struct OwnedBuffers {
-    ring: std::vec::Vec<Vec3>,
-    coach: std::vec::Vec<Vec3>,
-    floats: std::vec::Vec<f32>,
-    bytes: std::vec::Vec<u8>,
-}
-
-#[cfg(feature = "std")]
-impl OwnedBuffers {
-    /// Zeroed buffers of `lens`.
-    pub fn new(lens: BufferLens) -> OwnedBuffers {
-        OwnedBuffers {
-            ring: std::vec![Vec3::zeros(); lens.ring],
-            coach: std::vec![Vec3::zeros(); lens.coach],
-            floats: std::vec![0.0; lens.floats],
-            bytes: std::vec![0; lens.bytes],
-        }
-    }
-
-    /// The buffers, for [`Session::new`].
-    pub fn buffers(&mut self) -> Buffers<'_> {
-        Buffers {
-            ring: &mut self.ring,
-            coach: &mut self.coach,
-            floats: &mut self.floats,
-            bytes: &mut self.bytes,
-        }
-    }
-}
 
 /// Where a swing sits in the stream.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -290,83 +139,14 @@ impl Outcome<'_> {
     }
 }
 
-/// Why a message was refused.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Refusal {
-    /// Pose frames before any `StudentProfile`.
-    NoProfile,
-    /// The profile's keypoints do not make a skeleton.
-    Profile(SkeletonError),
-    /// The profile's format has no joint table, or its keypoint count is wrong.
-    ProfileFormat(Format),
-    /// No stored coach reference has this number.
-    UnknownCoach(u16),
-    /// The buffers are too small for this student, coach or rate.
-    Buffers,
-    /// A model rate outside [`RATES_HZ`] or a zero band.
-    Config,
-    /// The student's skeleton lacks what swing detection needs.
-    Detector(DetectorError),
-    /// The pose frame does not fit the stream.
-    Stream(StreamError),
-    /// The coach cannot be retargeted onto the student (degenerate skeleton).
-    Retarget,
-    /// No swing found in the coach reference on the student's body.
-    CoachSwing(EventError),
-    /// IMU samples before a `SensorLayout`, or pose frames after one.
-    Input,
-    /// The layout does not fit the student, or a sample is degenerate.
-    Imu(ImuError),
-}
-
-impl Refusal {
-    /// The reason a `Nack` gives: the message came at the wrong time, did not fit the session
-    /// now, or is wrong in itself.
-    pub fn nack_reason(self) -> NackReason {
-        match self {
-            Refusal::NoProfile | Refusal::Input => NackReason::Unexpected,
-            Refusal::Buffers => NackReason::Busy,
-            _ => NackReason::Invalid,
-        }
-    }
-}
-
-impl core::fmt::Display for Refusal {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Refusal::NoProfile => f.write_str("pose frames before a student profile"),
-            Refusal::Profile(e) => write!(f, "student profile: {e}"),
-            Refusal::ProfileFormat(format) => write!(
-                f,
-                "student profile in format `{}` with no joint table or the wrong keypoint count",
-                format.name()
-            ),
-            Refusal::UnknownCoach(n) => write!(f, "no coach reference number {n}"),
-            Refusal::Buffers => f.write_str("buffers too small for this student, coach or rate"),
-            Refusal::Config => write!(
-                f,
-                "model rate outside {} to {} Hz, or a zero band",
-                RATES_HZ.0, RATES_HZ.1
-            ),
-            Refusal::Detector(e) => write!(f, "swing detection: {e}"),
-            Refusal::Stream(e) => write!(f, "pose stream: {e}"),
-            Refusal::Retarget => f.write_str("the coach cannot be retargeted onto the student"),
-            Refusal::CoachSwing(e) => write!(f, "the coach reference on this student: {e}"),
-            Refusal::Input => f.write_str(
-                "IMU samples before a sensor layout, or pose frames in a session with IMUs",
-            ),
-            Refusal::Imu(e) => write!(f, "IMU: {e}"),
-        }
-    }
-}
-
 /// Everything that follows the student's body.
 #[derive(Debug)]
 struct Student<'b> {
     skeleton: Skeleton,
-    /// Skeleton of the stream's format scaled to the student, once the format is known.
-    source: Option<Skeleton>,
+    /// The fit of the stream format's skeleton (scaled to the student) onto the student's,
+    /// made at the first pose frame (the stream keeps to that frame's format) and used for
+    /// every one after.
+    fit: Option<Fit>,
     stream: PoseStream,
     detector: SwingDetector<'b>,
     /// Stream time of the detector's frame 0.
@@ -426,7 +206,7 @@ impl<'b> Session<'b> {
     }
 
     /// This session retargeting coaches with the int8 network of `weights` whenever the model
-    /// rate is the network's ([`Architecture::rate_hz`]); its ring must then be as long as
+    /// rate is the network's ([`Architecture::rate_hz`](posecoach_core::weights::Architecture::rate_hz)); its ring must then be as long as
     /// [`BufferLens::with_network`] says. Set it before the profile arrives.
     pub fn with_network(mut self, weights: &'b Weights<'b>) -> Session<'b> {
         self.network = Some(weights);
@@ -588,8 +368,8 @@ impl<'b> Session<'b> {
                 fits.then_some(()).ok_or(Refusal::Buffers)?;
                 let out = &mut self.virtual_coach[..frames * joints];
                 match network {
-                    Some(w) => retarget_network(w, coach, &skeleton, rate, ring, out),
-                    None => retarget_analytic(coach, &skeleton, rate, out),
+                    Some(w) => coach.retarget_network(w, &skeleton, rate, ring, out),
+                    None => coach.retarget_analytic(&skeleton, rate, out),
                 }
             })
             .and_then(|()| {
@@ -613,11 +393,8 @@ impl<'b> Session<'b> {
                     }
                 }
                 let frames = &self.virtual_coach[..coach.frames_at(rate) * joints];
-                let coach_hz = coach_rate(coach, rate);
-                let swing = swing_span(&skeleton, frames, coach_hz).map_err(Refusal::CoachSwing)?;
-                let span = &frames[swing.start * joints..swing.end * joints];
-                let events =
-                    events::detect(&skeleton, span, coach_hz).map_err(Refusal::CoachSwing)?;
+                let (swing, events) = swing_span(&skeleton, frames, coach.rate_at(rate))
+                    .map_err(Refusal::CoachSwing)?;
                 let stream = PoseStream::new(StreamConfig::new(rate)).map_err(Refusal::Stream)?;
                 Ok((stream, swing, events, imu))
             });
@@ -631,7 +408,7 @@ impl<'b> Session<'b> {
         let detector = SwingDetector::new(&skeleton, detector, ring).map_err(Refusal::Detector)?;
         self.student = Some(Student {
             skeleton,
-            source: None,
+            fit: None,
             stream,
             detector,
             t0_us: None,
@@ -647,19 +424,20 @@ impl<'b> Session<'b> {
         if student.imu.is_some() {
             return Err(Refusal::Input);
         }
-        if student.source.is_none() {
-            student.source = Some(stream_skeleton(&student.skeleton, frame.format)?);
+        if student.fit.is_none() {
+            let source = stream_skeleton(&student.skeleton, frame.format)?;
+            let fit = Fit::new(&source, &student.skeleton).map_err(|_| Refusal::Retarget)?;
+            student.fit = Some(fit);
         }
         let Student {
             skeleton,
-            source,
+            fit,
             stream,
             detector,
             t0_us,
             ..
         } = student;
-        let source = source.as_ref().ok_or(Refusal::NoProfile)?;
-        let retarget = Analytic::new(source, skeleton).map_err(|_| Refusal::Retarget)?;
+        let fit = fit.as_ref().ok_or(Refusal::NoProfile)?;
         let rate = f32::from(self.config.model_rate_hz);
         let mut closed: Option<(SwingWindow, u64)> = None;
         stream
@@ -671,7 +449,7 @@ impl<'b> Session<'b> {
                 StreamEvent::Frame { t_us, joints } => {
                     let mut out = [Vec3::zeros(); MAX_JOINTS];
                     let out = &mut out[..skeleton.len()];
-                    if retarget.frame(joints, out).is_err() {
+                    if fit.frame(skeleton, joints, out).is_err() {
                         return;
                     }
                     let t0 = *t0_us.get_or_insert(t_us);
@@ -735,7 +513,7 @@ impl<'b> Session<'b> {
         let Some(coach_hz) = self
             .coaches
             .get(usize::from(self.coach))
-            .map(|c| coach_rate(c, self.config.model_rate_hz))
+            .map(|c| c.rate_at(self.config.model_rate_hz))
         else {
             return;
         };
@@ -761,8 +539,8 @@ impl<'b> Session<'b> {
         let _ = detector.with_window(&window, |frames| {
             *swings += 1;
             let at = |frame: u64| t0_us + (frame as f64 * 1e6 / f64::from(rate)) as u64;
-            let span = match swing_span(skeleton, frames, rate) {
-                Ok(span) => span,
+            let (span, events) = match swing_span(skeleton, frames, rate) {
+                Ok(found) => found,
                 Err(error) => {
                     let swing = Swing {
                         number: *swings,
@@ -793,15 +571,12 @@ impl<'b> Session<'b> {
                 hz: coach_hz,
                 events: *coach_events,
             };
-            let result = Detected::new(skeleton, compared.student, rate)
-                .map_err(|error| ScoreError::Events {
-                    student: true,
-                    error,
-                })
-                .and_then(|student| {
-                    let (radius, anchored) = (config.band_radius, config.anchored);
-                    score::compare(skeleton, &student, &coach, radius, anchored, floats, bytes)
-                });
+            let student = Detected {
+                positions: compared.student,
+                hz: rate,
+                events,
+            };
+            let result = score::compare(skeleton, &student, &coach, config.band, floats, bytes);
             match result {
                 Ok(report) => {
                     let report = &*last_report.insert(report);
@@ -819,98 +594,23 @@ impl<'b> Session<'b> {
 
 /// Whether a session can run with `config`.
 fn valid(config: &Config) -> bool {
-    (RATES_HZ.0..=RATES_HZ.1).contains(&config.model_rate_hz) && config.band_radius > 0
+    (RATES_HZ.0..=RATES_HZ.1).contains(&config.model_rate_hz) && config.band.radius > 0
 }
 
-/// The rate of the virtual coach: the model rate, or the coach's own where they are the same
-/// rate ([`SAME_RATE`]) and its frames are used as they are.
-/// Frame `k` of `coach` at `rate_hz`, interpolated into `between` when it falls between two
-/// of its own frames.
-fn coach_frame<'a>(
-    coach: &'a Coach<'_>,
-    k: usize,
-    rate_hz: u16,
-    between: &'a mut [Vec3; MAX_JOINTS],
-) -> Option<&'a [Vec3]> {
-    let n = coach.skeleton.len();
-    let (i, fraction) = coach.source_of(k, rate_hz);
-    let frame = |i: usize| coach.positions.get(i * n..(i + 1) * n);
-    match (frame(i), frame(i + 1)) {
-        (Some(a), Some(b)) if fraction > 0.0 => {
-            for ((m, p), q) in between.iter_mut().zip(a).zip(b) {
-                *m = p + (q - p) * fraction;
-            }
-            Some(&between[..n])
-        }
-        (Some(a), _) => Some(a),
-        (None, _) => None,
-    }
-}
-
-/// `coach` at `rate_hz` retargeted onto `student` frame by frame with the analytic
-/// retargeter, into `out` (whole frames of the student).
-fn retarget_analytic(
-    coach: &Coach<'_>,
-    student: &Skeleton,
-    rate_hz: u16,
-    out: &mut [Vec3],
-) -> Result<(), Refusal> {
-    let retarget = Analytic::new(coach.skeleton, student).map_err(|_| Refusal::Retarget)?;
-    let mut between = [Vec3::zeros(); MAX_JOINTS];
-    for (k, pose) in out.chunks_exact_mut(student.len()).enumerate() {
-        let source = coach_frame(coach, k, rate_hz, &mut between).ok_or(Refusal::Retarget)?;
-        retarget
-            .frame(source, pose)
-            .map_err(|_| Refusal::Retarget)?;
-    }
-    Ok(())
-}
-
-/// `coach` at `rate_hz` retargeted onto `student` by the int8 network of `weights`, into
-/// `out` (whole frames of the student); its input and scratch are carved from `ring`.
-fn retarget_network(
-    weights: &Weights<'_>,
-    coach: &Coach<'_>,
-    student: &Skeleton,
-    rate_hz: u16,
-    ring: &mut [Vec3],
-    out: &mut [Vec3],
-) -> Result<(), Refusal> {
-    let n = coach.skeleton.len();
-    let frames = out.len() / student.len().max(1);
-    let (source, rest) = ring
-        .split_at_mut_checked(frames * n)
-        .ok_or(Refusal::Buffers)?;
-    let mut between = [Vec3::zeros(); MAX_JOINTS];
-    for (k, pose) in source.chunks_exact_mut(n).enumerate() {
-        let frame = coach_frame(coach, k, rate_hz, &mut between).ok_or(Refusal::Retarget)?;
-        pose.copy_from_slice(frame);
-    }
-    let scratch: &mut [u8] = bytemuck::cast_slice_mut(rest);
-    network::retarget(weights, coach.skeleton, student, source, scratch, out).map_err(|e| match e {
-        NetworkError::Scratch => Refusal::Buffers,
-        _ => Refusal::Retarget,
-    })
-}
-
-fn coach_rate(coach: &Coach<'_>, rate_hz: u16) -> f32 {
-    if same_rate(coach.rate_hz, rate_hz) {
-        coach.rate_hz
-    } else {
-        f32::from(rate_hz)
-    }
-}
-
-/// Frames of `positions` from [`SWING_MARGIN_S`] before the set-up to as long after the finish.
+/// The swing in `positions`: its frames from [`SWING_MARGIN_S`] before the set-up to as long
+/// after the finish, and its events counted from the first of them (found once, in all of
+/// `positions`).
 fn swing_span(
     skeleton: &Skeleton,
     positions: &[Vec3],
     rate_hz: f32,
-) -> Result<Range<usize>, EventError> {
+) -> Result<(Range<usize>, SwingEvents), EventError> {
     let events = events::detect(skeleton, positions, rate_hz)?;
     let margin = (SWING_MARGIN_S * rate_hz) as usize;
     let frames = positions.len() / skeleton.len().max(1);
-    Ok(events.address().saturating_sub(margin)..(events.finish() + margin + 1).min(frames))
+    let start = events.address().saturating_sub(margin);
+    let span = start..(events.finish() + margin + 1).min(frames);
+    Ok((span, events.from_frame(start)))
 }
 
 /// The skeleton pose frames of `format` are read on: the student's own when the formats
@@ -927,41 +627,4 @@ fn stream_skeleton(student: &Skeleton, format: Format) -> Result<Skeleton, Refus
     standard
         .with_bone_lengths(&lengths[..standard.len()])
         .map_err(Refusal::Profile)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_coach_is_kept_at_the_model_rate() {
-        assert_eq!(frames_at(110, 60.000_057, 60), 110);
-        assert_eq!(frames_at(110, 60.000_057, 30), 55);
-        assert_eq!(frames_at(110, 60.0, 120), 219);
-        assert_eq!(frames_at(0, 60.0, 30), 0);
-        let skeleton = Skeleton::standard(Format::H36m17).unwrap();
-        let positions = [Vec3::zeros(); 17 * 4];
-        let coach = Coach {
-            skeleton: &skeleton,
-            positions: &positions,
-            rate_hz: 60.000_057,
-        };
-        assert_eq!(coach.source_of(3, 60), (3, 0.0));
-        assert_eq!(coach.source_of(1, 30).0, 2);
-        let (i, fraction) = coach.source_of(1, 40);
-        assert_eq!(i, 1);
-        assert!((fraction - 0.5).abs() < 1e-4);
-    }
-
-    #[test]
-    fn the_scoring_scratch_is_sized_for_a_swing_as_long_as_the_ring() {
-        let at_30 = BufferLens::new(17, 55, 30);
-        assert_eq!(at_30.ring, 17 * 180);
-        assert_eq!(at_30.floats, score::scratch_len(180, 55).floats);
-        let at_60 = BufferLens::new(17, 110, 60);
-        assert_eq!(
-            at_60.floats,
-            score::scratch_len(MAX_SWING_FRAMES, 110).floats
-        );
-    }
 }
