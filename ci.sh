@@ -13,8 +13,12 @@ rustup show active-toolchain
 step "format"
 cargo fmt --all -- --check
 
-step "clippy"
+step "layering (scripts/check_layers.sh: what each crate and core::wire may import; burn only behind learn)"
+scripts/check_layers.sh
+
+step "clippy, default features and with the learned retargeter (learn)"
 cargo clippy --workspace --all-targets -- -D warnings
+cargo clippy --workspace --all-targets --features posecoach-cli/learn,posecoach-tests/learn -- -D warnings
 
 # Installs Debian packages when this user may (root or password-less sudo); else says why not.
 apt_install() {
@@ -33,6 +37,9 @@ fi
 
 step "tests"
 cargo test --workspace
+
+step "tests of the learned retargeter's commands (the learn feature: train, export, eval, --weights)"
+cargo test -p posecoach-tests --features learn --test learned --test int8
 
 step "banded DTW also on baseline x86-64 (4 SSE2 lanes; host builds use x86-64-v3, see .cargo/config.toml)"
 RUSTFLAGS="-C target-cpu=x86-64" CARGO_TARGET_DIR=target/baseline cargo test -p posecoach-core dtw

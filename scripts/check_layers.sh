@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# The layering docs/ARCHITECTURE.md states, checked on the source: exits 1 and names every
+# import that breaks it.
+#   - core imports no other posecoach crate;
+#   - adapters imports only core; io imports only core;
+#   - core::wire imports nothing from core::score (the wire is the ground floor; a report
+#     turns itself into its wire form);
+#   - the default build of posecoach-cli and the tests that do not train link no burn: every
+#     use of the trainer or burn in host-tools and tests sits behind the `learn` feature.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+status=0
+fail() { echo "layering: $*"; status=1; }
+
+forbid() { # forbid DIR PATTERN WHY
+    local hits
+    hits=$(grep -rnE "$2" "$1" --include='*.rs' || true)
+    [ -z "$hits" ] || fail "$3:"$'\n'"$hits"
+}
+forbid core/src 'posecoach_(adapters|io|cli|train|tests)\b' "core imports another posecoach crate"
+forbid adapters/src 'posecoach_(io|cli|train|tests)\b' "adapters imports more than core"
+forbid io/src 'posecoach_(adapters|cli|train|tests)\b' "io imports more than core"
+forbid core/src/wire.rs '(crate|super)::score\b' "core::wire imports core::score"
+
+for manifest in core/Cargo.toml adapters/Cargo.toml io/Cargo.toml; do
+    if grep -nE '^posecoach-(adapters|io|cli|train)' "$manifest" | grep -v '^.*posecoach-core'; then
+        fail "$manifest depends on a crate above it"
+    fi
+done
+
+# burn and the trainer only behind `learn`: in the manifests as optional dependencies, in the
+# sources only in files or items gated on the feature.
+for manifest in host-tools/Cargo.toml tests/Cargo.toml; do
+    grep -nE '^(burn|posecoach-train) ' "$manifest" | grep -v 'optional = true' &&
+        fail "$manifest links burn or the trainer outside the learn feature"
+done
+for file in $(grep -rlE '\b(burn|posecoach_train)::' host-tools/src tests --include='*.rs' || true); do
+    case "$file" in
+    host-tools/src/learn.rs) ;; # the module itself is declared under cfg(feature = "learn")
+    *) grep -q 'cfg(feature = "learn")' "$file" || fail "$file uses burn or the trainer without the learn feature" ;;
+    esac
+done
+grep -q '#\[cfg(feature = "learn")\]' <(grep -B1 '^pub mod learn;' host-tools/src/lib.rs) ||
+    fail "host-tools/src/lib.rs declares learn without the feature"
+
+[ "$status" -eq 0 ] && echo "layering: ok"
+exit "$status"
