@@ -315,6 +315,19 @@ pub fn sample_character_with(
 }
 
 #[cfg(test)]
+pub(crate) mod testing {
+    //! Seeded characters for tests.
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// A random character of `format`, seeded.
+    pub fn character(format: Format, seed: u64) -> Character {
+        sample_character(format, &mut ChaCha8Rng::seed_from_u64(seed)).unwrap()
+    }
+}
+
+#[cfg(test)]
 mod tests {
     use super::*;
     use crate::dataset::FORMATS;

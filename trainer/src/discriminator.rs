@@ -5,7 +5,8 @@
 //! convolutions (two with stride 2) to a score per joint and quarter window, averaged over
 //! the real bones. Least-squares GAN: real motions score 1, retargeted ones 0.
 
-use crate::features::{Skeletons, MOTION_CHANNELS, REST_CHANNELS};
+use crate::features::MOTION_CHANNELS;
+use crate::skeletons::{Skeletons, REST_CHANNELS};
 use burn::nn::conv::{Conv1d, Conv1dConfig};
 use burn::nn::PaddingConfig1d;
 use burn::prelude::{Device, Module, Tensor};

@@ -13,7 +13,7 @@
 //! single product with a constant table, over the outer product of their operands: few,
 //! large tensor operations rather than many narrow ones.
 
-use crate::features::Skeletons;
+use crate::skeletons::Skeletons;
 use burn::prelude::{Device, Tensor, TensorData};
 
 /// The identity rotation.
@@ -130,8 +130,8 @@ fn hamilton([aw, ax, ay, az]: [f32; 4], [bw, bx, by, bz]: [f32; 4]) -> [f32; 4] 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::features::testing::character;
-    use crate::features::MAX_JOINTS;
+    use crate::bodies::testing::character;
+    use crate::skeletons::MAX_JOINTS;
     use burn::prelude::{Device, TensorData};
     use posecoach_core::format::Format;
     use posecoach_core::kinematics;

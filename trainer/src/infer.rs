@@ -244,9 +244,9 @@ fn fitted(mut m: Motion, frames: usize) -> Motion {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bodies::testing::character;
     use crate::clip::leg_length;
     use crate::clip::testing::wave_frames;
-    use crate::features::testing::character;
     use posecoach_core::format::Format;
 
     #[test]

@@ -6,7 +6,7 @@
 //!  seeds ──dataset (split by stream)──▶ characters (bodies)
 //!  clip on character A = source, clip on character B = ground truth ──▶ pairs
 //!  retargeted vs ground truth ──metrics──▶ eq. 16 errors, hand gap, foot slide
-//!  windows ──features──▶ tensors ──model (teacher, fk)──▶ positions ──train──▶ Adam steps
+//!  windows ──features (skeletons, prior)──▶ tensors ──model (teacher, fk)──▶ positions ──train──▶ Adam steps
 //! ```
 //!
 //! - [`bodies`]: random anthropometric characters in every keypoint format.
@@ -14,10 +14,11 @@
 //! - [`golfgen`]: parametric synthetic golf swings and putts, both hands on one grip.
 //! - [`dataset`]: train/eval splits of files and characters, retargeting pairs.
 //! - [`metrics`]: evaluation against the ground truth, and the baselines' table.
-//! - [`features`]: motion windows and target T-poses as padded, batched tensors.
+//! - [`skeletons`]: skeletons and T-poses as padded, batched tensors.
 //! - [`fk`]: differentiable forward kinematics.
 //! - [`prior`]: the geometric solutions the teacher corrects (the rotation transfer, the
 //!   analytic retargeter's chords).
+//! - [`features`]: motion windows as padded, batched tensors, with their skeletons and prior.
 //! - [`model`]: the teacher network.
 //! - [`losses`]: the training losses.
 //! - [`discriminator`]: the adversarial loss's discriminator.
@@ -41,6 +42,7 @@ pub mod metrics;
 pub mod model;
 pub mod prior;
 pub mod quantize;
+pub mod skeletons;
 pub mod train;
 
 pub use error::Error;

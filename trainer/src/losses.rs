@@ -16,8 +16,8 @@
 //! are not in the papers' tables; their weights put them at the size of the reconstruction
 //! loss on an untrained teacher.
 
-use crate::features::Skeletons;
 use crate::model::Retargeted;
+use crate::skeletons::Skeletons;
 use burn::prelude::{Device, Tensor};
 use burn::tensor::activation::relu;
 use posecoach_core::joint::Joint;
@@ -299,7 +299,8 @@ pub fn distillation(student: Tensor<4>, teacher: Tensor<4>) -> Tensor<1> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::features::testing::{character, window};
+    use crate::bodies::testing::character;
+    use crate::features::testing::window;
     use crate::features::{Batch, WINDOW};
     use burn::prelude::TensorData;
     use posecoach_core::format::Format;

@@ -18,10 +18,11 @@
 //! *masked* convolution, one that mixes only a segment's own channels, is a grouped
 //! convolution with one group per segment. Layouts of the inputs: [`crate::features`].
 
-use crate::features::{Batch, Skeletons, MOTION_CHANNELS, REST_CHANNELS, SEGMENTS, WINDOW};
+use crate::features::{Batch, MOTION_CHANNELS, WINDOW};
 use crate::fk;
 use crate::prior::PriorKind;
 use crate::quantize::{Calibration, Point};
+use crate::skeletons::{Skeletons, REST_CHANNELS, SEGMENTS};
 use burn::module::Param;
 use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig};
 use burn::nn::conv::{Conv1d, Conv1dConfig};
@@ -556,7 +557,8 @@ impl Decoder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::features::testing::{character, window};
+    use crate::bodies::testing::character;
+    use crate::features::testing::window;
     use posecoach_core::format::Format;
 
     const SEED: u64 = 3;

@@ -24,8 +24,8 @@
 
 use crate::clip::{counterparts, leg_length, transfer, Rotations};
 use crate::error::Error;
-use crate::features::Skeletons;
 use crate::fk;
+use crate::skeletons::Skeletons;
 use burn::prelude::{Device, Tensor, TensorData};
 use posecoach_core::retarget::{Analytic, RetargetError};
 use posecoach_core::skeleton::Skeleton;
@@ -225,118 +225,5 @@ impl Prior {
             }
         }
         Tensor::from_data(TensorData::new(out, [b, onto, t, 4]), &device)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::clip::testing::wave_frames;
-    use crate::clip::{standard_skeleton, Clip};
-    use crate::features::testing::{character, window};
-    use crate::features::{Batch, Window, RATE_HZ, WINDOW};
-    use posecoach_core::format::Format;
-    use posecoach_core::Vec3;
-
-    const TOLERANCE: f32 = 1e-5;
-
-    #[test]
-    fn forward_kinematics_of_the_prior_is_the_analytic_retargeter() {
-        let device = Device::flex();
-        let formats = [Format::Coco17, Format::GolfMarkers, Format::Cmu31];
-        let targets = [Format::Cmu31, Format::H36m17, Format::Bandai22];
-        let windows: Vec<_> = formats
-            .iter()
-            .enumerate()
-            .map(|(i, &f)| window(&character(f, i as u64).skeleton))
-            .collect();
-        let bodies: Vec<_> = targets
-            .iter()
-            .enumerate()
-            .map(|(i, &f)| character(f, 10 + i as u64).skeleton)
-            .collect();
-        let onto: Vec<_> = bodies.iter().collect();
-        let batch = Batch::new(&windows, &onto, &device).unwrap();
-        let (rotations, root) = batch.prior.solve(
-            PriorKind::Chords,
-            batch.positions.clone(),
-            &batch.source,
-            &batch.target,
-        );
-        let positions = fk::forward(rotations, root, &batch.target);
-        let [_, frames, joints, _] = positions.dims();
-        let got = positions.to_data().try_to_vec::<f32>().unwrap();
-        for (i, (window, target)) in windows.iter().zip(&bodies).enumerate() {
-            let analytic = Analytic::new(window.skeleton(), target).unwrap();
-            let h = target.height();
-            let mut out = vec![Vec3::zeros(); target.len()];
-            let origin = window.frame(0)[0];
-            for f in 0..frames {
-                analytic.frame(window.frame(f), &mut out).unwrap();
-                let start = Vec3::new(origin.x, 0.0, origin.z) * analytic.scale();
-                for (k, expected) in out.iter().enumerate() {
-                    let p = &got[((i * frames + f) * joints + k) * 3..][..3];
-                    let p = Vec3::new(p[0], p[1], p[2]) * h;
-                    let gap = (p - (expected - start)).norm() / h;
-                    assert!(gap < TOLERANCE, "window {i} frame {f} joint {k}: {gap}");
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn the_rotation_prior_recovers_the_ground_truth_where_the_chords_miss_the_rest_poses() {
-        let device = Device::flex();
-        let pairs = [
-            (Format::H36m17, Format::H36m17),
-            (Format::Cmu31, Format::Coco17),
-            (Format::Bandai22, Format::H36m17),
-        ];
-        let mut windows = Vec::new();
-        let mut truths = Vec::new();
-        let mut bodies = Vec::new();
-        for (i, &(from, onto)) in pairs.iter().enumerate() {
-            let standard = standard_skeleton(&character(from, 20 + i as u64).skeleton).unwrap();
-            let motion = wave_frames(&standard, 3 * WINDOW);
-            let clip = Clip::from_motion("wave", &motion).unwrap();
-            let source = character(from, i as u64);
-            let target = character(onto, 10 + i as u64);
-            windows.push(Window::new(&clip.on(&source).unwrap(), 0).unwrap());
-            truths.push(clip.on(&target).unwrap().resampled(RATE_HZ));
-            bodies.push(target.skeleton);
-        }
-        let onto: Vec<_> = bodies.iter().collect();
-        let batch = Batch::new(&windows, &onto, &device).unwrap();
-        let error = |kind: PriorKind| {
-            let (rotations, root) =
-                batch
-                    .prior
-                    .solve(kind, batch.positions.clone(), &batch.source, &batch.target);
-            let positions = fk::forward(rotations, root, &batch.target);
-            let [_, frames, joints, _] = positions.dims();
-            let got = positions.to_data().try_to_vec::<f32>().unwrap();
-            let (mut sum, mut count) = (0.0, 0.0);
-            for (i, (truth, target)) in truths.iter().zip(&bodies).enumerate() {
-                let h = target.height();
-                let at = |f: usize, k: usize| {
-                    let p = &got[((i * frames + f) * joints + k) * 3..][..3];
-                    Vec3::new(p[0], p[1], p[2]) * h
-                };
-                for f in 0..frames {
-                    let truth = truth.frame(f);
-                    for k in 1..target.len() {
-                        let gap = (at(f, k) - at(f, 0)) - (truth[k] - truth[0]);
-                        sum += gap.norm() / h;
-                        count += 1.0;
-                    }
-                }
-            }
-            sum / count
-        };
-        let (rotations, chords) = (error(PriorKind::Rotations), error(PriorKind::Chords));
-        assert!(
-            rotations < 0.3 * chords && rotations < 0.004,
-            "rotations {rotations}, chords {chords} (heights)"
-        );
     }
 }

@@ -16,9 +16,10 @@
 use crate::bodies::Variation;
 use crate::dataset::{Pool, Split, SplitRng, Structure, FORMATS};
 use crate::error::Error;
-use crate::features::{Batch, Window, MOTION_CHANNELS, RATE_HZ, REST_CHANNELS, SEGMENTS, WINDOW};
+use crate::features::{Batch, Window, MOTION_CHANNELS, RATE_HZ, WINDOW};
 use crate::model::{Dense as Layer, Parameters, Teacher, TeacherConfig};
 use crate::prior::PriorKind;
+use crate::skeletons::{REST_CHANNELS, SEGMENTS};
 use burn::prelude::{Device, Tensor};
 use posecoach_core::int8::{self, Requant};
 use posecoach_core::weights::{

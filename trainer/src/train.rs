@@ -26,10 +26,11 @@ use crate::clip::counterparts;
 use crate::dataset::{Example, Pool, SplitRng, Structure};
 use crate::discriminator::Discriminator;
 use crate::error::Error;
-use crate::features::{motion_features, Batch, Skeletons, Window};
+use crate::features::{motion_features, Batch, Window};
 use crate::losses::{self, Reconstruction, Switches};
 use crate::model::{Teacher, TeacherConfig};
 use crate::prior::PriorKind;
+use crate::skeletons::Skeletons;
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::optim::{AdamConfig, GradientsAccumulator, GradientsParams, ModuleOptimizer};
 use burn::prelude::{Device, Tensor, TensorData};
@@ -810,10 +811,10 @@ impl<'a> Reader<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bodies::testing::character;
     use crate::clip::testing::wave_frames;
     use crate::clip::Clip;
     use crate::dataset::window_frames;
-    use crate::features::testing::character;
     use std::time::Instant;
 
     const SEED: u64 = 7;
