@@ -19,6 +19,7 @@
 //! - [`prior`]: the geometric solutions the teacher corrects (the rotation transfer, the
 //!   analytic retargeter's chords).
 //! - [`features`]: motion windows as padded, batched tensors, with their skeletons and prior.
+//! - [`calibration`]: the activations the int8 network keeps, and their largest magnitudes.
 //! - [`model`]: the teacher network.
 //! - [`losses`]: the training losses.
 //! - [`discriminator`]: the adversarial loss's discriminator.
@@ -29,6 +30,7 @@
 #![warn(missing_docs)]
 
 pub mod bodies;
+pub mod calibration;
 pub mod clip;
 pub mod dataset;
 pub mod discriminator;

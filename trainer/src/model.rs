@@ -18,10 +18,10 @@
 //! *masked* convolution, one that mixes only a segment's own channels, is a grouped
 //! convolution with one group per segment. Layouts of the inputs: [`crate::features`].
 
+use crate::calibration::{Calibration, Point};
 use crate::features::{Batch, MOTION_CHANNELS, WINDOW};
 use crate::fk;
 use crate::prior::PriorKind;
-use crate::quantize::{Calibration, Point};
 use crate::skeletons::{Skeletons, REST_CHANNELS, SEGMENTS};
 use burn::module::Param;
 use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig};

@@ -4,8 +4,8 @@
 //! - **Weights**: symmetric per output channel, `scale = max |w| / 127`. A layer whose int8
 //!   input has one scale per channel (the motion features) has those scales folded into its
 //!   weights first, so its accumulators share one unit per output.
-//! - **Activations**: one scale per point ([`Point`]), the largest magnitude the float network
-//!   produces there on golf windows ([`calibrate`]) over 127.
+//! - **Activations**: one scale per point ([`Point`](crate::calibration::Point)), the largest
+//!   magnitude the float network produces there on golf windows ([`calibrate`]) over 127.
 //! - **Constants** fold into biases: the time encoding (one bias row per frame), the segment
 //!   tokens' residual (one row per segment), and the rest features' columns of the first
 //!   joint layers (per joint, by the core at set-up).
@@ -14,114 +14,19 @@
 //!   are never computed. The tokens' own logits and values are `f32` tables too.
 
 use crate::bodies::Variation;
+use crate::calibration::{Calibration, TINY};
 use crate::dataset::{Pool, Split, SplitRng, Structure, FORMATS};
 use crate::error::Error;
 use crate::features::{Batch, Window, MOTION_CHANNELS, RATE_HZ, WINDOW};
 use crate::model::{Dense as Layer, Parameters, Teacher, TeacherConfig};
 use crate::prior::PriorKind;
 use crate::skeletons::{REST_CHANNELS, SEGMENTS};
-use burn::prelude::{Device, Tensor};
+use burn::prelude::Device;
 use posecoach_core::int8::{self, Requant};
 use posecoach_core::weights::{
     self, Architecture, Dense, Header, Scales, Table, Tensors, Training, VERSION,
 };
 use rand::seq::IndexedRandom;
-
-/// The activations the quantized network keeps in int8, where the float network makes them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Point {
-    /// The motion features (one scale per channel).
-    Motion,
-    /// The motion encoder's hidden layer.
-    Hidden,
-    /// Joint embeddings plus the time encoding.
-    Joints,
-    /// The attention's context before its output layer.
-    Context,
-    /// Segment tokens after attention.
-    Segments,
-    /// After the first downsampling convolution (activated).
-    Down1,
-    /// After the second, before the residual.
-    Down2,
-    /// The decoder's input: motion feature plus skeleton feature.
-    Fused,
-    /// After the first decoder convolution (activated).
-    Up1,
-    /// After the second (activated).
-    Up2,
-    /// The joint decoder's hidden layer.
-    Decoder,
-}
-
-/// Points after [`Point::Motion`], in [`Scales`] order.
-const POINTS: [Point; 10] = [
-    Point::Hidden,
-    Point::Joints,
-    Point::Context,
-    Point::Segments,
-    Point::Down1,
-    Point::Down2,
-    Point::Fused,
-    Point::Up1,
-    Point::Up2,
-    Point::Decoder,
-];
-
-/// Smallest magnitude a scale is computed from: an activation or weight row that is zero
-/// everywhere still gets a valid scale.
-const TINY: f32 = 1e-8;
-
-/// The largest magnitudes seen at each [`Point`].
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Calibration {
-    motion: [f32; MOTION_CHANNELS],
-    max: [f32; POINTS.len()],
-    /// Windows seen.
-    pub windows: usize,
-    /// An activation could not be read back as `f32`s: the scales would miss it.
-    unreadable: bool,
-}
-
-impl Calibration {
-    /// Records the magnitudes of `x` at `point`.
-    pub fn see<const D: usize>(&mut self, point: Point, x: &Tensor<D>) {
-        let Ok(values) = x.clone().abs().into_data().try_to_vec::<f32>() else {
-            self.unreadable = true;
-            return;
-        };
-        match POINTS.iter().position(|&p| p == point) {
-            Some(i) => self.max[i] = values.iter().copied().fold(self.max[i], f32::max),
-            None => {
-                for row in values.chunks_exact(MOTION_CHANNELS) {
-                    for (m, v) in self.motion.iter_mut().zip(row) {
-                        *m = m.max(*v);
-                    }
-                }
-            }
-        }
-    }
-
-    /// The int8 scales: each point's largest magnitude over 127.
-    pub fn scales(&self) -> Scales {
-        let s = |m: f32| m.max(TINY) / int8::MAX as f32;
-        let [hidden, joints, context, segments, down_1, down_2, fused, up_1, up_2, decoder] =
-            self.max.map(s);
-        Scales {
-            motion: self.motion.map(s),
-            hidden,
-            joints,
-            context,
-            segments,
-            down_1,
-            down_2,
-            fused,
-            up_1,
-            up_2,
-            decoder,
-        }
-    }
-}
 
 /// The activations' magnitudes of `model` on `windows` random golf windows of `pool`'s training
 /// clips (real and synthetic swings and putts), each onto a random body in a random format,
