@@ -39,6 +39,7 @@
 
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::format::{Format, Source};
+use posecoach_core::resample;
 use posecoach_core::wire::{PoseFrame, MAX_WIRE_JOINTS};
 use posecoach_core::Vec3;
 
@@ -271,9 +272,7 @@ impl PoseStream {
                         break;
                     }
                     let w = (t.saturating_sub(last.t_us)) as f32 / span;
-                    for ((o, a), b) in out.iter_mut().zip(&self.previous).zip(&current) {
-                        *o = a + (b - a) * w;
-                    }
+                    resample::lerp(&self.previous, &current, w, &mut out);
                     self.counters.emitted += 1;
                     emit(StreamEvent::Frame {
                         t_us: t,

@@ -18,6 +18,7 @@
 //! - [`format`](mod@format): built-in keypoint formats mapped onto the vocabulary.
 //! - [`skeleton`]: joints, parents, rest offsets, body segments, end effectors, height.
 //! - [`kinematics`]: forward and inverse kinematics with per-bone rotations.
+//! - [`resample`]: linear resampling from one frame rate to another.
 //! - [`retarget`]: the analytic retargeter.
 //! - [`detector`]: which stretch of a live pose stream is a swing.
 //! - [`events`]: the eight swing events.
@@ -48,6 +49,7 @@ pub mod kinematics;
 pub mod math;
 pub mod network;
 pub mod reference;
+pub mod resample;
 pub mod retarget;
 pub mod score;
 pub mod skeleton;

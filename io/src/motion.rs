@@ -6,6 +6,7 @@ use crate::golf::{JointCentres, GOLF_JOINTS};
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::reference::{self, Reference, ReferenceError};
+use posecoach_core::resample;
 use posecoach_core::retarget::{Analytic, RetargetError};
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
 use posecoach_core::Vec3;
@@ -72,27 +73,26 @@ impl Motion {
         })
     }
 
-    /// The motion resampled to `rate_hz` by linear interpolation in time; a sample is missing
-    /// if either neighbour was. A T-pose (rate 0) is returned unchanged.
+    /// The motion resampled to `rate_hz` by linear interpolation in time
+    /// ([`posecoach_core::resample`]); a sample is missing if either neighbour was. A T-pose
+    /// (rate 0), and a motion already at that rate ([`resample::SAME_RATE`]), are returned
+    /// unchanged.
     pub fn resampled(&self, rate_hz: f32) -> Motion {
         if self.rate_hz <= 0.0 || rate_hz <= 0.0 || self.frames() == 0 {
             return self.clone();
         }
+        if resample::same_rate(self.rate_hz, rate_hz) {
+            return self.clone();
+        }
         let n = self.skeleton.len();
-        let last = self.frames() - 1;
-        // Times in f64, snapped onto input samples within rounding error.
-        let step = f64::from(self.rate_hz) / f64::from(rate_hz);
-        let frames = (last as f64 / step + 1e-9).floor() as usize + 1;
-        let mut positions = Vec::with_capacity(frames * n);
+        let frames = resample::frames(self.frames(), self.rate_hz, rate_hz);
+        let mut positions = vec![Vec3::zeros(); frames * n];
         let mut missing = Vec::with_capacity(frames * n);
-        for f in 0..frames {
-            let t = f as f64 * step;
-            let i = ((t + 1e-9).floor() as usize).min(last);
-            let w = (t - i as f64).max(0.0) as f32;
-            let j = if w > 0.0 { (i + 1).min(last) } else { i };
+        for (f, out) in positions.chunks_exact_mut(n).enumerate() {
+            let (i, w) = resample::source(f, self.rate_hz, rate_hz, self.frames());
+            let j = if w > 0.0 { i + 1 } else { i };
+            resample::lerp(self.frame(i), self.frame(j), w, out);
             for k in 0..n {
-                let (a, b) = (self.positions[i * n + k], self.positions[j * n + k]);
-                positions.push(a + (b - a) * w);
                 missing.push(self.missing[i * n + k] || self.missing[j * n + k]);
             }
         }

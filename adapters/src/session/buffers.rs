@@ -23,7 +23,7 @@ pub struct BufferLens {
 
 impl BufferLens {
     /// For students of up to `joints` joints, coaches of up to `coach_frames` frames at the
-    /// model rate ([`frames_at`](super::frames_at)) and model rates up to `rate_hz`.
+    /// model rate ([`Coach::frames_at`](super::Coach::frames_at)) and model rates up to `rate_hz`.
     pub const fn new(joints: usize, coach_frames: usize, rate_hz: u16) -> BufferLens {
         let ring_frames = (RING_S * rate_hz as f32) as usize;
         // A swing is scored in the ring, so it is never longer than the ring.

@@ -34,13 +34,12 @@ mod refusal;
 #[cfg(feature = "std")]
 pub use buffers::OwnedBuffers;
 pub use buffers::{BufferLens, Buffers};
-pub use coach::{frames_at, Coach, SAME_RATE};
+pub use coach::Coach;
 pub use refusal::Refusal;
 
 use crate::fusion::FusionError;
 use crate::imu::{ImuAdapter, ImuError};
 use crate::pose_stream::{PoseStream, StreamConfig, StreamCounters, StreamError, StreamEvent};
-use coach::same_rate;
 use core::ops::Range;
 use posecoach_core::config::MAX_SWING_FRAMES;
 use posecoach_core::detector::{DetectorConfig, SwingDetector, SwingWindow};
@@ -48,6 +47,7 @@ use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, EventError, SwingEvents, STILL_S};
 use posecoach_core::format::Format;
 use posecoach_core::math::norm;
+use posecoach_core::resample;
 use posecoach_core::retarget::Fit;
 use posecoach_core::score::{self, Detected, Report, ScoreError};
 use posecoach_core::skeleton::Skeleton;
@@ -355,7 +355,7 @@ impl<'b> Session<'b> {
                 let frames = coach.frames_at(rate);
                 let network = self
                     .network
-                    .filter(|w| same_rate(w.architecture().rate_hz, rate));
+                    .filter(|w| resample::same_rate(w.architecture().rate_hz, f32::from(rate)));
                 let mut needed = BufferLens::new(joints, frames, rate);
                 if let Some(w) = network {
                     let n = coach.skeleton.len();

@@ -22,9 +22,10 @@ use nrf52840_hal::uarte::{self, Baudrate, Parity, Uarte};
 use nrf52840_hal::Timer;
 use panic_probe as _;
 use posecoach_adapters::lsm6ds3::{Lsm6ds3, ADDRESS};
-use posecoach_adapters::session::{frames_at, BufferLens, Buffers, Coach, Session, DEFAULT_CONFIG};
+use posecoach_adapters::session::{BufferLens, Buffers, Coach, Session, DEFAULT_CONFIG};
 use posecoach_core::blob::Aligned;
 use posecoach_core::reference::Reference;
+use posecoach_core::resample;
 use posecoach_core::wire::{encode, Config, Decoder, Message, MAX_FRAME};
 use posecoach_core::Vec3;
 use static_cell::ConstStaticCell;
@@ -41,7 +42,7 @@ const STUDENT_JOINTS: usize = 17;
 /// The model rate this board has buffers for (a phone asking for more gets a `Nack`), Hz.
 const MODEL_RATE_HZ: u16 = 30;
 /// Frames of the longest bundled coach reference (110 at 60 Hz) at the model rate.
-const COACH_FRAMES: usize = frames_at(110, 60.0, MODEL_RATE_HZ);
+const COACH_FRAMES: usize = resample::frames(110, 60.0, MODEL_RATE_HZ as f32);
 const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RATE_HZ);
 /// Microseconds a UART read waits for a byte before the loop polls the IMU again.
 const UART_WAIT_US: u32 = 200;

@@ -1,6 +1,6 @@
 //! posecoach's device pipeline on a Cortex-M4F (QEMU `mps2-an386`).
 //!
-//! First checks the int8 retargeter (`weights/student-int8.pcw`, embedded) against its golden
+//! First checks the int8 retargeter (`weights/distilled-int8.pcw`, embedded) against its golden
 //! vectors bit for bit. Then replays the recorded session `tests/logs/device_h36m_30hz.pclog`
 //! (embedded; a 30 Hz model rate, the network's) through the device's session with the
 //! bundled coach references (embedded `.pcr` blobs) and the network: decode → pose stream →
@@ -23,10 +23,11 @@ use count::Tally;
 use defmt_semihosting as _;
 use posecoach_adapters::log::LogReader;
 use posecoach_adapters::session::{
-    frames_at, BufferLens, Buffers, Coach, Outcome, Session, DEFAULT_CONFIG,
+    BufferLens, Buffers, Coach, Outcome, Session, DEFAULT_CONFIG,
 };
 use posecoach_core::blob::Aligned;
 use posecoach_core::reference::Reference;
+use posecoach_core::resample;
 use posecoach_core::weights::{Architecture, Weights, SEGMENTS, WINDOW};
 use posecoach_core::wire::{encode, Config, Message, MAX_FRAME};
 use posecoach_core::Vec3;
@@ -46,7 +47,7 @@ const STUDENT_JOINTS: usize = 17;
 /// The model rate the log's `Config` asks for, Hz.
 const MODEL_RATE_HZ: u16 = 30;
 /// Frames of the longest bundled coach reference (110 at 60 Hz) at the model rate.
-const COACH_FRAMES: usize = frames_at(110, 60.0, MODEL_RATE_HZ);
+const COACH_FRAMES: usize = resample::frames(110, 60.0, MODEL_RATE_HZ as f32);
 /// Joints of the bundled coaches (the canonical 22).
 const COACH_JOINTS: usize = 22;
 /// The embedded network's sizes (checked against its header at start).
