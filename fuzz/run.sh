@@ -15,7 +15,7 @@ for target in bvh c3d csv wire log reference weights; do
         wire) cp ../tests/fixtures/wire_messages.bin "$corpus/" ;;
         log) cp ../tests/logs/*.pclog "$corpus/" ;;
         reference) cp ../coaches/*.pcr "$corpus/" ;;
-        weights) cp ../weights/student-int8.pcw "$corpus/" ;;
+        weights) cp ../weights/distilled-int8.pcw "$corpus/" ;;
         *) find ../tests/fixtures -name "*.$target" -exec cp {} "$corpus/" \; ;;
     esac
     log="logs/$target.txt"

@@ -11,9 +11,9 @@ fn main() {
         "../../coaches/iron.pcr",
         "../../tests/logs/device_h36m_30hz.pclog",
         "../../tests/logs/device_h36m_30hz.int8.device.bin",
-        "../../weights/student-int8.pcw",
-        "../../weights/student-int8.golden-in.pcr",
-        "../../weights/student-int8.golden-out.pcr",
+        "../../weights/distilled-int8.pcw",
+        "../../weights/distilled-int8.golden-in.pcr",
+        "../../weights/distilled-int8.golden-out.pcr",
     ] {
         println!("cargo:rerun-if-changed={file}");
     }

@@ -28,9 +28,9 @@ fn aligned(bytes: &[u8]) -> Vec<u32> {
 /// golden output's bits: what the firmware checks on the Cortex-M4F.
 #[test]
 fn committed_weights_reproduce_their_golden_vectors_bit_for_bit() {
-    let bytes = std::fs::read(repo("weights/student-int8.pcw")).unwrap();
-    let input = io::load(&repo("weights/student-int8.golden-in.pcr")).unwrap();
-    let expected = io::load(&repo("weights/student-int8.golden-out.pcr")).unwrap();
+    let bytes = std::fs::read(repo("weights/distilled-int8.pcw")).unwrap();
+    let input = io::load(&repo("weights/distilled-int8.golden-in.pcr")).unwrap();
+    let expected = io::load(&repo("weights/distilled-int8.golden-out.pcr")).unwrap();
     let words = aligned(&bytes);
     let weights = Weights::from_bytes(&bytemuck::cast_slice(&words)[..bytes.len()]).unwrap();
     assert_eq!(input.rate_hz, weights.architecture().rate_hz);
@@ -66,7 +66,7 @@ fn export_writes_weights_that_inspect_reads_and_eval_ranks() {
     let dir = std::env::temp_dir().join(format!("posecoach-export-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("int8.pcw").display().to_string();
-    let model = repo("weights/student.pcw").display().to_string();
+    let model = repo("weights/distilled.pcw").display().to_string();
     let coach = repo("coaches/iron.pcr").display().to_string();
     let data = data.display().to_string();
     let args: learn::ExportArgs = parse(&[
@@ -114,8 +114,8 @@ fn export_writes_weights_that_inspect_reads_and_eval_ranks() {
             .as_f64()
             .unwrap()
     };
-    // The int8 network is the float student's to within a few per cent of its error.
-    let (int8, float) = (cross("int8"), cross("student"));
+    // The int8 network is the float distilled network's to within a few per cent of its error.
+    let (int8, float) = (cross("int8"), cross("distilled"));
     assert!(
         (int8 - float).abs() < 0.05 * float,
         "{int8} against {float}"

@@ -74,7 +74,7 @@ fn every_log_replays_to_its_swings_and_golden_reports() {
 
 #[test]
 fn the_firmwares_log_replays_with_the_int8_network_to_its_goldens() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../weights/student-int8.pcw");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../weights/distilled-int8.pcw");
     let network = posecoach_cli::coaches::Network::load(&path).unwrap();
     let weights = network.weights().unwrap();
     for name in INT8_LOGS {

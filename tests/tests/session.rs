@@ -215,7 +215,8 @@ fn a_stream_in_another_format_is_mapped_onto_the_profile() {
 /// network's rate and, with the analytic retargeter, at others.
 #[test]
 fn a_network_borrows_the_ring_at_its_rate() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../weights/student-int8.pcw");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../weights/distilled-int8.pcw");
     let network = posecoach_cli::coaches::Network::load(&path).unwrap();
     let weights = network.weights().unwrap();
     let a = weights.architecture();

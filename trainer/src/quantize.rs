@@ -478,7 +478,7 @@ mod tests {
     /// the float student closely on a golf swing onto another body and format.
     #[test]
     fn the_int8_student_follows_the_float_student() {
-        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../weights/student.pcw");
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../weights/distilled.pcw");
         let device = Device::flex();
         let (model, config, _) = load_teacher(&path, &device).unwrap();
         let mut pool = Pool::default();

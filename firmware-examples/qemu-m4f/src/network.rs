@@ -9,13 +9,14 @@ use posecoach_core::weights::Weights;
 use posecoach_core::Vec3;
 
 /// The committed int8 weights (`posecoach export`).
-pub static WEIGHTS: &Aligned<[u8]> = &Aligned(*include_bytes!("../../../weights/student-int8.pcw"));
+pub static WEIGHTS: &Aligned<[u8]> =
+    &Aligned(*include_bytes!("../../../weights/distilled-int8.pcw"));
 /// Their golden vectors: a coach swing at the network's rate, and its retargeting by the host.
 static GOLDEN_IN: &Aligned<[u8]> = &Aligned(*include_bytes!(
-    "../../../weights/student-int8.golden-in.pcr"
+    "../../../weights/distilled-int8.golden-in.pcr"
 ));
 static GOLDEN_OUT: &Aligned<[u8]> = &Aligned(*include_bytes!(
-    "../../../weights/student-int8.golden-out.pcr"
+    "../../../weights/distilled-int8.golden-out.pcr"
 ));
 
 /// Bytes of the golden vectors, which only the test embeds.
