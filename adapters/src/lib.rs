@@ -1,16 +1,25 @@
-//! posecoach-adapters: turning files, byte streams and sensor samples into core frames.
+//! posecoach-adapters: what runs on the device besides the core: sensor samples and a phone's
+//! pose stream turned into frames on the student's skeleton, and the scoring session that
+//! takes wire messages to swing reports.
 //!
-//! Without features the crate is `no_std` and allocation-free. The `std` feature adds host
-//! file import and export in the `io` module.
+//! `no_std` and allocation-free. The `std` feature only lifts `no_std` and adds
+//! `session::OwnedBuffers` (heap buffers for host tools and tests); host file formats are in
+//! `posecoach-io`.
 //!
 //! ```text
-//!  ImuSample ──fusion (wire units → SI, still-period bias, Mahony filter)──▶ orientations
-//!            ──imu (T-pose calibration, sensor-to-segment offsets, forward kinematics)──▶ frames
+//!  PoseFrame ──pose_stream (model-rate grid, duplicates, gaps, confidence)──▶ frames ─┐
+//!  ImuSample ──fusion (wire units → SI, still-period bias, Mahony filter)──▶ attitudes│
+//!            ──imu (T-pose calibration, sensor-to-segment offsets, FK)──▶ frames ────┤
+//!                                                                                    ▼
+//!  Message ──session (profile, coach, settings; detector, events, DTW, score)──▶ Outcome
 //! ```
 //!
+//! - [`pose_stream`]: a phone's keypoint frames onto the model rate's time grid.
 //! - [`fusion`]: one IMU's attitude.
 //! - [`imu`]: the pose of a skeleton from a layout of IMUs.
 //! - `lsm6ds3` (feature `lsm6ds3`): an IMU chip over any `embedded-hal` I²C bus.
+//! - [`log`]: recorded sessions (`.pclog`): a header and the wire frames a device received.
+//! - [`session`]: the device's scoring session, from wire messages to swing reports.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 #![forbid(unsafe_code)]
 

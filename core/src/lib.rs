@@ -1,18 +1,20 @@
 //! posecoach-core: the no_std, allocation-free heart of posecoach.
 //!
 //! Everything here runs unchanged on a Cortex-M4F and on the host, on caller-owned buffers,
-//! without panicking on any input.
+//! without panicking on any input. `docs/ARCHITECTURE.md` draws the whole device path; the
+//! core's part of it:
 //!
 //! ```text
-//!  keypoints (any format) ──format──▶ skeleton joints ──normalize──▶ p ⊕ v
-//!                                          │
-//!  coach swing ──retarget (onto the student's T-pose skeleton)──▶ virtual swing
-//!                                          │
-//!            kinematics: FK (rotations → positions), IK (positions → rotations)
+//!  bytes ──wire::Decoder──▶ Message          Report::to_wire ──wire::encode──▶ bytes
+//!                                                  ▲
+//!  student T-pose ──format──▶ skeleton             │
+//!  coach reference ──resample──▶ model rate        │
+//!     ──retarget::Analytic / network (int8)──▶ virtual coach ─┐
+//!  student frames ──detector──▶ swing ──events──▶ dtw (Band) ─┴─▶ score::Report
 //! ```
 //!
 //! Modules, in data-flow order:
-//! - [`config`]: every capacity constant.
+//! - [`config`]: the capacity constants more than one module shares.
 //! - [`math`]: square root and length, on the device's FPU.
 //! - [`joint`]: the canonical joint vocabulary and its parent table.
 //! - [`format`](mod@format): built-in keypoint formats mapped onto the vocabulary.

@@ -17,10 +17,11 @@
 use std::fmt;
 use std::str::FromStr;
 
-/// Most joints a file may declare; this also bounds the nesting depth.
-const MAX_JOINTS: usize = 256;
+/// Most joints a file may declare (a parsing limit; a skeleton keeps at most
+/// `posecoach_core::config::MAX_JOINTS` of them); this also bounds the nesting depth.
+const MAX_DECLARED_JOINTS: usize = 256;
 /// Most frames a file may declare (38 h at 120 fps).
-const MAX_FRAMES: usize = 1 << 24;
+const MAX_DECLARED_FRAMES: usize = 1 << 24;
 /// Rotation values of frame 0 below this (degrees) count as zero in [`Bvh::first_frame_is_rest`].
 const REST_EPS_DEG: f64 = 1e-6;
 /// Vectors shorter than this (file units) have no usable direction.
@@ -238,8 +239,10 @@ impl<'a> Lexer<'a> {
         joints: &mut Vec<BvhJoint>,
         parent: Option<usize>,
     ) -> Result<usize, BvhError> {
-        if joints.len() >= MAX_JOINTS {
-            return self.fail(BvhErrorKind::TooManyJoints { max: MAX_JOINTS });
+        if joints.len() >= MAX_DECLARED_JOINTS {
+            return self.fail(BvhErrorKind::TooManyJoints {
+                max: MAX_DECLARED_JOINTS,
+            });
         }
         let Some(name) = self.next().map(str::to_string) else {
             return self.unexpected("a joint name", None);
@@ -325,7 +328,9 @@ impl Bvh {
         }
         lx.expect("MOTION", "`MOTION` or `ROOT`")?;
         lx.expect("Frames:", "`Frames:`")?;
-        let frames = lx.value("a frame count up to 16777216", |n: &usize| *n <= MAX_FRAMES)?;
+        let frames = lx.value("a frame count up to 16777216", |n: &usize| {
+            *n <= MAX_DECLARED_FRAMES
+        })?;
         lx.expect("Frame", "`Frame Time:`")?;
         lx.expect("Time:", "`Frame Time:`")?;
         let frame_time = lx.value("a positive frame time", |t: &f64| t.is_finite() && *t > 0.0)?;
@@ -1063,7 +1068,9 @@ mod tests {
     fn hostile_inputs_never_panic() {
         let deep = "HIERARCHY\nROOT A\n{ OFFSET 0 0 0\n".to_string()
             + &"JOINT B { OFFSET 0 1 0\n".repeat(1000);
-        let too_many = BvhErrorKind::TooManyJoints { max: MAX_JOINTS };
+        let too_many = BvhErrorKind::TooManyJoints {
+            max: MAX_DECLARED_JOINTS,
+        };
         assert_eq!(Bvh::parse(&deep).unwrap_err().kind, too_many);
         assert!(Bvh::parse(&format!("HIERARCHY\nROOT A\n{}", "{\n".repeat(100_000))).is_err());
         let last_token = SMALL_BVH.trim_end().len() - 1;

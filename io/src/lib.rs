@@ -59,7 +59,7 @@ impl fmt::Display for FileError {
             FileErrorKind::C3d(e) => e.fmt(f),
             FileErrorKind::Golf(e) => write!(
                 f,
-                "{e}: C3D files are read as the GearsSports golf marker set (see the README)"
+                "{e}: C3D files are read as the GearsSports golf marker set (see docs/FORMATS.md)"
             ),
             FileErrorKind::Skeleton(e) => write!(f, "the joint centres are not a skeleton: {e}"),
             FileErrorKind::Reference(e) => e.fmt(f),
