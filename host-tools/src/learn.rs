@@ -174,7 +174,7 @@ pub fn train(args: &TrainArgs) -> Result<String> {
 }
 
 /// The distilled network's default sizes: half the teacher's features per segment.
-pub const STUDENT: TeacherConfig = TeacherConfig {
+pub const DISTILLED: TeacherConfig = TeacherConfig {
     features: 16,
     heads: 2,
     kernel: 3,
@@ -191,17 +191,17 @@ pub struct DistillArgs {
     /// Epochs of STEPS_PER_EPOCH (1000) steps, counting those a resumed checkpoint has done.
     #[arg(long, default_value_t = 10)]
     epochs: usize,
-    /// Seeds the student's weights and every batch.
+    /// Seeds the distilled network's weights and every batch.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Features per segment of the student (even, a multiple of `--heads`).
-    #[arg(long, default_value_t = STUDENT.features)]
+    /// Features per segment of the distilled network (even, a multiple of `--heads`).
+    #[arg(long, default_value_t = DISTILLED.features)]
     features: usize,
-    /// Attention heads of the student.
-    #[arg(long, default_value_t = STUDENT.heads)]
+    /// Attention heads of the distilled network.
+    #[arg(long, default_value_t = DISTILLED.heads)]
     heads: usize,
-    /// Kernel size of the student's temporal convolutions (odd).
-    #[arg(long, default_value_t = STUDENT.kernel)]
+    /// Kernel size of the distilled network's temporal convolutions (odd).
+    #[arg(long, default_value_t = DISTILLED.kernel)]
     kernel: usize,
     /// Windows per batch.
     #[arg(long, default_value_t = BATCH)]
@@ -215,9 +215,10 @@ pub struct DistillArgs {
     /// The checkpoint, rewritten after every epoch.
     #[arg(long)]
     out: PathBuf,
-    /// Also write the student alone here at the end (what `--weights` and `export` read).
+    /// Also write the distilled network alone here at the end (what `--weights` and `export`
+    /// read).
     #[arg(long)]
-    student: Option<PathBuf>,
+    distilled: Option<PathBuf>,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -229,7 +230,7 @@ pub fn distill(args: &DistillArgs) -> Result<String> {
         features: args.features,
         heads: args.heads,
         kernel: args.kernel,
-        prior: STUDENT.prior,
+        prior: DISTILLED.prior,
     };
     if sizes.heads == 0
         || !sizes.features.is_multiple_of(2 * sizes.heads)
@@ -264,7 +265,7 @@ pub fn distill(args: &DistillArgs) -> Result<String> {
         &pool,
         steps,
         &args.out,
-        args.student.as_deref(),
+        args.distilled.as_deref(),
         args.json,
     )
 }
@@ -508,7 +509,7 @@ const GOLDEN_HEIGHT_M: f32 = 1.70;
 
 #[derive(clap::Args)]
 pub struct ExportArgs {
-    /// The trained network to quantize: a distilled student (teacher file or checkpoint).
+    /// The trained network to quantize: the distilled network (teacher file or checkpoint).
     #[arg(long)]
     model: PathBuf,
     /// Golf windows the activation scales are calibrated on.

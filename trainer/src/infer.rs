@@ -31,7 +31,7 @@ use std::path::Path;
 /// Most interleaved streams a motion is split into (a 240 Hz capture: 8).
 const MAX_PHASES: usize = 8;
 
-/// A trained network: a float teacher (or distilled student) or its int8 export.
+/// A trained network: a float teacher (or the distilled network) or its int8 export.
 #[derive(Clone, Debug)]
 enum Model {
     Float {

@@ -290,10 +290,10 @@ pub fn geometry(predicted: Tensor<4>, target: &Skeletons) -> Tensor<1> {
     depth.square().sum() / present.sum().mul_scalar(t as f32).add_scalar(EPSILON)
 }
 
-/// Distillation: the mean squared distance, in target heights, between a student network's
+/// Distillation: the mean squared distance, in target heights, between the distilled network's
 /// joint positions and the teacher's (both `[B, T, J, 3]`; padded joints are zero in both).
-pub fn distillation(student: Tensor<4>, teacher: Tensor<4>) -> Tensor<1> {
-    (student - teacher).square().mean()
+pub fn distillation(distilled: Tensor<4>, teacher: Tensor<4>) -> Tensor<1> {
+    (distilled - teacher).square().mean()
 }
 
 #[cfg(test)]

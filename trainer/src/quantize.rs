@@ -223,7 +223,7 @@ pub fn export(
     if config.prior != PriorKind::Chords {
         return Err(Error::Checkpoint(
             "the core's network corrects the chords (the analytic retargeter); this one \
-             corrects the rotation transfer: distill it into a student first"
+             corrects the rotation transfer: distill it (`posecoach distill`) first"
                 .into(),
         ));
     }
@@ -474,10 +474,10 @@ mod tests {
         assert!((q.requant[0].factor() - scale / 0.05).abs() < 1e-9);
     }
 
-    /// The committed distilled student, quantized with scales from synthetic swings, follows
-    /// the float student closely on a golf swing onto another body and format.
+    /// The committed distilled network, quantized with scales from synthetic swings, follows
+    /// the float one closely on a golf swing onto another body and format.
     #[test]
-    fn the_int8_student_follows_the_float_student() {
+    fn the_int8_distilled_network_follows_the_float_one() {
         let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../weights/distilled.pcw");
         let device = Device::flex();
         let (model, config, _) = load_teacher(&path, &device).unwrap();

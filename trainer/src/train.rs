@@ -109,7 +109,7 @@ pub struct StepLosses {
     pub geometry: f32,
     /// The discriminator's loss.
     pub discriminator: f32,
-    /// Distillation (a student network against its teacher).
+    /// Distillation (the distilled network against its teacher).
     pub distillation: f32,
 }
 
@@ -392,12 +392,12 @@ impl Trainer {
             return Err(checkpoint("not distilling"));
         };
         let windows: usize = parts.iter().map(|p| p.batch.len()).sum();
-        let student = &self.teacher;
+        let distilled = &self.teacher;
         let passes: Vec<(GradientsParams, f32)> = std::thread::scope(|scope| {
             let handles: Vec<_> = parts
                 .iter()
                 .map(|Part { batch: part, .. }| {
-                    let (s, r) = (student.valid().train(), reference.valid().train());
+                    let (s, r) = (distilled.valid().train(), reference.valid().train());
                     let share = part.len() as f32 / windows.max(1) as f32;
                     scope.spawn(move || {
                         let target = r.forward(part).positions.detach();
@@ -452,8 +452,8 @@ impl Trainer {
         write_file(path, &self.header(), &parts)
     }
 
-    /// Writes the network alone to `path` (the student, while distilling): what `--weights`
-    /// loads.
+    /// Writes the network alone to `path` (the distilled network, while distilling): what
+    /// `--weights` loads.
     ///
     /// # Errors
     /// As [`Trainer::save`].
@@ -905,7 +905,8 @@ mod tests {
         let pool = pool();
         let dir = std::env::temp_dir().join(format!("posecoach-distill-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        // A teacher moved off the analytic solution (which an untrained student already is).
+        // A teacher moved off the analytic solution, which an untrained distilled network
+        // already is.
         let mut teacher = Trainer::new(
             TrainConfig {
                 learning_rate: 1e-2,
@@ -919,14 +920,14 @@ mod tests {
         }
         let teacher_file = dir.join("teacher.pcw");
         teacher.save_teacher(&teacher_file).unwrap();
-        let student = TrainConfig {
+        let distilled = TrainConfig {
             teacher: TeacherConfig {
                 features: 4,
                 ..TeacherConfig::TINY
             },
             ..tiny(2)
         };
-        let mut distiller = Trainer::distilling(&teacher_file, student, &device).unwrap();
+        let mut distiller = Trainer::distilling(&teacher_file, distilled, &device).unwrap();
         let losses: Vec<f32> = (0..SMOKE_STEPS)
             .map(|_| distiller.step_on(&batch).unwrap().distillation)
             .collect();
@@ -936,7 +937,7 @@ mod tests {
             losses[SMOKE_STEPS - 1] * SMOKE_FACTOR < losses[0],
             "{losses:?}"
         );
-        let checkpoint = dir.join("student.pcckpt");
+        let checkpoint = dir.join("distilled.pcckpt");
         distiller.save(&checkpoint).unwrap();
         let mut resumed = Trainer::load(&checkpoint, &device).unwrap();
         for _ in 0..2 {
@@ -945,9 +946,9 @@ mod tests {
                 resumed.train_step(&pool).unwrap()
             );
         }
-        let student_file = dir.join("student.pcw");
-        resumed.save_teacher(&student_file).unwrap();
-        let (_, config, steps) = load_teacher(&student_file, &Device::flex()).unwrap();
+        let distilled_file = dir.join("distilled.pcw");
+        resumed.save_teacher(&distilled_file).unwrap();
+        let (_, config, steps) = load_teacher(&distilled_file, &Device::flex()).unwrap();
         assert_eq!((config.teacher.features, steps), (4, SMOKE_STEPS + 2));
         std::fs::remove_dir_all(&dir).unwrap();
     }
