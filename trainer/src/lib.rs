@@ -6,7 +6,8 @@
 //!  seeds ──dataset (split by stream)──▶ characters (bodies)
 //!  clip on character A = source, clip on character B = ground truth ──▶ pairs
 //!  retargeted vs ground truth ──metrics──▶ eq. 16 errors, hand gap, foot slide
-//!  windows ──features (skeletons, prior)──▶ tensors ──model (teacher, fk)──▶ positions ──train──▶ Adam steps
+//!  windows ──features (skeletons, prior)──▶ tensors ──model (teacher, fk)──▶ positions
+//!  positions ──losses, train──▶ Adam steps
 //! ```
 //!
 //! - [`bodies`]: random anthropometric characters in every keypoint format.
