@@ -5,6 +5,7 @@
 #   - adapters imports only core; io imports only core;
 #   - core::wire imports nothing from core::score (the wire is the ground floor; a report
 #     turns itself into its wire form);
+#   - no import circle among a crate's modules (tests, at the bottom of each file, left out);
 #   - the default build of posecoach-cli and the tests that do not train link no burn: every
 #     use of the trainer or burn in host-tools and tests sits behind the `learn` feature.
 set -euo pipefail
@@ -42,6 +43,30 @@ for file in $(grep -rlE '\b(burn|posecoach_train)::' host-tools/src tests --incl
 done
 grep -q '#\[cfg(feature = "learn")\]' <(grep -B1 '^pub mod learn;' host-tools/src/lib.rs) ||
     fail "host-tools/src/lib.rs declares learn without the feature"
+
+# Import circles: every `crate::module` / `super::module` a module names outside comments and
+# tests is an edge; tsort finds the loops.
+module_edges() {
+    local dir=$1 file module target
+    for file in $(find "$dir" -name '*.rs'); do
+        module=${file#"$dir"/}
+        module=${module%.rs}
+        module=${module%/mod}
+        module=${module%%/*}
+        [ "$module" = lib ] || [ "$module" = main ] && continue
+        sed '/#\[cfg(test)\]/,$d' "$file" | grep -v '^ *//' |
+            grep -oE '\b(crate|super)::[a-z_0-9]+' | sed 's/.*:://' | sort -u |
+            while read -r target; do
+                if [ "$target" != "$module" ] && { [ -e "$dir/$target.rs" ] || [ -e "$dir/$target/mod.rs" ]; }; then
+                    echo "$module $target"
+                fi
+            done
+    done
+}
+for dir in core/src adapters/src io/src host-tools/src trainer/src; do
+    loops=$(module_edges "$dir" | tsort 2>&1 >/dev/null || true)
+    [ -z "$loops" ] || fail "import circle among the modules of $dir:"$'\n'"$loops"
+done
 
 [ "$status" -eq 0 ] && echo "layering: ok"
 exit "$status"

@@ -164,8 +164,8 @@ pub const LANES: usize = 4;
 /// Most inputs of one output (a linear layer's inputs, a convolution's kernel × inputs per
 /// group).
 pub const MAX_FIELD: usize = 128;
-/// Longest convolution kernel.
-pub use crate::weights::MAX_KERNEL;
+/// Longest convolution kernel (a weights blob with a longer one is refused).
+pub const MAX_KERNEL: usize = 7;
 
 /// Room for the vectors a layer call runs on together, made once and lent to every call
 /// ([`linear`], [`accumulate`], [`conv1d`]) so that none clears its own: on the DSP path the

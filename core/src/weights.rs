@@ -19,7 +19,7 @@
 //! its weights: its accumulators are in the same units whatever the input channel.
 
 use crate::blob::{self, Blob, BlobError};
-use crate::int8::Requant;
+use crate::int8::{Requant, MAX_KERNEL};
 use crate::skeleton::Segment;
 use heapless::{String as HString, Vec as HVec};
 use serde::{Deserialize, Serialize};
@@ -35,8 +35,6 @@ pub const MAX_BIAS: u32 = 1 << 30;
 pub const MAX_FEATURES: usize = 16;
 /// Most attention heads.
 pub const MAX_HEADS: usize = 8;
-/// Longest convolution kernel.
-pub const MAX_KERNEL: usize = 7;
 /// Frames in a window.
 pub const WINDOW: usize = 64;
 /// Body segments: the motion encoder's tokens.
