@@ -190,7 +190,6 @@ pub struct ImuAdapter {
     joints: u8,
     root: Vec3,
     rate_mhz: u64,
-    gains: Gains,
     phase: Phase,
     activity: f32,
 }
@@ -275,15 +274,9 @@ impl ImuAdapter {
             joints: skeleton.len() as u8,
             root: skeleton.offset(0),
             rate_mhz: (rate_hz * 1000.0) as u64,
-            gains: Gains::DEFAULT,
             phase: Phase::Calibrating(None),
             activity: 0.0,
         })
-    }
-
-    /// The same adapter with other filter gains (before any sample).
-    pub fn with_gains(self, gains: Gains) -> ImuAdapter {
-        ImuAdapter { gains, ..self }
     }
 
     /// Whether calibration is over and frames are being emitted.
@@ -401,10 +394,9 @@ impl ImuAdapter {
 
     /// Biases, filters and sensor-to-segment offsets from the still T-pose.
     fn finish_calibration(&mut self) -> Result<(), FusionError> {
-        let gains = self.gains;
         let len = usize::from(self.len);
         for track in &mut self.tracks[..len] {
-            track.filter = track.still.filter(gains)?;
+            track.filter = track.still.filter(Gains::DEFAULT)?;
             track.bias = track.still.gyro_bias();
         }
         // In the T-pose the filter reads `yaw · mounting`: compare it with the nominal one.
