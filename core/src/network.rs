@@ -781,7 +781,7 @@ mod tests {
     use super::*;
     use crate::format::Format;
     use crate::kinematics::testing::pose;
-    use crate::weights::testing::{blob, STUDENT};
+    use crate::weights::testing::{blob, DISTILLED};
     use std::vec::Vec;
 
     const TOLERANCE_M: f32 = 1e-5;
@@ -821,7 +821,7 @@ mod tests {
 
     #[test]
     fn without_corrections_it_is_the_analytic_retargeter() {
-        let bytes = blob(STUDENT, 5, true);
+        let bytes = blob(DISTILLED, 5, true);
         for (from, onto, frames) in [
             (Format::Cmu31, Format::H36m17, 70),
             (Format::H36m17, Format::Coco17, 20),
@@ -850,7 +850,7 @@ mod tests {
 
     #[test]
     fn corrections_keep_the_targets_bones_and_move_the_pose() {
-        let bytes = blob(STUDENT, 6, false);
+        let bytes = blob(DISTILLED, 6, false);
         let (source, target) = (
             Skeleton::standard(Format::Cmu31).unwrap(),
             Skeleton::standard(Format::H36m17).unwrap(),
@@ -859,7 +859,7 @@ mod tests {
         let out = run(&bytes, &source, &target, &frames).unwrap();
         let same = run(&bytes, &source, &target, &frames).unwrap();
         assert_eq!(out, same);
-        let analytic = run(&blob(STUDENT, 6, true), &source, &target, &frames).unwrap();
+        let analytic = run(&blob(DISTILLED, 6, true), &source, &target, &frames).unwrap();
         let moved = out
             .iter()
             .zip(&analytic)
@@ -881,7 +881,7 @@ mod tests {
 
     #[test]
     fn bad_buffers_and_inputs_are_typed_errors() {
-        let bytes = blob(STUDENT, 7, false);
+        let bytes = blob(DISTILLED, 7, false);
         let mut words = std::vec![0u32; bytes.len().div_ceil(4)];
         bytemuck::cast_slice_mut::<u32, u8>(&mut words)[..bytes.len()].copy_from_slice(&bytes);
         let weights =

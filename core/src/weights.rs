@@ -31,7 +31,7 @@ pub const VERSION: u16 = 1;
 /// Largest magnitude of a stored bias: an accumulator starts from its bias and adds a field's
 /// products (below `2^23`), so it never wraps.
 pub const MAX_BIAS: u32 = 1 << 30;
-/// Most features per segment the core's scratch holds (the distilled student's `d`).
+/// Most features per segment the core's scratch holds (the distilled network's `d`).
 pub const MAX_FEATURES: usize = 16;
 /// Most attention heads.
 pub const MAX_HEADS: usize = 8;
@@ -629,8 +629,8 @@ pub(crate) mod testing {
     use super::*;
     use std::vec::Vec;
 
-    /// The distilled student's sizes.
-    pub(crate) const STUDENT: Architecture = Architecture {
+    /// The distilled network's sizes.
+    pub(crate) const DISTILLED: Architecture = Architecture {
         features: 16,
         heads: 2,
         kernel: 3,
@@ -742,7 +742,7 @@ pub(crate) mod testing {
 
 #[cfg(test)]
 mod tests {
-    use super::testing::{blob, header, STUDENT};
+    use super::testing::{blob, header, DISTILLED};
     use super::*;
 
     /// `bytes` copied to a 4-byte-aligned buffer, viewed as bytes.
@@ -773,16 +773,16 @@ mod tests {
 
     #[test]
     fn written_weights_read_back_with_every_array_in_place() {
-        let bytes = blob(STUDENT, 1, false);
+        let bytes = blob(DISTILLED, 1, false);
         let words = aligned(&bytes);
         let view = &bytemuck::cast_slice::<u32, u8>(&words)[..bytes.len()];
         let w = Weights::from_bytes(view).unwrap();
-        assert_eq!(w.header(), &header(STUDENT));
+        assert_eq!(w.header(), &header(DISTILLED));
         for layer in Dense::ALL {
             let t = w.layer(layer);
             assert_eq!(
                 t.weights.len(),
-                layer.outputs(&STUDENT) * layer.inputs(&STUDENT)
+                layer.outputs(&DISTILLED) * layer.inputs(&DISTILLED)
             );
             assert_eq!(t.bias.len(), layer.bias_rows() * t.scale.len());
             assert_eq!(
@@ -798,7 +798,7 @@ mod tests {
 
     #[test]
     fn damaged_or_foreign_blobs_are_typed_errors() {
-        let bytes = blob(STUDENT, 2, false);
+        let bytes = blob(DISTILLED, 2, false);
         assert_eq!(
             open(&bytes[..bytes.len() - 1]),
             Err(WeightsError::Blob(BlobError::Crc))
@@ -827,7 +827,7 @@ mod tests {
 
     #[test]
     fn a_bad_requantization_or_bias_is_refused() {
-        let a = STUDENT;
+        let a = DISTILLED;
         let bytes = blob(a, 3, false);
         let words = aligned(&bytes);
         let view = &bytemuck::cast_slice::<u32, u8>(&words)[..bytes.len()];
