@@ -113,11 +113,6 @@ impl Retargeter {
         })
     }
 
-    /// Whether it runs the core's int8 network.
-    pub fn is_int8(&self) -> bool {
-        matches!(self.model, Model::Int8 { .. })
-    }
-
     /// `source` retargeted onto `target`, at the source's rate and length.
     ///
     /// # Errors
