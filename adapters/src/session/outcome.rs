@@ -1,0 +1,79 @@
+//! What a message led to: a swing scored or not, or a refusal, and the frame a device sends
+//! back for it.
+
+use super::Refusal;
+use posecoach_core::score::{Report, ScoreError};
+use posecoach_core::skeleton::Skeleton;
+use posecoach_core::wire::Message;
+use posecoach_core::Vec3;
+
+/// Where a swing sits in the stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Swing {
+    /// Swings found so far in this session, this one included.
+    pub number: u32,
+    /// Time of its first frame on the sender's clock, microseconds.
+    pub start_us: u64,
+    /// Its frames at the model rate.
+    pub frames: usize,
+}
+
+/// The two swings a report compares, on the student's skeleton: what a report view draws.
+#[derive(Clone, Copy, Debug)]
+pub struct Compared<'r> {
+    /// The student's skeleton.
+    pub skeleton: &'r Skeleton,
+    /// The student's swing, frame-major.
+    pub student: &'r [Vec3],
+    /// Its frame rate.
+    pub student_hz: f32,
+    /// The virtual coach's swing (the coach retargeted onto the student), frame-major.
+    pub coach: &'r [Vec3],
+    /// Its frame rate.
+    pub coach_hz: f32,
+}
+
+/// What a message led to.
+#[derive(Debug)]
+pub enum Outcome<'r> {
+    /// A swing, scored.
+    Scored {
+        /// Where it is.
+        swing: Swing,
+        /// Its report.
+        report: &'r Report,
+        /// The swings the report compares.
+        compared: Compared<'r>,
+    },
+    /// A swing that could not be scored (its events not found, or not like the coach's).
+    Unscored {
+        /// Where it is.
+        swing: Swing,
+        /// Why.
+        error: ScoreError,
+    },
+    /// The message was refused (a phone would get a `Nack`).
+    Refused(Refusal),
+}
+
+impl Outcome<'_> {
+    /// What a device answers to `message` when handling it led to this: a `SwingReport` for
+    /// a scored swing, a `Nack` for a refusal (of the pose frame's `seq`, else 0), nothing for
+    /// a swing that could not be scored.
+    pub fn reply(&self, message: &Message) -> Option<Message> {
+        match self {
+            Outcome::Scored { swing, report, .. } => {
+                Some(Message::SwingReport(report.to_wire(swing.number)))
+            }
+            Outcome::Unscored { .. } => None,
+            Outcome::Refused(why) => Some(Message::Nack {
+                seq: match message {
+                    Message::PoseFrame(f) => f.seq,
+                    _ => 0,
+                },
+                reason: why.nack_reason(),
+            }),
+        }
+    }
+}
