@@ -39,10 +39,11 @@ step "tests"
 cargo test --workspace
 
 step "tests of the learned retargeter's commands (the learn feature: train, export, eval, --weights)"
-cargo test -p posecoach-tests --features learn --test learned --test int8
+# --workspace keeps every dependency's features as in the step above: only our two crates rebuild.
+cargo test --workspace --features posecoach-cli/learn,posecoach-tests/learn --test learned --test int8
 
 step "banded DTW also on baseline x86-64 (4 SSE2 lanes; host builds use x86-64-v3, see .cargo/config.toml)"
-RUSTFLAGS="-C target-cpu=x86-64" CARGO_TARGET_DIR=target/baseline cargo test -p posecoach-core dtw
+RUSTFLAGS="-C target-cpu=x86-64" CARGO_TARGET_DIR=target/baseline cargo test -p posecoach-core --lib dtw
 
 step "thumbv7em-none-eabihf: core and adapters without std, with and without defmt"
 cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabihf

@@ -6,9 +6,9 @@
 //! each, and a run resumed from one continues exactly as if it had not stopped.
 
 use crate::inspect;
+use crate::progress::Progress;
 use anyhow::{bail, Context, Result};
 use burn::prelude::Device;
-use indicatif::{ProgressBar, ProgressStyle};
 use posecoach_core::network;
 use posecoach_core::weights::{self, Training, Weights};
 use posecoach_io as io;
@@ -318,13 +318,7 @@ fn run(
     teacher: Option<&Path>,
     json: bool,
 ) -> Result<String> {
-    let bar = ProgressBar::new(steps as u64).with_position(trainer.step() as u64);
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{bar:30} {pos}/{len} steps {elapsed_precise} (eta {eta}) {msg}",
-        )
-        .context("progress template")?,
-    );
+    let bar = Progress::new(steps as u64, "steps").at(trainer.step() as u64);
     let start = Instant::now();
     let first = trainer.step();
     let mut epochs = Vec::new();
@@ -335,7 +329,7 @@ fn run(
         sums = sums.plus(&losses);
         recent = recent.plus(&losses);
         (count, recent_count) = (count + 1, recent_count + 1);
-        bar.inc(1);
+        bar.inc();
         if trainer.step().is_multiple_of(LOG_EVERY) {
             let mean = recent.times(1.0 / recent_count as f32);
             bar.set_message(format!("loss {:.3}", mean.total));
@@ -359,7 +353,7 @@ fn run(
             );
             match bar.is_hidden() {
                 true => eprintln!("{line}"),
-                false => bar.println(line),
+                false => bar.println(&line),
             }
             epochs.push(json!({"step": trainer.step(), "losses": losses_json(&mean)}));
             (sums, count) = (StepLosses::default(), 0);
@@ -455,7 +449,7 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
         bail!("nothing to evaluate: pass --weights FILE, --analytic or --copy");
     }
     let pool = args.data.pool(args.seed)?;
-    let bar = ProgressBar::new(0);
+    let bar = Progress::new(0, "pairs");
     let table = metrics::table(&pool, args.seed, &methods, |done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
@@ -543,7 +537,7 @@ pub fn export(args: &ExportArgs) -> Result<String> {
         bail!("--windows must be at least 1");
     }
     let pool = args.data.pool(args.seed)?;
-    let bar = ProgressBar::new(args.windows as u64);
+    let bar = Progress::new(args.windows as u64, "windows");
     bar.set_message("calibrating");
     let calibration = quantize::calibrate(
         &model,

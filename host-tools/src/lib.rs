@@ -14,6 +14,8 @@ pub mod html;
 pub mod inspect;
 #[cfg(feature = "learn")]
 pub mod learn;
+#[cfg(feature = "learn")]
+pub mod progress;
 pub mod reference;
 pub mod replay;
 pub mod retarget;
