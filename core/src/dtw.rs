@@ -224,12 +224,6 @@ impl Band {
     }
 }
 
-impl Default for Band {
-    fn default() -> Band {
-        Band::DEFAULT
-    }
-}
-
 /// A [`Band`] laid over one pair of sequences: a Sakoe-Chiba window around the guide through
 /// its anchor cells.
 #[derive(Clone, Copy, Debug, PartialEq)]

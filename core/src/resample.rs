@@ -44,7 +44,8 @@ pub const fn frames(frames: usize, from_hz: f32, to_hz: f32) -> usize {
         return frames;
     }
     let last = (frames - 1) as f64 * to_hz as f64 / from_hz as f64;
-    (last + SNAP) as usize + 1
+    // A rate ratio too large for usize saturates rather than wrapping.
+    ((last + SNAP) as usize).saturating_add(1)
 }
 
 /// Where frame `k` at `to_hz` falls among `frames` input frames at `from_hz`: the input frame
@@ -91,6 +92,7 @@ mod tests {
         assert_eq!(frames(110, 60.0, 120.0), 219);
         assert_eq!(frames(0, 60.0, 30.0), 0);
         assert_eq!(frames(1, 60.0, 30.0), 1);
+        assert_eq!(frames(2, 1e-30, 1e30), usize::MAX);
         assert_eq!(source(1, 60.000_057, 30.0, 110).0, 2);
         let (i, fraction) = source(1, 60.0, 40.0, 110);
         assert_eq!(i, 1);

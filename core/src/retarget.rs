@@ -231,20 +231,19 @@ impl Fit {
         source: &[Vec3],
         out: &mut [Vec3],
     ) -> Result<(), RetargetError> {
-        let short = |expected: usize, actual: usize| {
-            (actual < expected).then_some(RetargetError::Length(LengthError { expected, actual }))
-        };
         let n = self.target_len;
-        if let Some(e) = short(self.source_len, source.len())
-            .or(short(n, out.len()))
-            .or(
-                (target.len() != n).then_some(RetargetError::Length(LengthError {
-                    expected: n,
-                    actual: target.len(),
-                })),
-            )
-        {
-            return Err(e);
+        if target.len() != n {
+            let actual = target.len();
+            return Err(LengthError {
+                expected: n,
+                actual,
+            }
+            .into());
+        }
+        for (expected, actual) in [(self.source_len, source.len()), (n, out.len())] {
+            if actual < expected {
+                return Err(LengthError { expected, actual }.into());
+            }
         }
         if let Some(joint) = source[..self.source_len]
             .iter()
@@ -295,6 +294,33 @@ mod tests {
     use proptest::prelude::*;
 
     const TOLERANCE_M: f32 = 1e-5;
+
+    #[test]
+    fn a_fit_poses_only_a_target_of_its_length() {
+        let (h36m, coco) = (
+            Skeleton::standard(Format::H36m17).unwrap(),
+            Skeleton::standard(Format::Coco17).unwrap(),
+        );
+        let fit = Fit::new(&h36m, &h36m).unwrap();
+        let mut frame = [Vec3::zeros(); MAX_JOINTS];
+        h36m.rest_positions(&mut frame);
+        let mut out = [Vec3::zeros(); MAX_JOINTS];
+        assert_eq!(fit.frame(&h36m, &frame[..17], &mut out), Ok(()));
+        assert_eq!(
+            fit.frame(&coco, &frame[..17], &mut out),
+            Err(RetargetError::Length(LengthError {
+                expected: 17,
+                actual: coco.len()
+            }))
+        );
+        assert_eq!(
+            fit.frame(&h36m, &frame[..16], &mut out),
+            Err(RetargetError::Length(LengthError {
+                expected: 17,
+                actual: 16
+            }))
+        );
+    }
 
     proptest! {
         #[test]

@@ -280,10 +280,10 @@ impl<'b> Session<'b> {
             }
             None => core::mem::take(&mut self.spare),
         };
+        let frames = coach.frames_at(rate);
         let checked = SwingDetector::check(&skeleton, detector, ring.len())
             .map_err(Refusal::Detector)
             .and_then(|_| {
-                let frames = coach.frames_at(rate);
                 let network = self
                     .network
                     .filter(|w| resample::same_rate(w.architecture().rate_hz, f32::from(rate)));
@@ -312,19 +312,15 @@ impl<'b> Session<'b> {
                     .map_err(Refusal::Imu)?;
                 if let Some(imu) = &imu {
                     // The coach as the student's IMUs would see them.
-                    for frame in self
-                        .virtual_coach
-                        .chunks_exact_mut(joints)
-                        .take(coach.frames_at(rate))
-                    {
+                    for frame in self.virtual_coach.chunks_exact_mut(joints).take(frames) {
                         let mut seen = [Vec3::zeros(); MAX_JOINTS];
                         imu.view(&skeleton, frame, &mut seen)
                             .map_err(Refusal::Imu)?;
                         frame.copy_from_slice(&seen[..joints]);
                     }
                 }
-                let frames = &self.virtual_coach[..coach.frames_at(rate) * joints];
-                let (swing, events) = swing_span(&skeleton, frames, coach.rate_at(rate))
+                let virtual_coach = &self.virtual_coach[..frames * joints];
+                let (swing, events) = swing_span(&skeleton, virtual_coach, coach.rate_at(rate))
                     .map_err(Refusal::CoachSwing)?;
                 let stream = PoseStream::new(StreamConfig::new(rate)).map_err(Refusal::Stream)?;
                 Ok((stream, swing, events, imu))
