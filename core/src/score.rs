@@ -407,7 +407,16 @@ impl Stance {
         }
     }
 
-    /// `p` in stance coordinates: toward target, toward ball, up.
+    /// The horizontal unit vector from the trail foot toward the lead foot.
+    pub fn toward_target(&self) -> Vec3 {
+        self.target
+    }
+
+    /// The horizontal unit vector toward the ball.
+    pub fn toward_ball(&self) -> Vec3 {
+        self.ball
+    }
+
     /// `p` as (toward the target, toward the ball, up) from between the feet.
     pub fn local(&self, p: Vec3) -> Vec3 {
         let d = p - self.origin;

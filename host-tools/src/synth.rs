@@ -11,29 +11,26 @@
 //! swings and their events (from the clean motion) in seconds of the recording; as the golfer
 //! stands still at address from `still_from_s`, an address found anywhere after that is right.
 
+use crate::phone::{self, to_mm, Camera, PhoneNoise};
 use crate::synth_imu::{self, ImuNoise};
 use anyhow::{bail, Context, Result};
 use posecoach_adapters::log;
 use posecoach_core::dtw::Band;
-use posecoach_core::events::{self, SwingKind};
+use posecoach_core::events::{self, SwingEvents, SwingKind};
 use posecoach_core::format::{Format, Source};
+use posecoach_core::score::Stance;
 use posecoach_core::skeleton::Skeleton;
-use posecoach_core::wire::{self, Config, Message, PoseFrame, StudentProfile, MAX_FRAME};
+use posecoach_core::wire::{self, Config, Message, StudentProfile, MAX_FRAME};
 use posecoach_core::Vec3;
 use posecoach_io::{self as io, csv, Motion};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use serde_json::{json, Map, Value};
 use std::f32::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
 
 /// Rate the session is laid out at, Hz.
 pub const TIMELINE_HZ: f32 = 60.0;
-/// Share of keypoints a pose estimator loses to occlusion in a frame.
-const OCCLUDED: f64 = 0.01;
-/// Extra error of an occluded keypoint, mm (one sigma per axis).
-const OCCLUDED_MM: f32 = 40.0;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -57,9 +54,22 @@ pub struct Args {
     /// Pose frames per second.
     #[arg(long, default_value_t = 30.0)]
     rate: f32,
-    /// Keypoint noise, mm (RMS 3D error per keypoint).
+    /// Keypoint noise fresh every frame, mm (3D RMS per keypoint; the camera's depth axis
+    /// twice the others).
     #[arg(long, default_value_t = 7.0)]
     noise_mm: f32,
+    /// Keypoint drift, mm (3D RMS, correlated over 0.2 to 1 s).
+    #[arg(long, default_value_t = 0.0)]
+    drift_mm: f32,
+    /// Constant keypoint bias, mm (3D RMS).
+    #[arg(long, default_value_t = 0.0)]
+    bias_mm: f32,
+    /// Share of the time a keypoint is occluded (runs of low confidence).
+    #[arg(long, default_value_t = 0.01)]
+    occluded: f64,
+    /// Where the phone stands: facing the golfer, or behind along the target line.
+    #[arg(long, value_enum, default_value_t = View::FaceOn)]
+    camera: View,
     /// Capture-time jitter, ms (uniform, plus or minus).
     #[arg(long, default_value_t = 4.0)]
     jitter_ms: f32,
@@ -91,15 +101,34 @@ pub struct Args {
     json: bool,
 }
 
-/// A session being laid out on the student's body.
-struct Timeline {
-    joints: usize,
-    positions: Vec<Vec3>,
+/// Where the phone stands.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum View {
+    /// Facing the golfer: depth is toward the ball.
+    FaceOn,
+    /// Behind the golfer on the target line: depth is toward the target.
+    DownTheLine,
+}
+
+/// A session being laid out on the student's body at `rate` frames per second.
+pub struct Timeline {
+    /// Joints per frame.
+    pub joints: usize,
+    /// Frames per second.
+    pub rate: f32,
+    /// Joint positions, frame-major.
+    pub positions: Vec<Vec3>,
 }
 
 impl Timeline {
-    fn frames(&self) -> usize {
+    /// Frames laid out so far.
+    pub fn frames(&self) -> usize {
         self.positions.len() / self.joints
+    }
+
+    /// Its length in seconds.
+    pub fn duration_s(&self) -> f64 {
+        self.frames() as f64 / f64::from(self.rate)
     }
 
     fn last(&self) -> Vec<Vec3> {
@@ -107,7 +136,7 @@ impl Timeline {
     }
 
     fn hold(&mut self, pose: &[Vec3], seconds: f32) {
-        for _ in 0..(seconds * TIMELINE_HZ) as usize {
+        for _ in 0..(seconds * self.rate) as usize {
             self.positions.extend_from_slice(pose);
         }
     }
@@ -115,7 +144,7 @@ impl Timeline {
     /// Eases from the last frame to `to` over `seconds`.
     fn blend(&mut self, to: &[Vec3], seconds: f32) {
         let from = self.last();
-        let frames = (seconds * TIMELINE_HZ) as usize;
+        let frames = (seconds * self.rate) as usize;
         for f in 1..=frames {
             let w = 0.5 * (1.0 - (PI * f as f32 / frames as f32).cos());
             self.positions
@@ -126,7 +155,7 @@ impl Timeline {
     /// Everything above the hips sways `amplitude` m along X and back, twice.
     fn waggle(&mut self, address: &[Vec3], amplitude: f32) {
         let hips = address[0].y;
-        let frames = TIMELINE_HZ as usize;
+        let frames = self.rate as usize;
         for f in 0..frames {
             let offset = amplitude * (2.0 * TAU * f as f32 / frames as f32).sin();
             self.positions.extend(
@@ -138,8 +167,8 @@ impl Timeline {
     }
 
     /// Position of joint `k` at `t` seconds, linear between frames.
-    fn at(&self, t: f64, k: usize) -> Vec3 {
-        let x = (t * f64::from(TIMELINE_HZ)).max(0.0);
+    pub fn at(&self, t: f64, k: usize) -> Vec3 {
+        let x = (t * f64::from(self.rate)).max(0.0);
         let last = self.frames() - 1;
         let i = (x.floor() as usize).min(last);
         let j = (i + 1).min(last);
@@ -174,10 +203,13 @@ pub fn run(args: &Args) -> Result<String> {
     if !(0.0..=0.5).contains(&args.drop) {
         bail!("--drop {} must be between 0 and 0.5", args.drop);
     }
-    if !(0.0..=50.0).contains(&args.noise_mm)
+    if [args.noise_mm, args.drift_mm, args.bias_mm]
+        .iter()
+        .any(|mm| !(0.0..=100.0).contains(mm))
         || !(0.0..1000.0 / (2.0 * args.rate)).contains(&args.jitter_ms)
+        || !(0.0..=0.5).contains(&args.occluded)
     {
-        bail!("--noise-mm must be 0 to 50, and --jitter-ms under half a frame");
+        bail!("--noise-mm, --drift-mm and --bias-mm must be 0 to 100, --occluded 0 to 0.5, and --jitter-ms under half a frame");
     }
     let body = match &args.student_tpose {
         Some(path) => io::load(path)?,
@@ -205,11 +237,9 @@ pub fn run(args: &Args) -> Result<String> {
             Ok((p.clone(), stretch(&swing, top, args.backswing_tempo)))
         })
         .collect::<Result<_>>()?;
-    let (timeline, expected) = lay_out(
-        &body,
-        &swings,
-        args.walk.as_deref().map(onto_body).transpose()?,
-    )?;
+    let walk = args.walk.as_deref().map(onto_body).transpose()?;
+    let (timeline, placed) = lay_out(&body, &swings, walk.as_ref(), TIMELINE_HZ)?;
+    let expected: Vec<Value> = placed.iter().map(|p| p.to_json(TIMELINE_HZ)).collect();
 
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
     let mut bytes = log::header().to_vec();
@@ -231,14 +261,34 @@ pub fn run(args: &Args) -> Result<String> {
     }
     let sent = match args.imu_rate {
         Some(rate) => record_imu(&timeline, &body, rate, args, &mut rng, &mut bytes)?,
-        None => record_pose(
-            &timeline,
-            format,
-            &keypoint_joints,
-            args,
-            &mut rng,
-            &mut bytes,
-        )?,
+        None => {
+            let first = &placed[0];
+            let stance = Stance::new(
+                &body.skeleton,
+                &timeline.positions[first.start * timeline.joints..][..timeline.joints],
+                first.events.lead,
+            );
+            let camera = Camera {
+                rate_hz: args.rate,
+                depth: match args.camera {
+                    View::FaceOn => stance.toward_ball(),
+                    View::DownTheLine => stance.toward_target(),
+                },
+            };
+            let noise = PhoneNoise {
+                white_mm: args.noise_mm,
+                drift_mm: args.drift_mm,
+                bias_mm: args.bias_mm,
+                occluded: args.occluded,
+                lost: 0.0,
+                jitter_ms: args.jitter_ms,
+                drop: args.drop,
+            };
+            let joints = &keypoint_joints;
+            record_pose(
+                &timeline, format, joints, &camera, &noise, &mut rng, &mut bytes,
+            )?
+        }
     };
     std::fs::write(&args.out, &bytes).with_context(|| format!("writing {}", args.out.display()))?;
     let sidecar = sidecar_path(&args.out);
@@ -246,6 +296,7 @@ pub fn run(args: &Args) -> Result<String> {
         "log": args.out.file_name().map(|n| n.to_string_lossy().into_owned()),
         "kind": if args.imu_rate.is_some() { "imu" } else { "pose" },
         "rate_hz": args.imu_rate.unwrap_or(args.rate), "magnetometers": args.imu_rate.map(|_| !args.no_mag), "seed": args.seed, "noise_mm": args.noise_mm,
+        "drift_mm": args.drift_mm, "bias_mm": args.bias_mm, "occluded": args.occluded,
         "jitter_ms": args.jitter_ms, "drop": args.drop,
         "duration_s": timeline.frames() as f32 / TIMELINE_HZ,
         "swings": expected,
@@ -279,7 +330,7 @@ pub fn sidecar_path(log: &Path) -> PathBuf {
 
 /// For each keypoint of `format`, the joint of `body` at that keypoint (the same joint when
 /// `body` is in `format`, else the same canonical joint).
-fn keypoint_sources(format: Format, body: &Skeleton) -> Result<Vec<usize>> {
+pub fn keypoint_sources(format: Format, body: &Skeleton) -> Result<Vec<usize>> {
     let keypoints = format.keypoints().len();
     let sources: Vec<Option<usize>> = (0..keypoints)
         .map(|i| {
@@ -301,10 +352,6 @@ fn keypoint_sources(format: Format, body: &Skeleton) -> Result<Vec<usize>> {
     Ok(sources.into_iter().flatten().collect())
 }
 
-fn to_mm(p: Vec3) -> [i16; 3] {
-    [p.x, p.y, p.z].map(|v| (v * 1000.0).round().clamp(-32767.0, 32767.0) as i16)
-}
-
 fn push_frame(bytes: &mut Vec<u8>, message: &Message) -> Result<()> {
     let mut frame = [0u8; MAX_FRAME];
     let n = wire::encode(message, &mut frame)?;
@@ -312,7 +359,6 @@ fn push_frame(bytes: &mut Vec<u8>, message: &Message) -> Result<()> {
     Ok(())
 }
 
-/// Lays the session out; returns it and the sidecar's swing entries.
 /// `swing` with frames `0..=top` stretched in time by `factor` (linear interpolation).
 fn stretch(swing: &Motion, top: usize, factor: f32) -> Motion {
     let joints = swing.skeleton.len();
@@ -332,11 +378,52 @@ fn stretch(swing: &Motion, top: usize, factor: f32) -> Motion {
     }
 }
 
-fn lay_out(
+/// Where one swing was laid out on a [`Timeline`] (frames of it).
+pub struct Placed {
+    /// The swing file.
+    pub source: PathBuf,
+    /// The golfer stands still at address from here.
+    pub still: usize,
+    /// The swing's first frame: the takeaway starts here.
+    pub start: usize,
+    /// The frame after the swing.
+    pub end: usize,
+    /// Its events as found in the clean swing, counted from `start`.
+    pub events: SwingEvents,
+}
+
+impl Placed {
+    /// The sidecar's entry, times in seconds on a timeline at `rate`.
+    fn to_json(&self, rate: f32) -> Value {
+        let s = |f: usize| f as f32 / rate;
+        let events: Map<String, Value> = self
+            .events
+            .iter()
+            .map(|(e, f)| (e.name().to_string(), json!(s(self.start + f))))
+            .collect();
+        json!({
+            "source": self.source.file_name().map(|n| n.to_string_lossy().into_owned()),
+            "start_s": s(self.start),
+            "takeaway_s": s(self.start),
+            "still_from_s": s(self.still),
+            "end_s": s(self.end),
+            "events_s": events,
+        })
+    }
+}
+
+/// Lays a session out at `rate` on `body`: a still T-pose, then per swing (at `rate` on the
+/// body) the walk up to it if given, a set-up, a waggle, the swing and the return; a practice
+/// half swing between swings.
+///
+/// # Errors
+/// If a swing has no events or is a putt.
+pub fn lay_out(
     body: &Motion,
     swings: &[(PathBuf, Motion)],
-    walk: Option<Motion>,
-) -> Result<(Timeline, Vec<Value>)> {
+    walk: Option<&Motion>,
+    rate: f32,
+) -> Result<(Timeline, Vec<Placed>)> {
     let skeleton = &body.skeleton;
     let joints = skeleton.len();
     let mut rest = vec![Vec3::zeros(); joints];
@@ -348,12 +435,13 @@ fn lay_out(
     };
     let mut t = Timeline {
         joints,
+        rate,
         positions: Vec::new(),
     };
     t.hold(&place(&rest, first[0]), 1.5);
     // Walking up to where the next swing's set-up stands.
     let walk_to = |t: &mut Timeline, at: Vec3| {
-        if let Some(walk) = &walk {
+        if let Some(walk) = walk {
             let end = walk.frame(walk.frames() - 1)[0];
             let shift = Vec3::new(at.x - end.x, 0.0, at.z - end.z);
             let walk: Vec<Vec3> = walk.positions.iter().map(|p| p + shift).collect();
@@ -361,13 +449,13 @@ fn lay_out(
             t.positions.extend_from_slice(&walk);
         }
     };
-    let mut expected = Vec::new();
+    let mut placed = Vec::new();
     for (n, (path, swing)) in swings.iter().enumerate() {
         let address = swing.frame(0).to_vec();
         walk_to(&mut t, address[0]);
-        let truth = events::detect(skeleton, &swing.positions, TIMELINE_HZ)
+        let events = events::detect(skeleton, &swing.positions, rate)
             .with_context(|| format!("events of {}", path.display()))?;
-        if truth.kind != SwingKind::Full {
+        if events.kind != SwingKind::Full {
             bail!(
                 "{} is a putt: recorded sessions hold full swings",
                 path.display()
@@ -380,27 +468,18 @@ fn lay_out(
         t.hold(&address, 0.6);
         let start = t.frames();
         t.positions.extend_from_slice(&swing.positions);
-        let events: Map<String, Value> = truth
-            .iter()
-            .map(|(e, f)| {
-                (
-                    e.name().to_string(),
-                    json!((start + f) as f32 / TIMELINE_HZ),
-                )
-            })
-            .collect();
-        expected.push(json!({
-            "source": path.file_name().map(|n| n.to_string_lossy().into_owned()),
-            "start_s": start as f32 / TIMELINE_HZ,
-            "still_from_s": still as f32 / TIMELINE_HZ,
-            "end_s": t.frames() as f32 / TIMELINE_HZ,
-            "events_s": events,
-        }));
+        placed.push(Placed {
+            source: path.clone(),
+            still,
+            start,
+            end: t.frames(),
+            events,
+        });
         t.blend(&address, 1.0);
         t.hold(&address, 1.0);
         if n + 1 < swings.len() {
             // A practice half swing: the takeaway to hip height and back.
-            let half = (truth.frame(events::Event::ToeUp).unwrap_or(truth.top()) + 3)
+            let half = (events.frame(events::Event::ToeUp).unwrap_or(events.top()) + 3)
                 .min(swing.frames() - 1);
             for f in (0..=half).chain((0..=half).rev()) {
                 t.positions.extend_from_slice(swing.frame(f));
@@ -410,64 +489,33 @@ fn lay_out(
     }
     let end = t.last();
     t.hold(&end, 1.0);
-    Ok((t, expected))
+    Ok((t, placed))
 }
 
-/// Appends the pose frames a phone would send while `timeline` happens; returns how many
-/// were sent (lost ones excluded).
+/// Appends the pose frames a phone (see [`phone`]) would send while `timeline` happens;
+/// returns how many were sent.
 fn record_pose(
     timeline: &Timeline,
     format: Format,
     keypoint_joints: &[usize],
-    args: &Args,
+    camera: &Camera,
+    noise: &PhoneNoise,
     rng: &mut ChaCha8Rng,
     bytes: &mut Vec<u8>,
 ) -> Result<usize> {
-    let sigma = args.noise_mm / 3f32.sqrt();
-    let noise = Normal::new(0.0, sigma.max(f32::MIN_POSITIVE))?;
-    let occluded = Normal::new(0.0, OCCLUDED_MM)?;
-    let duration = timeline.frames() as f64 / f64::from(TIMELINE_HZ);
-    let frames = (duration * f64::from(args.rate)) as u32;
-    let mut sent = 0;
-    for seq in 0..frames {
-        let jitter = f64::from(args.jitter_ms) * 1e-3 * rng.random_range(-1.0..=1.0);
-        let t = (f64::from(seq) / f64::from(args.rate) + jitter).max(0.0);
-        let lost = rng.random_bool(args.drop);
-        let mut joints_mm = heapless::Vec::new();
-        let mut confidence = heapless::Vec::new();
-        for &k in keypoint_joints {
-            let unsure = rng.random_bool(OCCLUDED);
-            let extra = if unsure { OCCLUDED_MM } else { 0.0 };
-            let mut p = timeline.at(t, k) * 1000.0;
-            for axis in 0..3 {
-                p[axis] += noise.sample(rng)
-                    + if extra > 0.0 {
-                        occluded.sample(rng)
-                    } else {
-                        0.0
-                    };
-            }
-            let _ = joints_mm.push(to_mm(p * 1e-3));
-            let _ = confidence.push(if unsure {
-                rng.random_range(20..60)
-            } else {
-                rng.random_range(180..=255)
-            });
-        }
-        if lost {
-            continue;
-        }
-        let frame = PoseFrame {
-            seq,
-            t_us: (t * 1e6).round() as u64,
-            format,
-            joints_mm,
-            confidence,
-        };
-        push_frame(bytes, &Message::PoseFrame(frame))?;
-        sent += 1;
+    let frames = phone::record(
+        |t, k| timeline.at(t, k),
+        timeline.duration_s(),
+        format,
+        keypoint_joints,
+        camera,
+        noise,
+        rng,
+    );
+    for frame in &frames {
+        push_frame(bytes, &Message::PoseFrame(frame.clone()))?;
     }
-    Ok(sent)
+    Ok(frames.len())
 }
 
 /// Appends the sensor layout and the IMU samples of `timeline` at `rate_hz`; returns how many
