@@ -38,6 +38,9 @@ fi
 step "tests"
 cargo test --workspace
 
+step "coaching benchmark, small configuration (planted flaws, phone noise, the device's session)"
+cargo run -q -p posecoach-cli -- bench coaching --quick
+
 step "tests of the learned retargeter's commands (the learn feature: train, export, eval, --weights)"
 # --workspace keeps every dependency's features as in the step above: only our two crates rebuild.
 cargo test --workspace --features posecoach-cli/learn,posecoach-tests/learn --test learned --test int8

@@ -16,6 +16,9 @@ pub struct Args {
 enum What {
     /// Banded DTW with the path on random-walk data.
     Dtw(DtwArgs),
+    /// Whether the advice is true: planted flaws in real swings on other bodies, filmed by a
+    /// noisy phone, through the device's session.
+    Coaching(crate::coaching::Args),
 }
 
 #[derive(clap::Args)]
@@ -47,6 +50,7 @@ struct DtwArgs {
 pub fn run(args: &Args) -> Result<String> {
     match &args.what {
         What::Dtw(a) => dtw(a),
+        What::Coaching(a) => crate::coaching::run(a),
     }
 }
 

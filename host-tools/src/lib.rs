@@ -8,13 +8,14 @@
 pub mod bench;
 pub mod bridge;
 pub mod coaches;
+pub mod coaching;
 pub mod demo;
 pub mod device_sim;
 pub mod html;
 pub mod inspect;
 #[cfg(feature = "learn")]
 pub mod learn;
-#[cfg(feature = "learn")]
+pub mod phone;
 pub mod progress;
 pub mod reference;
 pub mod replay;

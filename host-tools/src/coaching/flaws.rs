@@ -1,0 +1,642 @@
+//! Flaws planted in a clean swing, and the truth each leaves: the tempo it changes, or the
+//! joints it moves at each event and which way.
+//!
+//! A swing is given on the student's body at a timeline rate, starting at the takeaway (the
+//! golfer is still before its first frame), with its events in seconds from there, found in
+//! the source swing with its club at the source's own rate.
+
+use posecoach_core::events::{Event, Side, SwingEvents};
+use posecoach_core::joint::Joint;
+use posecoach_core::score::{Direction, Phase, Stance, Verdict};
+use posecoach_core::skeleton::Skeleton;
+use posecoach_core::Vec3;
+use posecoach_io::Motion;
+use serde::Serialize;
+
+/// A change of body position, in the stance frame.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Body {
+    /// The hips move toward the ball from the top through impact.
+    EarlyExtension,
+    /// The hips slide away from the target in the backswing.
+    Sway,
+    /// The head drops in the backswing and stays down.
+    HeadDown,
+    /// The shoulders turn less in the backswing.
+    ReducedTurn,
+    /// The lead elbow bends at the top.
+    BentLeadArm,
+}
+
+impl Body {
+    /// Every kind.
+    pub const ALL: [Body; 5] = [
+        Body::EarlyExtension,
+        Body::Sway,
+        Body::HeadDown,
+        Body::ReducedTurn,
+        Body::BentLeadArm,
+    ];
+}
+
+/// One planted flaw.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Flaw {
+    /// A phase takes `factor` times as long.
+    Tempo {
+        /// The phase.
+        phase: Phase,
+        /// Its duration over the clean swing's.
+        factor: f32,
+    },
+    /// The hands wait at the top for `seconds` (part of the backswing).
+    Pause {
+        /// How long.
+        seconds: f32,
+    },
+    /// A joint (with the joints it carries) off by `metres` in `direction` around an event.
+    Offset {
+        /// When.
+        event: Event,
+        /// Which joint.
+        joint: Joint,
+        /// Which way.
+        direction: Direction,
+        /// How far.
+        metres: f32,
+    },
+    /// A body-level fault of `size` (metres, or degrees for the turn and the lead arm).
+    Body {
+        /// Which.
+        body: Body,
+        /// How much.
+        size: f32,
+    },
+}
+
+impl Flaw {
+    /// Its size in the unit the benchmark bins it by: cm, % of a phase, or the body's own.
+    pub fn size(&self) -> f32 {
+        match *self {
+            Flaw::Tempo { factor, .. } => (factor - 1.0).abs() * 100.0,
+            Flaw::Pause { seconds } => seconds * 1000.0,
+            Flaw::Offset { metres, .. } => metres * 100.0,
+            Flaw::Body { size, .. } => size,
+        }
+    }
+}
+
+/// What a flawed swing should be told: a tempo verdict, or a joint off at an event.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Truth {
+    /// This phase is slow or fast.
+    Tempo {
+        /// The phase.
+        phase: Phase,
+        /// Its verdict.
+        verdict: Verdict,
+    },
+    /// This joint is off this way at this event.
+    Spatial {
+        /// When.
+        event: Event,
+        /// Which joint.
+        joint: Joint,
+        /// Which way.
+        direction: Direction,
+    },
+}
+
+/// The events in seconds from the takeaway, [`Event::ALL`] order (the takeaway is 0).
+pub type Times = [f32; 8];
+
+/// A swing's events in seconds from its first frame, found at `rate_hz`.
+pub fn times(events: &SwingEvents, rate_hz: f32) -> Times {
+    Event::ALL.map(|e| events.frame(e).map_or(f32::NAN, |f| f as f32 / rate_hz))
+}
+
+/// A displacement counts toward the truth when it is at least this share of the flaw's largest.
+pub const TRUTH_SHARE: f32 = 0.7;
+
+/// A flawed swing and what it should be told.
+pub struct Planted {
+    /// The swing, at the clean swing's rate, from the takeaway.
+    pub swing: Motion,
+    /// Its events, seconds from the takeaway.
+    pub times: Times,
+    /// Backswing over downswing.
+    pub tempo_ratio: f32,
+    /// Every statement that names a planted flaw rightly.
+    pub truths: Vec<Truth>,
+}
+
+/// Plants `flaws` in `clean` (on its body, at its rate, from the takeaway) whose events are
+/// `times` and whose lead side is `lead`.
+pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Planted {
+    let (warped, warped_times) = warp(clean, times, flaws);
+    let skeleton = &clean.skeleton;
+    let joints = skeleton.len();
+    let mut swing = warped.clone();
+    for flaw in flaws {
+        move_joints(&mut swing, &warped_times, lead, flaw);
+    }
+    let stance = Stance::new(skeleton, warped.frame(0), lead);
+    let at = |m: &Motion, t: f32, k: usize| {
+        let x = (t * m.rate_hz).clamp(0.0, (m.frames() - 1) as f32);
+        let (i, w) = (x.floor() as usize, x.fract());
+        let j = (i + 1).min(m.frames() - 1);
+        m.positions[i * joints + k] * (1.0 - w) + m.positions[j * joints + k] * w
+    };
+    // Displacements at each event, in the stance frame.
+    let mut moved = Vec::new();
+    for (e, &t) in Event::ALL.iter().zip(&warped_times) {
+        for k in 0..joints {
+            let Some(joint) = skeleton.joint(k) else {
+                continue;
+            };
+            let d = stance.local(at(&swing, t, k)) - stance.local(at(&warped, t, k));
+            moved.push((*e, joint, d));
+        }
+    }
+    let largest = moved.iter().map(|m| m.2.norm()).fold(0.0, f32::max);
+    let mut truths: Vec<Truth> = moved
+        .iter()
+        .filter(|m| largest > 0.0 && m.2.norm() >= TRUTH_SHARE * largest)
+        .map(|&(event, joint, d)| Truth::Spatial {
+            event,
+            joint,
+            direction: direction(d),
+        })
+        .collect();
+    for flaw in flaws {
+        let (phase, slow) = match *flaw {
+            Flaw::Tempo { phase, factor } => (phase, factor > 1.0),
+            Flaw::Pause { .. } => (Phase::Backswing, true),
+            _ => continue,
+        };
+        truths.push(Truth::Tempo {
+            phase,
+            verdict: if slow { Verdict::Slow } else { Verdict::Fast },
+        });
+    }
+    let t = &warped_times;
+    let (top, impact) = (Event::Top as usize, Event::Impact as usize);
+    Planted {
+        swing,
+        tempo_ratio: t[top] / (t[impact] - t[top]),
+        times: warped_times,
+        truths,
+    }
+}
+
+/// The stance direction of `d`'s largest component, as the report names it.
+pub fn direction(d: Vec3) -> Direction {
+    let axis = d.iamax();
+    match (axis, d[axis] > 0.0) {
+        (0, true) => Direction::TowardTarget,
+        (0, false) => Direction::AwayFromTarget,
+        (1, true) => Direction::TowardBall,
+        (1, false) => Direction::AwayFromBall,
+        (_, true) => Direction::Up,
+        (_, false) => Direction::Down,
+    }
+}
+
+/// The unit vector of `direction` in the stance frame.
+fn unit(direction: Direction) -> Vec3 {
+    match direction {
+        Direction::TowardTarget => Vec3::x(),
+        Direction::AwayFromTarget => -Vec3::x(),
+        Direction::TowardBall => Vec3::y(),
+        Direction::AwayFromBall => -Vec3::y(),
+        Direction::Up => Vec3::z(),
+        Direction::Down => -Vec3::z(),
+    }
+}
+
+/// The swing with its phases stretched and its pause inserted; its events.
+fn warp(clean: &Motion, times: &Times, flaws: &[Flaw]) -> (Motion, Times) {
+    let mut factor = [1.0f32; 3];
+    let mut pause = 0.0;
+    for flaw in flaws {
+        match *flaw {
+            Flaw::Tempo { phase, factor: f } => factor[phase as usize] *= f,
+            Flaw::Pause { seconds } => pause += seconds,
+            _ => {}
+        }
+    }
+    let (top, impact, finish) = (
+        times[Event::Top as usize],
+        times[Event::Impact as usize],
+        times[Event::Finish as usize],
+    );
+    let end = clean.frames() as f32 / clean.rate_hz;
+    // Knots (warped time, clean time): the pause holds the top.
+    let t_top = top * factor[0];
+    let t_down = t_top + pause;
+    let t_impact = t_down + (impact - top) * factor[1];
+    let t_finish = t_impact + (finish - impact) * factor[2];
+    let knots = [
+        (0.0, 0.0),
+        (t_top, top),
+        (t_down, top),
+        (t_impact, impact),
+        (t_finish, finish),
+        (t_finish + end - finish, end),
+    ];
+    let source = |u: f32| {
+        let i = knots
+            .windows(2)
+            .position(|w| u <= w[1].0)
+            .unwrap_or(knots.len() - 2);
+        let ((u0, s0), (u1, s1)) = (knots[i], knots[i + 1]);
+        if u1 > u0 {
+            s0 + (s1 - s0) * ((u - u0) / (u1 - u0)).clamp(0.0, 1.0)
+        } else {
+            s0
+        }
+    };
+    let map = |t: f32| {
+        // Clean time to warped time, for the events (the pause belongs to the backswing).
+        let i = knots
+            .windows(2)
+            .position(|w| t <= w[1].1 && w[1].1 > w[0].1)
+            .unwrap_or(knots.len() - 2);
+        let ((u0, s0), (u1, s1)) = (knots[i], knots[i + 1]);
+        if s1 > s0 {
+            u0 + (u1 - u0) * (t - s0) / (s1 - s0)
+        } else {
+            u0
+        }
+    };
+    let mut warped_times = times.map(map);
+    warped_times[Event::Top as usize] = t_down.max(t_top);
+    if pause > 0.0 {
+        warped_times[Event::Top as usize] = t_down;
+    }
+    let joints = clean.skeleton.len();
+    let frames = ((t_finish + end - finish) * clean.rate_hz).round() as usize;
+    let mut positions = Vec::with_capacity(frames * joints);
+    for f in 0..frames {
+        let x = (source(f as f32 / clean.rate_hz) * clean.rate_hz)
+            .clamp(0.0, (clean.frames() - 1) as f32);
+        let (i, w) = (x.floor() as usize, x.fract());
+        let (a, b) = (clean.frame(i), clean.frame((i + 1).min(clean.frames() - 1)));
+        positions.extend(a.iter().zip(b).map(|(a, b)| a + (b - a) * w));
+    }
+    let motion = Motion {
+        missing: vec![false; positions.len()],
+        positions,
+        ..clean.clone()
+    };
+    (motion, warped_times)
+}
+
+/// A smooth bump: 0 outside `from..to`, rising to 1 at `peak` (raised cosines).
+fn bump(t: f32, from: f32, peak: f32, to: f32) -> f32 {
+    let rise = |x: f32| 0.5 - 0.5 * (std::f32::consts::PI * x.clamp(0.0, 1.0)).cos();
+    if t <= peak {
+        if peak > from {
+            rise((t - from) / (peak - from))
+        } else {
+            1.0
+        }
+    } else if to > peak {
+        1.0 - rise((t - peak) / (to - peak))
+    } else {
+        1.0
+    }
+}
+
+/// Joints `k` of `skeleton` that `joint` carries: itself and, for an arm or the head, the
+/// joints beyond it.
+fn carried(skeleton: &Skeleton, joint: Joint) -> Vec<usize> {
+    let Some(at) = skeleton.index_of(joint) else {
+        return Vec::new();
+    };
+    let limb = matches!(
+        joint,
+        Joint::LeftElbow
+            | Joint::RightElbow
+            | Joint::LeftWrist
+            | Joint::RightWrist
+            | Joint::LeftShoulder
+            | Joint::RightShoulder
+            | Joint::Head
+            | Joint::Neck
+    );
+    (0..skeleton.len())
+        .filter(|&k| k == at || (limb && skeleton.ancestry(k).any(|a| a == at)))
+        .collect()
+}
+
+/// The joints of the head beyond the thorax: whichever of neck, head and head top the
+/// skeleton has.
+fn head(skeleton: &Skeleton) -> Vec<usize> {
+    (0..skeleton.len())
+        .filter(|&k| {
+            matches!(
+                skeleton.joint(k),
+                Some(Joint::Neck | Joint::Head | Joint::HeadTop)
+            )
+        })
+        .collect()
+}
+
+/// Applies a spatial or body flaw to `swing` (events at `times`).
+fn move_joints(swing: &mut Motion, times: &Times, lead: Side, flaw: &Flaw) {
+    let skeleton = swing.skeleton.clone();
+    let joints = skeleton.len();
+    let rate = swing.rate_hz;
+    let stance = Stance::new(&skeleton, swing.frame(0), lead);
+    let world =
+        |v: Vec3| stance.toward_target() * v.x + stance.toward_ball() * v.y + Vec3::y() * v.z;
+    let t = |e: Event| times[e as usize];
+    let find = |j: Joint| skeleton.index_of(j);
+    let (lead_arm, trail_arm) = match lead {
+        Side::Left => (
+            [Joint::LeftShoulder, Joint::LeftElbow, Joint::LeftWrist],
+            Joint::RightShoulder,
+        ),
+        Side::Right => (
+            [Joint::RightShoulder, Joint::RightElbow, Joint::RightWrist],
+            Joint::LeftShoulder,
+        ),
+    };
+    // Which way the shoulder line turns from address to the top (about +Y): a reduced turn
+    // turns back the other way.
+    let turn = match (find(lead_arm[0]), find(trail_arm)) {
+        (Some(l), Some(r)) => {
+            let heading = |f: usize| {
+                let v = swing.positions[f * joints + l] - swing.positions[f * joints + r];
+                v.z.atan2(v.x)
+            };
+            let top = ((t(Event::Top) * rate) as usize).min(swing.frames() - 1);
+            let turned = heading(top) - heading(0);
+            // Rotating by +a about +Y lowers atan2(z, x) by a.
+            turned.sin().signum()
+        }
+        _ => 0.0,
+    };
+    for f in 0..swing.frames() {
+        let u = f as f32 / rate;
+        let frame = &mut swing.positions[f * joints..(f + 1) * joints];
+        match *flaw {
+            Flaw::Offset {
+                event,
+                joint,
+                direction,
+                metres,
+            } => {
+                let i = event as usize;
+                // Around the event, reaching halfway to the events either side.
+                let before = if i == 0 {
+                    -1.0
+                } else {
+                    0.5 * (times[i - 1] + times[i])
+                };
+                let after = if i + 1 < 8 {
+                    0.5 * (times[i] + times[i + 1])
+                } else {
+                    times[i] + 0.3
+                };
+                let w = if event == Event::Address {
+                    bump(u, -1.0, 0.0, after)
+                } else {
+                    bump(u, before, times[i], after)
+                };
+                for k in carried(&skeleton, joint) {
+                    frame[k] += world(unit(direction)) * metres * w;
+                }
+            }
+            Flaw::Body {
+                body: Body::EarlyExtension,
+                size,
+            } => {
+                let w = bump(u, t(Event::Top), t(Event::Impact), t(Event::Finish) + 1.0);
+                for (j, share) in [
+                    (Joint::Pelvis, 1.0),
+                    (Joint::LeftHip, 1.0),
+                    (Joint::RightHip, 1.0),
+                    (Joint::LeftKnee, 0.5),
+                    (Joint::RightKnee, 0.5),
+                    (Joint::Spine, 0.5),
+                ] {
+                    if let Some(k) = find(j) {
+                        frame[k] += world(Vec3::y()) * size * share * w;
+                    }
+                }
+            }
+            Flaw::Body {
+                body: Body::Sway,
+                size,
+            } => {
+                let w = bump(u, 0.0, t(Event::Top), t(Event::Impact));
+                for (j, share) in [
+                    (Joint::Pelvis, 1.0),
+                    (Joint::LeftHip, 1.0),
+                    (Joint::RightHip, 1.0),
+                    (Joint::LeftKnee, 0.5),
+                    (Joint::RightKnee, 0.5),
+                    (Joint::Spine, 0.5),
+                ] {
+                    if let Some(k) = find(j) {
+                        frame[k] -= world(Vec3::x()) * size * share * w;
+                    }
+                }
+            }
+            Flaw::Body {
+                body: Body::HeadDown,
+                size,
+            } => {
+                let w = bump(u, 0.0, t(Event::Top), t(Event::Finish));
+                for k in head(&skeleton) {
+                    frame[k] -= Vec3::y() * size * w;
+                }
+            }
+            Flaw::Body {
+                body: Body::ReducedTurn,
+                size,
+            } => {
+                // Everything from the thorax up turns back toward its address heading, about
+                // the vertical through the spine.
+                let (Some(spine), Some(thorax)) = (find(Joint::Spine), find(Joint::Thorax)) else {
+                    return;
+                };
+                let w = bump(u, 0.0, t(Event::Top), t(Event::Impact));
+                let rot = nalgebra::Rotation3::from_axis_angle(
+                    &Vec3::y_axis(),
+                    size.to_radians() * w * turn,
+                );
+                let pivot = frame[spine];
+                for (k, p) in frame.iter_mut().enumerate() {
+                    if k == thorax || skeleton.ancestry(k).any(|a| a == thorax) {
+                        *p = pivot + rot * (*p - pivot);
+                    }
+                }
+            }
+            Flaw::Body {
+                body: Body::BentLeadArm,
+                size,
+            } => {
+                let (Some(s), Some(e)) = (find(lead_arm[0]), find(lead_arm[1])) else {
+                    return;
+                };
+                let w = bump(
+                    u,
+                    t(Event::MidBackswing),
+                    t(Event::Top),
+                    t(Event::MidDownswing),
+                );
+                let Some(wrist) = find(lead_arm[2]) else {
+                    return;
+                };
+                let (upper, fore) = (frame[s] - frame[e], frame[wrist] - frame[e]);
+                let Some(axis) = fore.cross(&upper).try_normalize(1e-9) else {
+                    continue;
+                };
+                let rot = nalgebra::Rotation3::from_axis_angle(
+                    &nalgebra::Unit::new_unchecked(axis),
+                    size.to_radians() * w,
+                );
+                let pivot = frame[e];
+                for (k, p) in frame.iter_mut().enumerate() {
+                    if skeleton.ancestry(k).any(|a| a == e) {
+                        *p = pivot + rot * (*p - pivot);
+                    }
+                }
+            }
+            Flaw::Tempo { .. } | Flaw::Pause { .. } => return,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use posecoach_core::events;
+    use posecoach_io::csv;
+
+    /// The tour driver (committed fixture, with its club) on the bundled T-pose at 240 Hz, and
+    /// its events.
+    fn clean() -> (Motion, Times, Side) {
+        let source =
+            csv::read(include_str!("../../../tests/fixtures/golf_driver_60hz.csv")).unwrap();
+        let found = events::detect(&source.skeleton, &source.positions, source.rate_hz).unwrap();
+        let body = csv::read(include_str!("../../../tests/fixtures/h36m17_tpose.csv")).unwrap();
+        let swing = source.retarget_analytic(&body).unwrap().resampled(240.0);
+        (swing, times(&found, source.rate_hz), found.lead)
+    }
+
+    #[test]
+    fn an_unflawed_swing_is_the_clean_one_with_no_truth() {
+        let (swing, t, lead) = clean();
+        let planted = plant(&swing, &t, lead, &[]);
+        assert!(planted.truths.is_empty());
+        assert_eq!(planted.swing.frames(), swing.frames());
+        let worst = planted
+            .swing
+            .positions
+            .iter()
+            .zip(&swing.positions)
+            .map(|(a, b)| (a - b).norm())
+            .fold(0.0, f32::max);
+        assert!(worst < 1e-5, "{worst}");
+    }
+
+    #[test]
+    fn a_slow_backswing_stretches_only_the_backswing() {
+        let (swing, t, lead) = clean();
+        let flaw = Flaw::Tempo {
+            phase: Phase::Backswing,
+            factor: 1.5,
+        };
+        let planted = plant(&swing, &t, lead, &[flaw]);
+        let (top, impact) = (Event::Top as usize, Event::Impact as usize);
+        assert!((planted.times[top] - 1.5 * t[top]).abs() < 1e-4);
+        assert!((planted.times[impact] - planted.times[top] - (t[impact] - t[top])).abs() < 1e-4);
+        assert!((planted.tempo_ratio - 1.5 * t[top] / (t[impact] - t[top])).abs() < 1e-3);
+        assert_eq!(
+            planted.truths,
+            vec![Truth::Tempo {
+                phase: Phase::Backswing,
+                verdict: Verdict::Slow
+            }]
+        );
+        let extra = planted.swing.frames() as f32 - swing.frames() as f32;
+        assert!((extra - 0.5 * t[top] * 240.0).abs() <= 1.0, "{extra}");
+    }
+
+    #[test]
+    fn an_offset_is_true_of_its_joint_direction_and_event() {
+        let (swing, t, lead) = clean();
+        let flaw = Flaw::Offset {
+            event: Event::Top,
+            joint: Joint::LeftWrist,
+            direction: Direction::Down,
+            metres: 0.12,
+        };
+        let planted = plant(&swing, &t, lead, &[flaw]);
+        let named = Truth::Spatial {
+            event: Event::Top,
+            joint: Joint::LeftWrist,
+            direction: Direction::Down,
+        };
+        assert!(planted.truths.contains(&named), "{:?}", planted.truths);
+        // Nothing far from the top, and no other joint.
+        assert!(
+            planted.truths.iter().all(|t| matches!(
+                t,
+                Truth::Spatial {
+                    joint: Joint::LeftWrist,
+                    event: Event::Top | Event::MidBackswing | Event::MidDownswing,
+                    ..
+                }
+            )),
+            "{:?}",
+            planted.truths
+        );
+        let f = (t[Event::Top as usize] * 240.0).round() as usize;
+        let k = swing.skeleton.index_of(Joint::LeftWrist).unwrap();
+        let j = swing.skeleton.len();
+        let drop = swing.positions[f * j + k].y - planted.swing.positions[f * j + k].y;
+        assert!((drop - 0.12).abs() < 0.005, "{drop}");
+    }
+
+    #[test]
+    fn body_flaws_move_what_they_name() {
+        let (swing, t, lead) = clean();
+        let truths = |body, size| plant(&swing, &t, lead, &[Flaw::Body { body, size }]).truths;
+        let early = truths(Body::EarlyExtension, 0.1);
+        assert!(
+            early.iter().any(|t| matches!(
+                t,
+                Truth::Spatial {
+                    event: Event::Impact,
+                    joint: Joint::Pelvis,
+                    direction: Direction::TowardBall
+                }
+            )),
+            "{early:?}"
+        );
+        let sway = truths(Body::Sway, 0.1);
+        assert!(
+            sway.iter().any(|t| matches!(
+                t,
+                Truth::Spatial {
+                    event: Event::Top,
+                    joint: Joint::Pelvis,
+                    direction: Direction::AwayFromTarget
+                }
+            )),
+            "{sway:?}"
+        );
+        for body in [Body::ReducedTurn, Body::BentLeadArm, Body::HeadDown] {
+            let size = if body == Body::HeadDown { 0.08 } else { 25.0 };
+            assert!(!truths(body, size).is_empty(), "{body:?}");
+        }
+    }
+}

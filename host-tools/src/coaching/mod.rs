@@ -1,0 +1,600 @@
+//! `posecoach bench coaching`: whether the advice is true, on swings whose truth is known.
+//!
+//! Cases are made from real swings (the source files, with their club) on bodies of other
+//! statures and proportions ([`bodies`]): a clean swing, with flaws planted in it
+//! ([`flaws`]), laid out as a session (T-pose, set-up, waggle, swing, return), filmed by a
+//! phone ([`phone`](crate::phone)) facing the golfer or down the line at 30 or 60 frames per
+//! second, and sent through the device's own session with the bundled coach of the swing's club.
+//! Every figure compares the report with the planted truth:
+//!
+//! - **timing**: the takeaway (the first frame of the swing: the golfer is still before it),
+//!   the top and impact (found in the source swing with its club at its own rate), against the
+//!   report's address, top and impact, in ms;
+//! - **tempo**: the backswing:downswing ratio's relative error;
+//! - **recall at 1**: the report's first advice item states a planted flaw (see
+//!   [`flaws::Truth`]);
+//! - **false advice**: an unflawed swing given any advice; **false tempo**: given a tempo verdict;
+//! - **score** of unflawed swings, and its fall for a flaw of a given size.
+
+pub mod bodies;
+pub mod flaws;
+
+use crate::coaches;
+use crate::phone::{self, Camera, PhoneNoise};
+use crate::progress::Progress;
+use crate::synth::{self, lay_out};
+use anyhow::{bail, Context, Result};
+use flaws::{Body, Flaw, Planted, Times, Truth};
+use posecoach_adapters::session::Outcome;
+use posecoach_core::dtw::Band;
+use posecoach_core::events::{self, Event, Side};
+use posecoach_core::format::Format;
+use posecoach_core::joint::Joint;
+use posecoach_core::score::{Advice, Direction, Phase, Report, Stance};
+use posecoach_core::wire::{Config, Message, StudentProfile};
+use posecoach_core::Vec3;
+use posecoach_io::{self as io, Motion};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde_json::{json, Value};
+use std::fmt::Write;
+use std::path::PathBuf;
+use std::sync::mpsc;
+
+/// Rate the cases are laid out at: fine enough that a camera frame's time is exact to 4 ms.
+pub const LAYOUT_HZ: f32 = 240.0;
+/// The device's model rate in every case.
+pub const MODEL_HZ: u16 = 60;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Real swings to plant flaws in (.c3d with a club, or any swing file); the bundled coach
+    /// whose name the file name holds scores them. Default: the two tour swings in
+    /// `$POSECOACH_DATA/golf`, else `../shared/data/golf`.
+    #[arg(long = "swing")]
+    swings: Vec<PathBuf>,
+    /// Bodies (statures spread over 1.50 to 1.95 m, limb proportions varied).
+    #[arg(long, default_value_t = 8)]
+    bodies: usize,
+    /// Noise levels, mm of drift (3D RMS; white jitter and bias a third of it each).
+    #[arg(long, value_delimiter = ',', default_value = "0,10,20,30,50")]
+    levels: Vec<f32>,
+    /// The small configuration CI runs: 3 bodies, one case per flaw family.
+    #[arg(long)]
+    quick: bool,
+    /// Seed of the flaws, cameras and noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Also write every case and its outcome here (JSON lines).
+    #[arg(long)]
+    cases_out: Option<PathBuf>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// A source swing on one body, ready to flaw.
+struct Clean {
+    source: PathBuf,
+    coach: u16,
+    body: Motion,
+    swing: Motion,
+    times: Times,
+    lead: Side,
+}
+
+/// One case: a clean swing, its flaws, and how it is filmed.
+struct Case {
+    clean: usize,
+    flaws: Vec<Flaw>,
+    level_mm: f32,
+    rate_hz: f32,
+    face_on: bool,
+    seed: u64,
+}
+
+/// What the device made of a case.
+#[derive(Default)]
+struct Outcome1 {
+    found: bool,
+    false_swings: usize,
+    /// Measured minus true, ms: takeaway, top, impact.
+    timing_ms: Option<[f32; 3]>,
+    tempo_error: Option<f32>,
+    first: Option<String>,
+    right_first: bool,
+    any_advice: bool,
+    tempo_verdict: bool,
+    score: Option<f32>,
+    error: Option<String>,
+}
+
+pub fn run(args: &Args) -> Result<String> {
+    let sources = if args.swings.is_empty() {
+        let data = std::env::var_os("POSECOACH_DATA")
+            .map_or_else(|| PathBuf::from("../shared/data"), PathBuf::from);
+        ["gears_tour_driver.c3d", "gears_tour_iron.c3d"]
+            .map(|f| data.join("golf").join(f))
+            .to_vec()
+    } else {
+        args.swings.clone()
+    };
+    let coach_names: Vec<String> = coaches::all()?
+        .iter()
+        .map(|c| c.name().to_string())
+        .collect();
+    let bodies = bodies::bodies(if args.quick { 3 } else { args.bodies })?;
+
+    let mut cleans = Vec::new();
+    for path in &sources {
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().to_lowercase())
+            .unwrap_or_default();
+        let Some(coach) = coach_names.iter().position(|n| stem.contains(n.as_str())) else {
+            bail!(
+                "{}: no bundled coach ({}) is named in the file name",
+                path.display(),
+                coach_names.join(", ")
+            );
+        };
+        let motion = io::load(path).with_context(|| format!("reading {}", path.display()))?;
+        let found = events::detect(&motion.skeleton, &motion.positions, motion.rate_hz)
+            .with_context(|| format!("events of {}", path.display()))?;
+        let times = flaws::times(&found, motion.rate_hz);
+        for body in &bodies {
+            let swing = motion
+                .retarget_analytic(body)
+                .map_err(|(f, e)| anyhow::anyhow!("{} frame {f}: {e}", path.display()))?
+                .resampled(LAYOUT_HZ);
+            cleans.push(Clean {
+                source: path.clone(),
+                coach: coach as u16,
+                body: body.clone(),
+                swing,
+                times,
+                lead: found.lead,
+            });
+        }
+    }
+    let cases = cases(&cleans, args);
+    let progress = Progress::new(cases.len() as u64, "cases");
+    let (tx, rx) = mpsc::channel();
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let outcomes: Vec<Outcome1> = std::thread::scope(|scope| {
+        for _ in 0..workers {
+            let (tx, next, cases, cleans) = (tx.clone(), &next, &cases, &cleans);
+            scope.spawn(move || loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(case) = cases.get(i) else { break };
+                let outcome = run_case(&cleans[case.clean], case).unwrap_or_else(|e| Outcome1 {
+                    error: Some(format!("{e:#}")),
+                    ..Outcome1::default()
+                });
+                if tx.send((i, outcome)).is_err() {
+                    break;
+                }
+            });
+        }
+        drop(tx);
+        let mut out: Vec<Option<Outcome1>> = (0..cases.len()).map(|_| None).collect();
+        for (i, o) in rx {
+            out[i] = Some(o);
+            progress.inc();
+        }
+        out.into_iter().map(Option::unwrap_or_default).collect()
+    });
+    progress.finish_and_clear();
+    if let Some(path) = &args.cases_out {
+        let lines: String = cases
+            .iter()
+            .zip(&outcomes)
+            .map(|(c, o)| format!("{}\n", case_json(&cleans[c.clean], c, o)))
+            .collect();
+        std::fs::write(path, lines).with_context(|| format!("writing {}", path.display()))?;
+    }
+    let levels: Vec<Value> = args
+        .levels
+        .iter()
+        .map(|&level| {
+            let pairs: Vec<(&Case, &Outcome1)> = cases
+                .iter()
+                .zip(&outcomes)
+                .filter(|(c, _)| c.level_mm == level)
+                .collect();
+            summary(level, &pairs)
+        })
+        .collect();
+    let doc = json!({
+        "sources": sources.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+        "bodies": bodies.len(), "cases": cases.len(), "layout_hz": LAYOUT_HZ, "model_hz": MODEL_HZ,
+        "levels": levels,
+    });
+    if args.json {
+        return Ok(format!("{doc}\n"));
+    }
+    Ok(table(&doc))
+}
+
+/// The cases: for every clean swing and noise level, unflawed swings, tempo flaws, a pause,
+/// offsets, the body-level flaws and two combinations, drawn from `args.seed`.
+fn cases(cleans: &[Clean], args: &Args) -> Vec<Case> {
+    let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
+    let mut cases = Vec::new();
+    let (unflawed, tempos, offsets) = if args.quick { (1, 1, 2) } else { (3, 4, 10) };
+    let joints = [
+        Joint::LeftWrist,
+        Joint::RightWrist,
+        Joint::LeftElbow,
+        Joint::RightElbow,
+        Joint::Neck,
+        Joint::LeftKnee,
+        Joint::RightKnee,
+        Joint::Pelvis,
+    ];
+    let directions = [
+        Direction::TowardTarget,
+        Direction::AwayFromTarget,
+        Direction::TowardBall,
+        Direction::AwayFromBall,
+        Direction::Up,
+        Direction::Down,
+    ];
+    for &level_mm in &args.levels {
+        for clean in 0..cleans.len() {
+            let mut sets: Vec<Vec<Flaw>> = Vec::new();
+            for _ in 0..unflawed {
+                sets.push(Vec::new());
+            }
+            let tempo = |rng: &mut ChaCha8Rng| {
+                let change = rng.random_range(0.15f32..=0.5);
+                Flaw::Tempo {
+                    phase: Phase::ALL[rng.random_range(0..3)],
+                    factor: if rng.random_bool(0.5) {
+                        1.0 + change
+                    } else {
+                        1.0 / (1.0 + change)
+                    },
+                }
+            };
+            let offset = |rng: &mut ChaCha8Rng| Flaw::Offset {
+                event: Event::ALL[rng.random_range(0..8)],
+                joint: joints[rng.random_range(0..joints.len())],
+                direction: directions[rng.random_range(0..6)],
+                metres: rng.random_range(0.05f32..=0.2),
+            };
+            for _ in 0..tempos {
+                sets.push(vec![tempo(&mut rng)]);
+            }
+            sets.push(vec![Flaw::Pause {
+                seconds: rng.random_range(0.1f32..=0.3),
+            }]);
+            for _ in 0..offsets {
+                sets.push(vec![offset(&mut rng)]);
+            }
+            for body in Body::ALL {
+                let size = match body {
+                    Body::ReducedTurn => rng.random_range(10.0f32..=25.0),
+                    Body::BentLeadArm => rng.random_range(20.0f32..=40.0),
+                    _ => rng.random_range(0.05f32..=0.12),
+                };
+                sets.push(vec![Flaw::Body { body, size }]);
+            }
+            sets.push(vec![tempo(&mut rng), offset(&mut rng)]);
+            sets.push(vec![offset(&mut rng), offset(&mut rng)]);
+            for flaws in sets {
+                cases.push(Case {
+                    clean,
+                    flaws,
+                    level_mm,
+                    rate_hz: if rng.random_bool(0.5) { 30.0 } else { 60.0 },
+                    face_on: rng.random_bool(0.5),
+                    seed: rng.random(),
+                });
+            }
+        }
+    }
+    cases
+}
+
+/// Lays the case out, films it and sends it through the device's session.
+fn run_case(clean: &Clean, case: &Case) -> Result<Outcome1> {
+    let planted = flaws::plant(&clean.swing, &clean.times, clean.lead, &case.flaws);
+    let source = (clean.source.clone(), planted.swing.clone());
+    let (mut timeline, placed) = lay_out(&clean.body, &[source], None, LAYOUT_HZ)?;
+    let start_s = placed[0].start as f64 / f64::from(LAYOUT_HZ);
+    let swing_end_s = placed[0].end as f64 / f64::from(LAYOUT_HZ);
+    let mut rng = ChaCha8Rng::seed_from_u64(case.seed);
+
+    // Into the phone's frame: its depth axis is Z, the golfer's stance square to it give or
+    // take 15°.
+    let joints = timeline.joints;
+    let stance = Stance::new(
+        &clean.body.skeleton,
+        &timeline.positions[placed[0].start * joints..][..joints],
+        clean.lead,
+    );
+    let depth = if case.face_on {
+        stance.toward_ball()
+    } else {
+        stance.toward_target()
+    };
+    let square = depth.z.atan2(depth.x) - std::f32::consts::FRAC_PI_2;
+    let skew = rng.random_range(-15f32..=15.0).to_radians();
+    let turn = nalgebra::Rotation3::from_axis_angle(&Vec3::y_axis(), square + skew);
+    for p in &mut timeline.positions {
+        *p = turn * *p;
+    }
+    let camera = Camera {
+        rate_hz: case.rate_hz,
+        depth: Vec3::z(),
+    };
+    let noise = PhoneNoise::level(case.level_mm);
+    let format = Format::H36m17;
+    let keypoint_joints = synth::keypoint_sources(format, &clean.body.skeleton)?;
+    let frames = phone::record(
+        |t, k| timeline.at(t, k),
+        timeline.duration_s(),
+        format,
+        &keypoint_joints,
+        &camera,
+        &noise,
+        &mut rng,
+    );
+    // The profile: the T-pose the phone saw in the first second.
+    let mut sum = vec![(Vec3::zeros(), 0u32); keypoint_joints.len()];
+    for frame in frames.iter().filter(|f| f.t_us < 1_000_000) {
+        for (k, (p, &c)) in frame.joints_mm.iter().zip(&frame.confidence).enumerate() {
+            if c >= 180 {
+                sum[k].0 += Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32);
+                sum[k].1 += 1;
+            }
+        }
+    }
+    if sum.iter().any(|s| s.1 == 0) {
+        bail!("a joint was never seen in the T-pose");
+    }
+    let profile = StudentProfile {
+        format,
+        joints_mm: sum
+            .iter()
+            .map(|(p, n)| phone::to_mm(p / (*n as f32) * 1e-3))
+            .collect(),
+    };
+    let mut messages = vec![
+        Message::StudentProfile(profile),
+        Message::Config(Config {
+            model_rate_hz: MODEL_HZ,
+            band: Band::DEFAULT,
+        }),
+        Message::CoachSelect { coach: clean.coach },
+    ];
+    messages.extend(frames.into_iter().map(Message::PoseFrame));
+
+    let mut scored: Vec<(f64, std::result::Result<Report, String>)> = Vec::new();
+    coaches::session(None, |session| {
+        for m in &messages {
+            session.handle(m, |outcome| match outcome {
+                Outcome::Scored { swing, report, .. } => {
+                    scored.push((swing.start_us as f64 * 1e-6, Ok(report.clone())));
+                }
+                Outcome::Unscored { swing, error } => {
+                    scored.push((swing.start_us as f64 * 1e-6, Err(error.to_string())));
+                }
+                Outcome::Refused(_) => {}
+            });
+        }
+    })?;
+
+    // The swing that overlaps the planted one; any other is false.
+    let model_s = 1.0 / f64::from(MODEL_HZ);
+    let (mut ours, mut others): (Vec<_>, Vec<_>) = scored.into_iter().partition(|(at, r)| {
+        let frames = r
+            .as_ref()
+            .map_or(0, |r| r.path.last().map_or(0, |p| p.0 as usize + 1));
+        let end = at + frames as f64 * model_s;
+        *at < swing_end_s && end > start_s
+    });
+    others.retain(|(_, r)| r.is_ok());
+    let mut outcome = Outcome1 {
+        false_swings: others.len() + ours.len().saturating_sub(1),
+        ..Outcome1::default()
+    };
+    let Some((at, result)) = ours.drain(..).next() else {
+        return Ok(outcome);
+    };
+    let report = match result {
+        Ok(r) => r,
+        Err(e) => {
+            outcome.error = Some(e);
+            return Ok(outcome);
+        }
+    };
+    outcome.found = true;
+    let measured = |e: Event| {
+        report
+            .student_events
+            .frame(e)
+            .map_or(f64::NAN, |f| at + f as f64 * model_s)
+    };
+    let truth = |e: Event| start_s + f64::from(planted.times[e as usize]);
+    outcome.timing_ms = Some(
+        [Event::Address, Event::Top, Event::Impact]
+            .map(|e| ((measured(e) - truth(e)) * 1000.0) as f32),
+    );
+    outcome.tempo_error = Some(report.student_tempo_ratio / planted.tempo_ratio - 1.0);
+    outcome.score = Some(report.score);
+    outcome.any_advice = !report.advice.is_empty();
+    outcome.tempo_verdict = report.advice.iter().any(|a| matches!(a, Advice::Tempo(_)));
+    if let Some(first) = report.advice.first() {
+        outcome.first = Some(first.to_string());
+        outcome.right_first = states(first, &planted);
+    }
+    Ok(outcome)
+}
+
+/// Whether `advice` states one of the planted flaws.
+fn states(advice: &Advice, planted: &Planted) -> bool {
+    planted.truths.iter().any(|t| match (t, advice) {
+        (Truth::Tempo { phase, verdict }, Advice::Tempo(p)) => {
+            p.phase == *phase && p.verdict == *verdict
+        }
+        (
+            Truth::Spatial {
+                event,
+                joint,
+                direction,
+            },
+            Advice::Spatial(d),
+        ) => d.event == *event && d.joint == *joint && d.direction == *direction,
+        _ => false,
+    })
+}
+
+/// Median and 95th percentile of `values`' magnitudes.
+fn quantiles(values: &[f32]) -> Value {
+    if values.is_empty() {
+        return json!(null);
+    }
+    let mut v: Vec<f32> = values.iter().map(|x| x.abs()).collect();
+    v.sort_by(f32::total_cmp);
+    let q = |p: f32| v[((v.len() - 1) as f32 * p).round() as usize];
+    json!({"median": q(0.5), "p95": q(0.95), "n": v.len()})
+}
+
+fn share(hits: usize, of: usize) -> Value {
+    if of == 0 {
+        json!(null)
+    } else {
+        json!({"share": hits as f64 / of as f64, "hits": hits, "of": of})
+    }
+}
+
+fn family(flaws: &[Flaw]) -> &'static str {
+    match flaws {
+        [] => "unflawed",
+        [Flaw::Tempo { .. }] | [Flaw::Pause { .. }] => "tempo",
+        [Flaw::Offset { .. }] => "offset",
+        [Flaw::Body { .. }] => "body",
+        _ => "combined",
+    }
+}
+
+/// The figures of one noise level.
+fn summary(level: f32, pairs: &[(&Case, &Outcome1)]) -> Value {
+    let found: Vec<&(&Case, &Outcome1)> = pairs.iter().filter(|(_, o)| o.found).collect();
+    let timing = |i: usize| {
+        quantiles(
+            &found
+                .iter()
+                .filter_map(|(_, o)| o.timing_ms.map(|t| t[i]))
+                .collect::<Vec<_>>(),
+        )
+    };
+    let unflawed: Vec<&&(&Case, &Outcome1)> =
+        found.iter().filter(|(c, _)| c.flaws.is_empty()).collect();
+    let recall = |f: &dyn Fn(&Case) -> bool| {
+        let of: Vec<_> = found.iter().filter(|(c, _)| f(c)).collect();
+        share(of.iter().filter(|(_, o)| o.right_first).count(), of.len())
+    };
+    let offset_at_least = |cm: f32| move |c: &Case| matches!(c.flaws[..], [Flaw::Offset { metres, .. }] if metres * 100.0 >= cm);
+    let mean_score = |f: &dyn Fn(&Case) -> bool| {
+        let s: Vec<f32> = found
+            .iter()
+            .filter(|(c, _)| f(c))
+            .filter_map(|(_, o)| o.score)
+            .collect();
+        if s.is_empty() {
+            json!(null)
+        } else {
+            json!({"mean": s.iter().sum::<f32>() / s.len() as f32, "min": s.iter().copied().fold(f32::INFINITY, f32::min), "n": s.len()})
+        }
+    };
+    let offset_in = |lo: f32, hi: f32| move |c: &Case| matches!(c.flaws[..], [Flaw::Offset { metres, .. }] if (lo..hi).contains(&(metres * 100.0)));
+    let tempo_in = |lo: f32, hi: f32| move |c: &Case| matches!(c.flaws[..], [Flaw::Tempo { factor, .. }] if (lo..hi).contains(&((factor - 1.0).abs() * 100.0)));
+    json!({
+        "level_mm": level,
+        "cases": pairs.len(),
+        "found": share(found.len(), pairs.len()),
+        "false_swings": pairs.iter().map(|(_, o)| o.false_swings).sum::<usize>(),
+        "errors": pairs.iter().filter(|(_, o)| o.error.is_some()).count(),
+        "takeaway_ms": timing(0), "top_ms": timing(1), "impact_ms": timing(2),
+        "tempo_ratio_error": quantiles(&found.iter().filter_map(|(_, o)| o.tempo_error).collect::<Vec<_>>()),
+        "false_tempo": share(unflawed.iter().filter(|(_, o)| o.tempo_verdict).count(), unflawed.len()),
+        "false_advice": share(unflawed.iter().filter(|(_, o)| o.any_advice).count(), unflawed.len()),
+        "recall_at_1": {
+            "tempo": recall(&|c| family(&c.flaws) == "tempo"),
+            "offset": recall(&|c| family(&c.flaws) == "offset"),
+            "offset_8cm": recall(&offset_at_least(8.0)),
+            "body": recall(&|c| family(&c.flaws) == "body"),
+            "combined": recall(&|c| family(&c.flaws) == "combined"),
+        },
+        "score": {
+            "unflawed": mean_score(&|c| c.flaws.is_empty()),
+            "offset_5_10cm": mean_score(&offset_in(5.0, 10.0)),
+            "offset_10_15cm": mean_score(&offset_in(10.0, 15.0)),
+            "offset_15_20cm": mean_score(&offset_in(15.0, 20.01)),
+            "tempo_15_30pc": mean_score(&tempo_in(15.0, 30.0)),
+            "tempo_30_50pc": mean_score(&tempo_in(30.0, 50.01)),
+        },
+    })
+}
+
+fn case_json(clean: &Clean, case: &Case, o: &Outcome1) -> Value {
+    json!({
+        "source": clean.source.file_name().map(|n| n.to_string_lossy().into_owned()),
+        "height_m": clean.body.skeleton.height(), "flaws": case.flaws, "level_mm": case.level_mm,
+        "rate_hz": case.rate_hz, "camera": if case.face_on { "face_on" } else { "down_the_line" },
+        "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
+        "tempo_error": o.tempo_error, "score": o.score, "first": o.first, "right_first": o.right_first,
+        "any_advice": o.any_advice, "error": o.error,
+    })
+}
+
+/// The table printed without `--json`.
+fn table(doc: &Value) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "coaching benchmark: {} cases, {} bodies, sources {}",
+        doc["cases"], doc["bodies"], doc["sources"]
+    );
+    let _ = writeln!(out, "noise | found | false | takeaway ms | top ms | impact ms | tempo err | false tempo | false advice | recall@1 offset>=8cm / tempo / body | score unflawed / 10-15cm / tempo 30-50%");
+    let pct = |v: &Value| {
+        v["share"]
+            .as_f64()
+            .map_or("-".into(), |s| format!("{:.0}%", s * 100.0))
+    };
+    let q = |v: &Value| {
+        v["median"].as_f64().map_or("-".into(), |m| {
+            format!("{m:.0} / {:.0}", v["p95"].as_f64().unwrap_or(f64::NAN))
+        })
+    };
+    let sc = |v: &Value| v["mean"].as_f64().map_or("-".into(), |m| format!("{m:.1}"));
+    for l in doc["levels"].as_array().into_iter().flatten() {
+        let r = &l["recall_at_1"];
+        let _ = writeln!(
+            out,
+            "{:>3} mm | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {}",
+            l["level_mm"],
+            pct(&l["found"]),
+            l["false_swings"],
+            q(&l["takeaway_ms"]),
+            q(&l["top_ms"]),
+            q(&l["impact_ms"]),
+            l["tempo_ratio_error"]["median"]
+                .as_f64()
+                .map_or("-".into(), |m| format!("{:.1}%", m * 100.0)),
+            pct(&l["false_tempo"]),
+            pct(&l["false_advice"]),
+            pct(&r["offset_8cm"]),
+            pct(&r["tempo"]),
+            pct(&r["body"]),
+            sc(&l["score"]["unflawed"]),
+            sc(&l["score"]["offset_10_15cm"]),
+            sc(&l["score"]["tempo_30_50pc"]),
+        );
+    }
+    out
+}
