@@ -424,6 +424,34 @@ impl Stance {
     }
 }
 
+/// Turns `coach` (frames × skeleton joints, with its `events`) about the vertical through its
+/// stance origin so that its target line runs along `toward_target` (a student's
+/// [`Stance::toward_target`]): the alignment compares root-relative poses, which a camera's or
+/// a sensor's heading would otherwise turn away from the coach's. Positions along the target
+/// line and toward the ball are unchanged in the coach's own stance frame.
+pub fn face(skeleton: &Skeleton, coach: &mut [Vec3], events: &SwingEvents, toward_target: Vec3) {
+    let joints = skeleton.len();
+    let address = events.address() * joints;
+    let Some(pose) = coach.get(address..address + joints) else {
+        return;
+    };
+    let stance = Stance::new(skeleton, pose, events.lead);
+    let (from, to) = (stance.toward_target(), toward_target);
+    // The angle about +Y taking `from` to `to` (both horizontal).
+    let (sin, cos) = (from.cross(&to).y, from.x * to.x + from.z * to.z);
+    let norm = libm::hypotf(sin, cos);
+    // Already facing that way (to a micro-radian), or no line to turn: leave it bit for bit.
+    if norm.is_nan() || norm <= 0.0 || (cos > 0.0 && libm::fabsf(sin) <= 1e-6 * norm) {
+        return;
+    }
+    let (sin, cos) = (sin / norm, cos / norm);
+    let origin = stance.origin;
+    for p in coach.iter_mut() {
+        let d = *p - origin;
+        *p = origin + Vec3::new(cos * d.x + sin * d.z, d.y, -sin * d.x + cos * d.z);
+    }
+}
+
 /// Frame `f` of a swing of `joints` joints.
 fn frame(swing: &[Vec3], joints: usize, f: usize) -> &[Vec3] {
     &swing[f * joints..(f + 1) * joints]
@@ -486,7 +514,8 @@ fn closest_coach_pose<'c>(
 
 /// Scores `student` (frames × skeleton joints at `student_hz`) against the coach's virtual
 /// swing `coach` (on the same skeleton, at `coach_hz`), aligned within `band`: [`compare`]
-/// after detecting both swings' events.
+/// after detecting both swings' events and turning the coach to [`face`] the way the student
+/// does.
 ///
 /// # Errors
 /// [`ScoreError`] when events cannot be found, a swing is too long or the scratch (see
@@ -496,7 +525,7 @@ pub fn score(
     skeleton: &Skeleton,
     student: &[Vec3],
     student_hz: f32,
-    coach: &[Vec3],
+    coach: &mut [Vec3],
     coach_hz: f32,
     band: Band,
     floats: &mut [f32],
@@ -506,10 +535,25 @@ pub fn score(
         Detected::new(skeleton, positions, hz)
             .map_err(|error| ScoreError::Events { student, error })
     };
-    let (student, coach) = (
-        detect(student, student_hz, true)?,
-        detect(coach, coach_hz, false)?,
+    let student = detect(student, student_hz, true)?;
+    let coach_events =
+        events::detect(skeleton, coach, coach_hz).map_err(|error| ScoreError::Events {
+            student: false,
+            error,
+        })?;
+    let joints = skeleton.len();
+    let address = student.events.address() * joints;
+    let stance = Stance::new(
+        skeleton,
+        &student.positions[address..address + joints],
+        student.events.lead,
     );
+    face(skeleton, coach, &coach_events, stance.toward_target());
+    let coach = Detected {
+        positions: coach,
+        hz: coach_hz,
+        events: coach_events,
+    };
     compare(skeleton, &student, &coach, band, floats, bytes)
 }
 
@@ -539,7 +583,8 @@ impl<'a> Detected<'a> {
     }
 }
 
-/// [`score`] of two swings whose events are known (a device detects its coach's once).
+/// [`score`] of two swings whose events are known (a device detects its coach's once), the
+/// coach already turned to [`face`] the way the student does.
 ///
 /// # Errors
 /// [`ScoreError`] when a swing is too long, the swings are of different kinds or the

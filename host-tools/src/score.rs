@@ -127,15 +127,17 @@ pub fn write_report(path: &Path, json: &Value, html: impl FnOnce() -> String) ->
     std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
 }
 
-/// Scores `student` against `coach`, both on the student's skeleton.
+/// Scores `student` against `coach`, both on the student's skeleton (the coach turned to face
+/// the student's way).
 pub fn score_swings(student: &Motion, coach: &Motion, band: Band) -> Result<Report> {
+    let mut coach_positions = coach.positions.clone();
     let len = score::scratch_len(student.frames(), coach.frames());
     let (mut floats, mut bytes) = (vec![0.0; len.floats], vec![0u8; len.bytes]);
     Ok(score::score(
         &student.skeleton,
         &student.positions,
         student.rate_hz,
-        &coach.positions,
+        &mut coach_positions,
         coach.rate_hz,
         band,
         &mut floats,

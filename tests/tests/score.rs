@@ -26,7 +26,7 @@ fn run(student: &Motion, coach: &Motion) -> Report {
         &coach.skeleton,
         &student.positions,
         student.rate_hz,
-        &coach.positions,
+        &mut coach.positions.clone(),
         coach.rate_hz,
         BAND,
         &mut floats,
@@ -270,6 +270,33 @@ fn advice_reads_as_sentences() {
     assert!(sentence.contains("% slower than the coach's"), "{sentence}");
 }
 
+/// A camera or a sensor set's heading is not the coach's: a student swing turned about the
+/// vertical scores as it did facing the coach's way.
+#[test]
+fn the_student_may_face_any_way() {
+    let coach = driver();
+    let slow = warp_phase(&coach, 12, 65, 1.3);
+    let facing = run(&slow, &coach);
+    for degrees in [90.0f32, -135.0, 180.0] {
+        let turn = nalgebra::Rotation3::from_axis_angle(&Vec3::y_axis(), degrees.to_radians());
+        let turned = Motion {
+            positions: slow.positions.iter().map(|p| turn * p).collect(),
+            ..slow.clone()
+        };
+        let report = run(&turned, &coach);
+        assert!(
+            (report.score - facing.score).abs() < 0.05,
+            "{degrees}: {} against {}",
+            report.score,
+            facing.score
+        );
+        assert_eq!(report.advice.len(), facing.advice.len());
+        for (a, b) in report.advice.iter().zip(&facing.advice) {
+            assert_eq!(a.to_string(), b.to_string(), "{degrees}");
+        }
+    }
+}
+
 #[test]
 fn putts_are_scored_like_putts() {
     let golfer = driver();
@@ -294,7 +321,7 @@ fn putts_are_scored_like_putts() {
         &coach.skeleton,
         &student.positions,
         60.0,
-        &golfer.positions,
+        &mut golfer.positions.clone(),
         60.0,
         BAND,
         &mut floats,

@@ -51,7 +51,7 @@ use posecoach_core::format::Format;
 use posecoach_core::math::norm;
 use posecoach_core::resample;
 use posecoach_core::retarget::Fit;
-use posecoach_core::score::{self, Detected, Report, ScoreError};
+use posecoach_core::score::{self, Detected, Report, ScoreError, Stance};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::weights::Weights;
 use posecoach_core::wire::{Config, ImuSample, Message, PoseFrame, SensorLayout, StudentProfile};
@@ -458,8 +458,11 @@ impl<'b> Session<'b> {
         } = student;
         let joints = skeleton.len();
         let (swings, config) = (&mut self.swings, self.config);
-        let (virtual_coach, floats, bytes) =
-            (&*self.virtual_coach, &mut *self.floats, &mut *self.bytes);
+        let (virtual_coach, floats, bytes) = (
+            &mut *self.virtual_coach,
+            &mut *self.floats,
+            &mut *self.bytes,
+        );
         let last_report = &mut self.report;
         // The swing is scored where it lies in the detector's ring (a window that has left the
         // ring is skipped, as a copy of it would fail).
@@ -486,11 +489,16 @@ impl<'b> Session<'b> {
                 start_us: at(window.start + span.start as u64),
                 frames: span.len(),
             };
+            let student = &frames[span.start * joints..span.end * joints];
+            let coach = &mut virtual_coach[coach_swing.start * joints..coach_swing.end * joints];
+            let address = events.address() * joints;
+            let stance = Stance::new(skeleton, &student[address..address + joints], events.lead);
+            score::face(skeleton, coach, coach_events, stance.toward_target());
             let compared = Compared {
                 skeleton,
-                student: &frames[span.start * joints..span.end * joints],
+                student,
                 student_hz: rate,
-                coach: &virtual_coach[coach_swing.start * joints..coach_swing.end * joints],
+                coach,
                 coach_hz,
             };
             let coach = Detected {
