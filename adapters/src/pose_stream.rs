@@ -5,7 +5,8 @@
 //! joints (see [`Format::joints`]) every `1 / rate_hz` seconds of the sender's clock, each
 //! linearly interpolated between the two received frames around it, so capture jitter does not
 //! reach the swing's timing. It drops repeated and late frames (by sequence number and time), masks
-//! keypoints under `min_confidence` by holding the joint's last confident position, and breaks
+//! keypoints under `min_confidence` (the joint is carried by its parent at the offset it last
+//! had from it; a masked root holds its last confident position), and breaks
 //! the stream at a gap longer than `max_gap_s`: it emits [`StreamEvent::Gap`] and starts a
 //! new grid at the next frame, so a swing is never stitched across missing time. Nothing
 //! allocates and nothing panics.
@@ -252,12 +253,22 @@ impl PoseStream {
         self.joints = joints.len();
         self.counters.accepted += 1;
         let mut current = self.previous;
+        let table = frame.format.joints();
         for (k, (position, confident)) in joints.iter().enumerate() {
             if *confident {
                 current[k] = *position;
                 self.seen |= 1 << k;
             } else {
                 self.counters.masked += 1;
+            }
+        }
+        // A masked joint is carried by its parent: it keeps the offset from it that it had in
+        // the last frame (parents come first in a format's table), so an occluded wrist follows
+        // its elbow through a downswing instead of staying behind.
+        for (k, (_, confident)) in joints.iter().enumerate() {
+            let parent = table.get(k).and_then(|j| j.parent).map(usize::from);
+            if let Some(p) = parent.filter(|&p| !*confident && p < k) {
+                current[k] = current[p] + (self.previous[k] - self.previous[p]);
             }
         }
         let ready = self.seen.count_ones() as usize == self.joints;

@@ -1,9 +1,10 @@
 //! Streaming swing detection: which stretch of a live pose stream is a swing.
 //!
 //! [`SwingDetector`] keeps the latest frames in a ring buffer the caller owns. The hands'
-//! speed (over [`SPEED_WINDOW_S`], which absorbs pose noise) opens a candidate when it passes
-//! `open_speed`, with `pre_s` of history kept before it for the set-up; the candidate closes once
-//! the hands have stayed under `close_speed` for `settle_s`. It is a swing only if the hands
+//! speed (over [`SPEED_WINDOW_S`]) opens a candidate when it passes `open_speed`, with `pre_s`
+//! of history kept before it for the set-up; the candidate closes once the hands have stayed
+//! under `close_speed` for `settle_s` (a frame above it takes back [`SETTLE_SETBACK`]
+//! frames), their speed then measured over [`SETTLE_WINDOW_S`]. It is a swing only if the hands
 //! peaked above `min_peak_speed` and rose at least `min_rise`: walking, waggles and practice
 //! half swings open candidates that fail those tests. A swing hands back a [`SwingWindow`],
 //! scored where it lies with [`SwingDetector::with_window`].
@@ -29,6 +30,14 @@ use crate::Vec3;
 
 /// Hand speed is measured over this long a stretch of frames.
 pub const SPEED_WINDOW_S: f32 = 0.1;
+/// Settling is judged on the hands' speed between their means over two successive stretches
+/// this long (so that 50 mm of pose noise does not keep still hands above it).
+pub const SETTLE_WINDOW_S: f32 = 0.2;
+/// Skeleton height (feet to head, by bone lengths) of the golfer the hand thresholds are
+/// given for: the 1.75 m standard T-pose. Hand speeds and rises scale with the body.
+pub const REFERENCE_HEIGHT_M: f32 = 1.62;
+/// Settled frames one frame above the settling speed takes back.
+pub const SETTLE_SETBACK: usize = 2;
 
 /// Thresholds of the detector. The speeds are of its activity signal: the hands' speed in m/s
 /// for [`SwingDetector::push`], the caller's measure (rad/s for gyros) for
@@ -142,6 +151,8 @@ pub struct SwingDetector<'s> {
     joints: usize,
     wrists: [usize; 2],
     config: DetectorConfig,
+    /// The body's height over [`REFERENCE_HEIGHT_M`].
+    size: f32,
     capacity: usize,
     /// Frames pushed so far.
     seen: u64,
@@ -167,6 +178,7 @@ impl<'s> SwingDetector<'s> {
             joints,
             wrists,
             config,
+            size: skeleton.height() / REFERENCE_HEIGHT_M,
             seen: 0,
             candidate: None,
         })
@@ -236,6 +248,13 @@ impl<'s> SwingDetector<'s> {
         (self.storage[at + self.wrists[0]] + self.storage[at + self.wrists[1]]) * 0.5
     }
 
+    /// The hands averaged over the `span` frames ending at `frame`.
+    fn mean_hands(&self, frame: u64, span: u64) -> Vec3 {
+        let span = span.min(frame + 1).max(1);
+        let sum = (frame + 1 - span..=frame).fold(Vec3::zeros(), |s, f| s + self.hands(f));
+        sum / span as f32
+    }
+
     /// Takes the next frame; returns a window when it closes a swing. Activity is the hands'
     /// speed over [`SPEED_WINDOW_S`].
     ///
@@ -278,10 +297,20 @@ impl<'s> SwingDetector<'s> {
 
         let rate = self.config.rate_hz;
         let lag = ((SPEED_WINDOW_S * rate) as u64).max(1).min(now);
-        let speed = match activity {
-            Some(a) => a,
-            None if lag == 0 => 0.0,
-            None => norm(&(self.hands(now) - self.hands(now - lag))) * rate / lag as f32,
+        let settle = ((SETTLE_WINDOW_S * rate) as u64).max(1);
+        // The speed that opens and peaks is over one stretch; the one that settles is between
+        // the means of two, which pose noise does not keep above the settling speed.
+        let (speed, steady) = match activity {
+            Some(a) => (a, a),
+            None if lag == 0 => (0.0, 0.0),
+            None => {
+                let back = settle.min(now);
+                let moved = self.mean_hands(now, settle) - self.mean_hands(now - back, settle);
+                (
+                    norm(&(self.hands(now) - self.hands(now - lag))) * rate / lag as f32,
+                    norm(&moved) * rate / back.max(1) as f32,
+                )
+            }
         };
         let height = self.hands(now).y;
         let c = self.config;
@@ -301,10 +330,12 @@ impl<'s> SwingDetector<'s> {
         candidate.peak = candidate.peak.max(speed);
         candidate.low = candidate.low.min(height);
         candidate.high = candidate.high.max(height);
-        candidate.settled = if speed < c.close_speed {
+        // A frame above the settling speed takes back two settled frames rather than all: a
+        // noisy stream still settles, a swing (fast for far longer) does not.
+        candidate.settled = if steady < c.close_speed {
             candidate.settled + 1
         } else {
-            0
+            candidate.settled.saturating_sub(SETTLE_SETBACK)
         };
         let len = (now + 1 - candidate.start) as usize;
         if len >= self.capacity {
@@ -317,8 +348,13 @@ impl<'s> SwingDetector<'s> {
             return Ok(None);
         }
         self.candidate = None;
+        // Hand speeds and rises scale with the body; an IMU's activity (rad/s) does not.
+        let peak = match activity {
+            Some(_) => c.min_peak_speed,
+            None => c.min_peak_speed * self.size,
+        };
         let swing =
-            candidate.peak >= c.min_peak_speed && candidate.high - candidate.low >= c.min_rise;
+            candidate.peak >= peak && candidate.high - candidate.low >= c.min_rise * self.size;
         Ok(swing.then_some(SwingWindow {
             start: candidate.start,
             len,
