@@ -31,14 +31,14 @@ use posecoach_core::events::{self, Event, Side};
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{Advice, Direction, Phase, Report, Stance};
-use posecoach_core::wire::{Config, Message, StudentProfile};
+use posecoach_core::wire::{self, Config, Message, StudentProfile, MAX_FRAME};
 use posecoach_core::Vec3;
 use posecoach_io::{self as io, Motion};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{json, Value};
 use std::fmt::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 
 /// Rate the cases are laid out at: fine enough that a camera frame's time is exact to 4 ms.
@@ -68,6 +68,10 @@ pub struct Args {
     /// Also write every case and its outcome here (JSON lines).
     #[arg(long)]
     cases_out: Option<PathBuf>,
+    /// Also write every case's session into this folder as `case_SEED.pclog` (the seed is in
+    /// `--cases-out`), for `posecoach replay`.
+    #[arg(long)]
+    logs_out: Option<PathBuf>,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
@@ -158,6 +162,9 @@ pub fn run(args: &Args) -> Result<String> {
         }
     }
     let cases = cases(&cleans, args);
+    if let Some(dir) = &args.logs_out {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
     let progress = Progress::new(cases.len() as u64, "cases");
     let (tx, rx) = mpsc::channel();
     let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -168,10 +175,11 @@ pub fn run(args: &Args) -> Result<String> {
             scope.spawn(move || loop {
                 let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 let Some(case) = cases.get(i) else { break };
-                let outcome = run_case(&cleans[case.clean], case).unwrap_or_else(|e| Outcome1 {
-                    error: Some(format!("{e:#}")),
-                    ..Outcome1::default()
-                });
+                let outcome = run_case(&cleans[case.clean], case, args.logs_out.as_deref())
+                    .unwrap_or_else(|e| Outcome1 {
+                        error: Some(format!("{e:#}")),
+                        ..Outcome1::default()
+                    });
                 if tx.send((i, outcome)).is_err() {
                     break;
                 }
@@ -299,7 +307,7 @@ fn cases(cleans: &[Clean], args: &Args) -> Vec<Case> {
 }
 
 /// Lays the case out, films it and sends it through the device's session.
-fn run_case(clean: &Clean, case: &Case) -> Result<Outcome1> {
+fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outcome1> {
     let planted = flaws::plant(&clean.swing, &clean.times, clean.lead, &case.flaws);
     let source = (clean.source.clone(), planted.swing.clone());
     let (mut timeline, placed) = lay_out(&clean.body, &[source], None, LAYOUT_HZ)?;
@@ -372,36 +380,57 @@ fn run_case(clean: &Clean, case: &Case) -> Result<Outcome1> {
     ];
     messages.extend(frames.into_iter().map(Message::PoseFrame));
 
-    let mut scored: Vec<(f64, std::result::Result<Report, String>)> = Vec::new();
+    if let Some(dir) = logs_out {
+        let mut bytes = posecoach_adapters::log::header().to_vec();
+        for m in &messages {
+            let mut frame = [0u8; MAX_FRAME];
+            let n = wire::encode(m, &mut frame)?;
+            bytes.extend_from_slice(&frame[..n]);
+        }
+        let path = dir.join(format!("case_{}.pclog", case.seed));
+        std::fs::write(&path, bytes).with_context(|| format!("writing {}", path.display()))?;
+    }
+    let mut scored: Vec<(f64, usize, std::result::Result<Report, String>)> = Vec::new();
+    let mut refused = Vec::new();
     coaches::session(None, |session| {
         for m in &messages {
             session.handle(m, |outcome| match outcome {
                 Outcome::Scored { swing, report, .. } => {
-                    scored.push((swing.start_us as f64 * 1e-6, Ok(report.clone())));
+                    scored.push((
+                        swing.start_us as f64 * 1e-6,
+                        swing.frames,
+                        Ok(report.clone()),
+                    ));
                 }
                 Outcome::Unscored { swing, error } => {
-                    scored.push((swing.start_us as f64 * 1e-6, Err(error.to_string())));
+                    scored.push((
+                        swing.start_us as f64 * 1e-6,
+                        swing.frames,
+                        Err(error.to_string()),
+                    ));
                 }
-                Outcome::Refused(_) => {}
+                Outcome::Refused(r) => refused.push(r.to_string()),
             });
         }
     })?;
 
     // The swing that overlaps the planted one; any other is false.
     let model_s = 1.0 / f64::from(MODEL_HZ);
-    let (mut ours, mut others): (Vec<_>, Vec<_>) = scored.into_iter().partition(|(at, r)| {
-        let frames = r
-            .as_ref()
-            .map_or(0, |r| r.path.last().map_or(0, |p| p.0 as usize + 1));
-        let end = at + frames as f64 * model_s;
-        *at < swing_end_s && end > start_s
-    });
-    others.retain(|(_, r)| r.is_ok());
+    let (mut ours, mut others): (Vec<_>, Vec<_>) = scored
+        .into_iter()
+        .partition(|(at, frames, _)| *at < swing_end_s && at + *frames as f64 * model_s > start_s);
+    others.retain(|(_, _, r)| r.is_ok());
     let mut outcome = Outcome1 {
         false_swings: others.len() + ours.len().saturating_sub(1),
         ..Outcome1::default()
     };
-    let Some((at, result)) = ours.drain(..).next() else {
+    let Some((at, _, result)) = ours.drain(..).next() else {
+        if let Some(r) = refused.first() {
+            outcome.error = Some(format!(
+                "{} messages refused, the first: {r}",
+                refused.len()
+            ));
+        }
         return Ok(outcome);
     };
     let report = match result {
@@ -545,7 +574,7 @@ fn case_json(clean: &Clean, case: &Case, o: &Outcome1) -> Value {
     json!({
         "source": clean.source.file_name().map(|n| n.to_string_lossy().into_owned()),
         "height_m": clean.body.skeleton.height(), "flaws": case.flaws, "level_mm": case.level_mm,
-        "rate_hz": case.rate_hz, "camera": if case.face_on { "face_on" } else { "down_the_line" },
+        "seed": case.seed, "rate_hz": case.rate_hz, "camera": if case.face_on { "face_on" } else { "down_the_line" },
         "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
         "tempo_error": o.tempo_error, "score": o.score, "first": o.first, "right_first": o.right_first,
         "any_advice": o.any_advice, "error": o.error,
