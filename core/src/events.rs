@@ -57,6 +57,10 @@ pub const FOLLOW_ARM_DEG: f32 = -45.0;
 /// Impact comes within this long after the top (a slow amateur downswing takes half of it):
 /// a club set back down at the ball later, to address the next shot, is not an impact.
 pub const IMPACT_WITHIN_S: f32 = 1.0;
+/// Without a club, a full swing's impact comes this long after the hands are back where they
+/// were at address: the hands lead the club head through impact (20.4 and 20.5 ms on the two
+/// tour swings, timed against their club heads).
+pub const IMPACT_LAG_S: f32 = 0.02;
 /// A stroke whose hands rise less than this (metres, over the whole motion) is a putt; a full
 /// swing raises them 0.8 m or more.
 pub const PUTT_RISE_M: f32 = 0.25;
@@ -128,7 +132,7 @@ pub enum SwingKind {
 
 /// The events of one swing: all eight for a full swing; address, top, impact and finish for a
 /// putt.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[derive(serde::Serialize, serde::Deserialize)]
 pub struct SwingEvents {
@@ -140,6 +144,9 @@ pub struct SwingEvents {
     pub club: bool,
     /// Per event in [`Event::ALL`] order, `u16::MAX` where the kind has no such event.
     frames: [u16; 8],
+    /// Per event, its time in frames (between frames: see [`SwingEvents::time`]); 0 where
+    /// the kind has no such event.
+    times: [f32; 8],
 }
 
 const ABSENT: u16 = u16::MAX;
@@ -153,6 +160,29 @@ impl SwingEvents {
         }
     }
 
+    /// Time of `event` in frames from the first, between frames where the motion tells: the
+    /// takeaway for [`Event::Address`] (whose frame is the last before it), the crossing or
+    /// the turning point of the signal that defines the others (see the module documentation).
+    pub fn time(&self, event: Event) -> Option<f32> {
+        self.frame(event).map(|_| self.times[event as usize])
+    }
+
+    /// These events with the takeaway at `time` (frames, within the backswing): a takeaway
+    /// timed against a coach's ([`takeaway_against`]).
+    pub fn with_takeaway(&self, time: f32) -> SwingEvents {
+        let mut events = *self;
+        let a = Event::Address as usize;
+        if events.frames[a] != ABSENT && time.is_finite() {
+            let time = time.clamp(
+                0.0,
+                (f32::from(events.frames[Event::Top as usize]) - 1.0).max(0.0),
+            );
+            events.times[a] = time;
+            events.frames[a] = time as u16;
+        }
+        events
+    }
+
     /// These events counted from frame `start` instead of 0: the events of the stretch that
     /// begins there (`start` at most the address; a later one clamps events before it to 0).
     pub fn from_frame(&self, start: usize) -> SwingEvents {
@@ -162,6 +192,7 @@ impl SwingEvents {
                 ABSENT => ABSENT,
                 f => f.saturating_sub(start),
             }),
+            times: self.times.map(|t| (t - f32::from(start)).max(0.0)),
             ..*self
         }
     }
@@ -265,7 +296,18 @@ struct Track<'a> {
     rate: f32,
 }
 
-impl Track<'_> {
+impl<'a> Track<'a> {
+    /// `positions` of `joints` joints at `rate` frames per second, smoothed over ±[`SMOOTHING_S`].
+    fn new(positions: &'a [Vec3], joints: usize, rate: f32) -> Track<'a> {
+        Track {
+            positions,
+            joints,
+            frames: positions.len() / joints.max(1),
+            half: libm::roundf(SMOOTHING_S * rate) as usize,
+            rate,
+        }
+    }
+
     /// Joint `j` at frame `t`, averaged over `t ± half` (clamped to the motion).
     fn at(&self, j: usize, t: usize) -> Vec3 {
         let (lo, hi) = (
@@ -320,6 +362,189 @@ fn crossing(
     None
 }
 
+/// Where a parabola through `(−1, a)`, `(0, b)`, `(1, c)` turns, in −0.5..=0.5 (0 where the
+/// three are on a line): a turning point found at a frame, placed between frames.
+fn vertex(a: f32, b: f32, c: f32) -> f32 {
+    let curve = a - 2.0 * b + c;
+    if curve.abs() > f32::EPSILON {
+        (0.5 * (a - c) / curve).clamp(-0.5, 0.5)
+    } else {
+        0.0
+    }
+}
+
+/// Where `f` crosses `level` between frames `a` and `b` (linear), as a fractional frame.
+fn between(f: impl Fn(usize) -> f32, level: f32, a: usize, b: usize) -> f32 {
+    let (fa, fb) = (f(a), f(b));
+    let w = if fb != fa {
+        ((level - fa) / (fb - fa)).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    a as f32 + (b as f32 - a as f32) * w
+}
+
+/// The hands' progress toward the top is fitted between these shares of it (well above pose
+/// noise, early enough to be a start from rest).
+pub const ONSET_SHARES: (f32, f32) = (0.08, 0.3);
+
+/// The takeaway, in frames: when the `hands` start back from `home` (their set-up position)
+/// toward where they are at `top`, searching from frame `from`. Starting from rest with a
+/// smooth push, the hands' progress along their first direction grows as the cube of the time
+/// since the takeaway (the start of a minimum-jerk reach; 3.1 to 3.2 on the tour swings), so
+/// its cube root is fitted with a line between [`ONSET_SHARES`] of the way to the top and
+/// extrapolated back to zero. `None` without enough frames in that stretch.
+fn takeaway(hands: impl Fn(usize) -> Vec3, home: Vec3, from: usize, top: usize) -> Option<f32> {
+    let reach = norm(&(hands(top) - home));
+    if reach <= 0.0 {
+        return None;
+    }
+    let (lo, hi) = (ONSET_SHARES.0 * reach, ONSET_SHARES.1 * reach);
+    let last = (from..=top).find(|&t| norm(&(hands(t) - home)) >= hi)?;
+    let way = (hands(last) - home) / norm(&(hands(last) - home));
+    let progress = |t: usize| (hands(t) - home).dot(&way);
+    let mut first = last;
+    while first > from && progress(first - 1) >= lo {
+        first -= 1;
+    }
+    if last - first < 1 {
+        return None;
+    }
+    // Pose noise of σ in the progress p is σ / (3 p^(2/3)) in its cube root: each frame is
+    // weighted by p^(4/3), the inverse of that variance.
+    let (mut sw, mut st, mut sy, mut stt, mut sty) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+    for t in first..=last {
+        let (x, y) = ((t - first) as f32, libm::cbrtf(progress(t).max(0.0)));
+        let w = y * y * y * y;
+        sw += w;
+        st += w * x;
+        sy += w * y;
+        stt += w * x * x;
+        sty += w * x * y;
+    }
+    let slope = (sw * sty - st * sy) / (sw * stt - st * st);
+    if !(slope.is_finite() && slope > 0.0) {
+        return None;
+    }
+    let intercept = (sy - slope * st) / sw;
+    Some(first as f32 - intercept / slope)
+}
+
+/// The shares of the way from the set-up to the top at which [`takeaway_against`] compares
+/// the hands' progress: the 13 from 0.1 to 0.7 in steps of 0.05.
+const PROGRESS_SHARES: (f32, f32, usize) = (0.1, 0.05, 13);
+
+/// The student's takeaway (frames, between frames) timed against the coach's: the arms'
+/// (wrists and elbows) progress along the line from their set-up to their top pose passes 10 %
+/// to 70 % of the way at moments that, were the student's backswing the coach's run at its own pace, would
+/// lie at the same shares of the time from the takeaway to the top; the takeaway that fits
+/// them best (least squares, each crossing weighted by how sharply the progress passes it) is
+/// the student's. It uses half a second of the backswing where
+/// [`detect`] uses a fifth, so pose noise moves it less. `None` when a swing lacks the joints,
+/// the events or a crossing.
+pub fn takeaway_against(
+    skeleton: &Skeleton,
+    student: &[Vec3],
+    student_events: &SwingEvents,
+    student_hz: f32,
+    coach: &[Vec3],
+    coach_events: &SwingEvents,
+    coach_hz: f32,
+) -> Option<f32> {
+    // The arms: wrists (or hands) and elbows, whose pose errors are independent.
+    let arms = [
+        skeleton.find(&[Joint::LeftWrist, Joint::LeftHand])?,
+        skeleton.find(&[Joint::RightWrist, Joint::RightHand])?,
+        skeleton.index_of(Joint::LeftElbow)?,
+        skeleton.index_of(Joint::RightElbow)?,
+    ];
+    let joints = skeleton.len();
+    let (s, c) = (
+        Track::new(student, joints, student_hz),
+        Track::new(coach, joints, coach_hz),
+    );
+    if s.frames == 0 || c.frames == 0 {
+        return None;
+    }
+    type Arms = [Vec3; 4];
+    let pose = |t: &Track<'_>, x: f32| -> Arms {
+        let f = (x.max(0.0) as usize).min(t.frames - 1);
+        let g = (f + 1).min(t.frames - 1);
+        let w = (x - f as f32).clamp(0.0, 1.0);
+        arms.map(|k| t.at(k, f) * (1.0 - w) + t.at(k, g) * w)
+    };
+    let (c0, c_top) = (
+        coach_events.time(Event::Address)?,
+        coach_events.time(Event::Top)?,
+    );
+    let (s0, s_top) = (
+        student_events.time(Event::Address)?,
+        student_events.time(Event::Top)?,
+    );
+    if c_top <= c0 || s_top <= s0 {
+        return None;
+    }
+    // Progress along the set-up → top line of the arms' pose, 0 at the set-up and 1 at the
+    // top.
+    let progress = |t: &Track<'_>, home: &Arms, top: &Arms, f: usize| {
+        let now = pose(t, f as f32);
+        let (mut along, mut length) = (0.0f32, 0.0f32);
+        for i in 0..4 {
+            let line = top[i] - home[i];
+            along += (now[i] - home[i]).dot(&line);
+            length += line.norm_squared();
+        }
+        along / length
+    };
+    // Each swing's set-up: the arms' mean over the still stretch before its own takeaway.
+    let home = |t: &Track<'_>, taken: f32| {
+        let still = (libm::roundf(STILL_S * t.rate) as usize).max(1);
+        let end = (taken as usize).saturating_sub(1);
+        let start = end.saturating_sub(still);
+        let mut mean = [Vec3::zeros(); 4];
+        for f in start..=end {
+            for (m, p) in mean.iter_mut().zip(pose(t, f as f32)) {
+                *m += p / (end - start + 1) as f32;
+            }
+        }
+        (start, mean)
+    };
+    let ((c_start, c_home), (start, s_home)) = (home(&c, c0), home(&s, s0));
+    let c_line = (c_home, pose(&c, c_top));
+    let s_line = (s_home, pose(&s, s_top));
+    // The first moment (frames, between frames) the progress passes `share` in `from..=to`.
+    let passes = |t: &Track<'_>, line: &(Arms, Arms), from: usize, to: usize, share: f32| {
+        let p = |f: usize| progress(t, &line.0, &line.1, f);
+        (from..to).find(|&f| p(f + 1) >= share).map(|f| {
+            if p(f) >= share {
+                f as f32
+            } else {
+                between(p, share, f, f + 1)
+            }
+        })
+    };
+    let c_span = c_top - c0;
+    let (mut num, mut den) = (0.0f32, 0.0f32);
+    for i in 0..PROGRESS_SHARES.2 {
+        let share = PROGRESS_SHARES.0 + PROGRESS_SHARES.1 * i as f32;
+        let c_at = passes(&c, &c_line, c_start, c_top as usize, share)?;
+        let s_at = passes(&s, &s_line, start, s_top as usize, share)?;
+        // s_at = t0 + f (s_top − t0), f the coach's share of its backswing's time there. Pose
+        // noise moves a crossing in time inversely to how fast the progress goes through it
+        // (the coach's pace there, per share of the backswing): each is weighted so.
+        let f = ((c_at - c0) / c_span).clamp(0.0, 0.95);
+        let k = c_at as usize;
+        let pace = (progress(&c, &c_line.0, &c_line.1, (k + 1).min(c.frames - 1))
+            - progress(&c, &c_line.0, &c_line.1, k.saturating_sub(1)))
+            * 0.5
+            * c_span;
+        let w = pace * pace;
+        num += w * (1.0 - f) * (s_at - f * s_top);
+        den += w * (1.0 - f) * (1.0 - f);
+    }
+    (den > 0.0).then(|| num / den)
+}
+
 /// Finds the events of the one swing (eight) or putt (four) in `positions` (frames × skeleton joints,
 /// metres, +Y up) recorded at `rate_hz`.
 ///
@@ -362,13 +587,7 @@ pub fn detect(
     let club = skeleton
         .index_of(Joint::ClubGrip)
         .zip(skeleton.index_of(Joint::ClubHead));
-    let track = &Track {
-        positions,
-        joints,
-        frames,
-        half: libm::roundf(SMOOTHING_S * rate_hz) as usize,
-        rate: rate_hz,
-    };
+    let track = &Track::new(positions, joints, rate_hz);
     let hands = |t: usize| (track.at(wrists[0], t) + track.at(wrists[1], t)) * 0.5;
     let hand_speeds = Memo::new(|t| track.speed(hands, t));
     let hand_speed = |t: usize| hand_speeds.get(t);
@@ -421,10 +640,23 @@ pub fn detect(
     let quietest = (0..top).map(stir).fold(f32::INFINITY, f32::min);
     let still = (STILL_FRACTION * peak).max(NOISE_MARGIN * quietest);
     // A still stretch that runs into the start of the recording counts as long enough.
-    let address = (0..top)
+    let settled = (0..top)
         .rev()
         .find(|&t| stir(t) < still)
         .ok_or(EventError::NoSwing)?;
+    // The takeaway: from where the hands rested in that stretch, the start of their way back.
+    let rest = settled.saturating_sub(window);
+    let rested =
+        (rest..=settled).fold(Vec3::zeros(), |s, t| s + hands(t)) / (settled - rest + 1) as f32;
+    let putt = high - low < PUTT_RISE_M;
+    // A putt's stroke moves the hands a few centimetres: too little to fit its start, so its
+    // address is the end of the still set-up.
+    let taken = match putt {
+        true => settled as f32,
+        false => takeaway(hands, rested, rest, top)
+            .map_or(settled as f32, |t| t.clamp(0.0, (top - 1) as f32)),
+    };
+    let address = taken as usize;
 
     // The backswing takes the hands toward the trail foot.
     let across = track.at(feet[1], address) - track.at(feet[0], address);
@@ -441,14 +673,33 @@ pub fn detect(
 
     // Impact: after the top, where the club head (or the hands) comes closest to where it was
     // at address.
-    let home = probe(address);
+    let home = match club {
+        Some(_) => probe(address),
+        None => rested,
+    };
+    let away = |t: usize| norm(&(probe(t) - home));
     let reach = top + 1 + (libm::roundf(IMPACT_WITHIN_S * rate_hz) as usize).min(frames);
     let impact = (top + 1..reach.min(frames))
-        .min_by(|&a, &b| norm(&(probe(a) - home)).total_cmp(&norm(&(probe(b) - home))))
+        .min_by(|&a, &b| away(a).total_cmp(&away(b)))
         .filter(|&t| t + 1 < frames)
         .ok_or(EventError::NoSwing)?;
+    // Turning points between frames: the slowest hands at the top, the nearest at impact.
+    let turning = |f: &dyn Fn(usize) -> f32, t: usize| {
+        if t == 0 || t + 1 >= frames {
+            t as f32
+        } else {
+            t as f32 + vertex(f(t - 1), f(t), f(t + 1))
+        }
+    };
+    let top_time = turning(&hand_speed, top);
+    let impact_time = match club {
+        // The hands lead the club head through impact (shaft lean).
+        None if !putt => turning(&away, impact) + IMPACT_LAG_S * rate_hz,
+        _ => turning(&away, impact),
+    }
+    .min((frames - 1) as f32);
 
-    if high - low < PUTT_RISE_M {
+    if putt {
         // A putt: the finish is where the forward stroke stops, the hands slower than
         // STILL_FRACTION of their fastest after impact (a speed minimum would come late,
         // once the smoothing window has passed the stop).
@@ -464,19 +715,26 @@ pub fn detect(
             return Err(EventError::NoSwing);
         }
         let mut frames = [ABSENT; 8];
-        for (event, frame) in [
-            (Event::Address, address),
-            (Event::Top, top),
-            (Event::Impact, impact),
-            (Event::Finish, finish),
+        let mut times = [0.0; 8];
+        for (event, frame, time) in [
+            (Event::Address, address, taken),
+            (Event::Top, top, top_time),
+            (Event::Impact, impact, impact_time),
+            (
+                Event::Finish,
+                finish,
+                between(hand_speed, stopped, finish.saturating_sub(1), finish),
+            ),
         ] {
             frames[event as usize] = frame as u16;
+            times[event as usize] = time;
         }
         return Ok(SwingEvents {
             kind: SwingKind::Putt,
             lead,
             club: club.is_some(),
             frames,
+            times,
         });
     }
 
@@ -498,14 +756,41 @@ pub fn detect(
     let follow = follow.ok_or(EventError::NoSwing)?;
     let mid_backswing = crossing(toe_up..top, arm, 0.0, true).ok_or(EventError::NoSwing)?;
     let mid_downswing = crossing(top..impact, arm, 0.0, false).ok_or(EventError::NoSwing)?;
+    // A crossing found at frame `t` of `f` past `level`, placed between the two frames around it.
+    let crossed = |f: &dyn Fn(usize) -> f32, level: f32, t: usize| {
+        let next = (t + 1).min(frames - 1);
+        if (f(t) - level) * (f(next) - level) <= 0.0 {
+            between(f, level, t, next)
+        } else {
+            between(f, level, t.saturating_sub(1), t)
+        }
+    };
+    let (lift, lift_level) = match club {
+        Some(_) => (&shaft as &dyn Fn(usize) -> f32, (0.0, 0.0)),
+        None => (
+            &arm as &dyn Fn(usize) -> f32,
+            (TOE_UP_ARM_DEG, FOLLOW_ARM_DEG),
+        ),
+    };
 
     // Finish: the hands' highest point after the follow-through.
     let mut finish = follow;
     while finish + 1 < frames && hands(finish + 1).y >= hands(finish).y {
         finish += 1;
     }
+    let height = |t: usize| hands(t).y;
 
-    let frames = [
+    let times = [
+        taken,
+        crossed(lift, lift_level.0, toe_up),
+        crossed(&arm, 0.0, mid_backswing),
+        top_time,
+        crossed(&arm, 0.0, mid_downswing),
+        impact_time,
+        crossed(lift, lift_level.1, follow),
+        turning(&height, finish),
+    ];
+    let mut frames = [
         address,
         toe_up,
         mid_backswing,
@@ -519,11 +804,18 @@ pub fn detect(
     if frames.windows(2).any(|w| w[1] <= w[0]) {
         return Err(EventError::NoSwing);
     }
+    // Impact's frame is the one nearest its time (later than the hands' return by the lag),
+    // between its neighbours.
+    let i = Event::Impact as usize;
+    frames[i] = (libm::roundf(times[i]) as u16)
+        .clamp(frames[i - 1] + 1, frames[i + 1] - 1)
+        .max(frames[i]);
     Ok(SwingEvents {
         kind: SwingKind::Full,
         lead,
         club: club.is_some(),
         frames,
+        times,
     })
 }
 

@@ -611,6 +611,17 @@ pub fn compare(
     if student_events.kind != coach_events.kind {
         return Err(ScoreError::KindMismatch);
     }
+    // The student's takeaway timed against the coach's backswing (steadier under pose noise).
+    let student_events = events::takeaway_against(
+        skeleton,
+        student,
+        &student_events,
+        student_hz,
+        coach,
+        &coach_events,
+        coach_hz,
+    )
+    .map_or(student_events, |t| student_events.with_takeaway(t));
     let (n, m) = (student.len() / joints, coach.len() / joints);
     for frames in [n, m] {
         if frames > MAX_SWING_FRAMES {
@@ -659,13 +670,15 @@ pub fn compare(
     let score = 100.0 * libm::expf(-alignment.normalized / (SCORE_SCALE * skeleton.height()));
 
     // Tempo.
+    // Between the events' times (the backswing from the takeaway), not their frames.
     let duration = |e: &SwingEvents, hz: f32, phase: Phase| {
         let (from, to) = match phase {
-            Phase::Backswing => (e.address(), e.top()),
-            Phase::Downswing => (e.top(), e.impact()),
-            Phase::FollowThrough => (e.impact(), e.finish()),
+            Phase::Backswing => (Event::Address, Event::Top),
+            Phase::Downswing => (Event::Top, Event::Impact),
+            Phase::FollowThrough => (Event::Impact, Event::Finish),
         };
-        (to - from) as f32 / hz
+        let at = |event| e.time(event).unwrap_or(0.0);
+        (at(to) - at(from)) / hz
     };
     let tempo = Phase::ALL.map(|phase| {
         let (student_s, coach_s) = (

@@ -102,7 +102,7 @@ impl Warp {
 }
 
 /// A synthetic putt at 60 Hz from the address pose (frame 0) of `golfer`: shoulders, arms and
-/// club rock about the spine axis through the thorax, eased: 0.5 s still, a backstroke of
+/// club rock about the spine axis through the thorax, eased with minimum jerk: 0.5 s still, a backstroke of
 /// `back_deg` over `back_s`, a forward stroke to `through_deg` over `through_s`, 0.5 s still.
 /// Returns the motion and its events by construction: address, top, impact (the pose of
 /// address again) and finish, in frames.
@@ -148,7 +148,11 @@ pub fn synthetic_putt(
     } else {
         -1.0
     };
-    let ease = |x: f32| 0.5 * (1.0 - (std::f32::consts::PI * x.clamp(0.0, 1.0)).cos());
+    // Minimum-jerk easing, the smooth start and stop of a human point-to-point movement.
+    let ease = |x: f32| {
+        let x = x.clamp(0.0, 1.0);
+        x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
+    };
     let (still, back, through) = (
         (0.5 * RATE_HZ) as usize,
         back_s * RATE_HZ,
@@ -174,8 +178,16 @@ pub fn synthetic_putt(
         }));
     }
     // Impact: the forward stroke passes the address angle where ease(x) = a / (a + b).
-    let impact =
-        still as f32 + back + through * (1.0 - 2.0 * a / (a + b)).acos() / std::f32::consts::PI;
+    let (mut lo, mut hi) = (0.0f32, 1.0f32);
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if ease(mid) < a / (a + b) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let impact = still as f32 + back + through * lo;
     let events = [
         still as f32,
         still as f32 + back,

@@ -1,8 +1,9 @@
 //! Swing events on the two real tour swings against frames labelled by hand.
 //!
 //! The labels in `fixtures/golf_events_60hz.csv` were read off per-frame values of the 60 Hz
-//! joint centres with GolfDB's definitions: address = the club head about to leave its set-up
-//! spot; toe-up = shaft horizontal in the backswing; mid-backswing and mid-downswing = lead
+//! joint centres with GolfDB's definitions, the address as the takeaway: the first motion of the
+//! club and hands (both recordings begin as it starts: the club head has moved 0.8 mm after
+//! 25 ms); toe-up = shaft horizontal in the backswing; mid-backswing and mid-downswing = lead
 //! arm horizontal; top = club and hands reverse; impact = club head back at the ball;
 //! mid-follow-through = shaft horizontal after impact; finish = hands highest after impact.
 
@@ -192,24 +193,14 @@ fn without_a_club_the_hands_and_lead_arm_give_the_events() {
         assert_eq!(events.lead, Side::Left);
         for (event, &label) in Event::ALL.iter().zip(&expected) {
             let found = events.frame(*event).unwrap() as i32;
-            // The hands leave the set-up later than the club head does.
-            let tolerance = if *event == Event::Address {
-                HANDS_ADDRESS_LAG_FRAMES
-            } else {
-                TOLERANCE_FRAMES
-            };
             assert!(
-                (found - label).abs() <= tolerance,
+                (found - label).abs() <= TOLERANCE_FRAMES,
                 "{name} without a club: {} at frame {found}, labelled {label}",
                 event.name()
             );
         }
     }
 }
-
-/// How much later than the club head the hands alone mark the address, at 60 Hz (5 frames on
-/// both tour swings).
-const HANDS_ADDRESS_LAG_FRAMES: i32 = 6;
 
 #[test]
 fn a_putt_has_address_top_impact_and_finish() {
@@ -242,4 +233,54 @@ fn a_putt_has_address_top_impact_and_finish() {
     ] {
         assert_eq!(events.frame(event), None);
     }
+}
+
+#[test]
+fn a_takeaway_timed_against_the_coach_follows_a_slow_backswing_through_noise() {
+    use posecoach_core::events::takeaway_against;
+    let (coach, labels) = driver();
+    // Twice the coach's backswing from the takeaway (frame 0) to the top, then 2 cm of
+    // uniform noise per coordinate on the student.
+    let top = labels[3] as f32;
+    let warp = Warp(vec![(0.0, top, 2.0)]);
+    let slow = warp.apply(&coach);
+    // Behind 40 frames of still set-up.
+    let lead_in = 40;
+    let mut positions: Vec<_> = (0..lead_in).flat_map(|_| slow.frame(0).to_vec()).collect();
+    positions.extend_from_slice(&slow.positions);
+    let mut student = io::Motion {
+        missing: vec![false; positions.len()],
+        positions,
+        ..slow
+    };
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    for p in &mut student.positions {
+        for v in p.iter_mut() {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            *v += ((state >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * 0.04;
+        }
+    }
+    let (s, c) = (detected(&student), detected(&coach));
+    let s_hz = student.rate_hz;
+    let found = takeaway_against(
+        &coach.skeleton,
+        &student.positions,
+        &s,
+        s_hz,
+        &coach.positions,
+        &c,
+        coach.rate_hz,
+    )
+    .unwrap();
+    let truth = lead_in as f32 + warp.forward(c.time(Event::Address).unwrap());
+    assert!(
+        (found - truth).abs() <= 1.5,
+        "takeaway at frame {found:.1}, truth {truth:.1}"
+    );
+    let moved = s.with_takeaway(found);
+    assert_eq!(moved.time(Event::Address), Some(found));
+    assert_eq!(moved.address(), found as usize);
+    assert_eq!(moved.time(Event::Top), s.time(Event::Top));
 }

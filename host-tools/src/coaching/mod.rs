@@ -444,8 +444,8 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     let measured = |e: Event| {
         report
             .student_events
-            .frame(e)
-            .map_or(f64::NAN, |f| at + f as f64 * model_s)
+            .time(e)
+            .map_or(f64::NAN, |t| at + f64::from(t) * model_s)
     };
     let truth = |e: Event| start_s + f64::from(planted.times[e as usize]);
     outcome.timing_ms = Some(
