@@ -6,7 +6,8 @@
 //! linearly interpolated between the two received frames around it, so capture jitter does not
 //! reach the swing's timing. It drops repeated and late frames (by sequence number and time), masks
 //! keypoints under `min_confidence` (the joint is carried by its parent at the offset it last
-//! had from it; a masked root holds its last confident position), and breaks
+//! had from it, turned as the parent's bone turned, unless the unsure keypoint lies within
+//! [`UNSURE_WITHIN_M`] of that; a masked root holds its last confident position), and breaks
 //! the stream at a gap longer than `max_gap_s`: it emits [`StreamEvent::Gap`] and starts a
 //! new grid at the next frame, so a swing is never stitched across missing time. Nothing
 //! allocates and nothing panics.
@@ -40,14 +41,19 @@
 
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::format::{Format, Source};
+use posecoach_core::math::norm;
 use posecoach_core::resample;
 use posecoach_core::wire::{PoseFrame, MAX_WIRE_JOINTS};
 use posecoach_core::Vec3;
 
 /// A gap between frames longer than this breaks the stream, seconds.
 pub const MAX_GAP_S: f32 = 0.25;
-/// Keypoints under this confidence (of 255) are masked.
+/// Keypoints under this confidence (of 255) are unsure: see [`UNSURE_WITHIN_M`].
 pub const MIN_CONFIDENCE: u8 = 77;
+/// An unsure keypoint (under the minimum confidence, but above 0) is taken as sent when it lies
+/// this close to where its parent carries the joint, metres; else, and for a keypoint of
+/// confidence 0, the carried position is used.
+pub const UNSURE_WITHIN_M: f32 = 0.15;
 
 /// Settings of a [`PoseStream`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -254,8 +260,8 @@ impl PoseStream {
         self.counters.accepted += 1;
         let mut current = self.previous;
         let table = frame.format.joints();
-        for (k, (position, confident)) in joints.iter().enumerate() {
-            if *confident {
+        for (k, (position, confidence)) in joints.iter().enumerate() {
+            if *confidence >= self.config.min_confidence {
                 current[k] = *position;
                 self.seen |= 1 << k;
             } else {
@@ -265,10 +271,25 @@ impl PoseStream {
         // A masked joint is carried by its parent: it keeps the offset from it that it had in
         // the last frame (parents come first in a format's table), so an occluded wrist follows
         // its elbow through a downswing instead of staying behind.
-        for (k, (_, confident)) in joints.iter().enumerate() {
-            let parent = table.get(k).and_then(|j| j.parent).map(usize::from);
-            if let Some(p) = parent.filter(|&p| !*confident && p < k) {
-                current[k] = current[p] + (self.previous[k] - self.previous[p]);
+        for (k, (position, confidence)) in joints.iter().enumerate() {
+            let parent = |k: usize| table.get(k).and_then(|j| j.parent).map(usize::from);
+            let unsure = *confidence < self.config.min_confidence;
+            let Some(p) = parent(k).filter(|&p| unsure && p < k) else {
+                continue;
+            };
+            let offset = self.previous[k] - self.previous[p];
+            // Turned as the parent's own bone turned since the last frame.
+            let turn = parent(p)
+                .filter(|&g| g < p)
+                .and_then(|g| {
+                    let (was, is) = (self.previous[p] - self.previous[g], current[p] - current[g]);
+                    nalgebra::UnitQuaternion::rotation_between(&was, &is)
+                })
+                .unwrap_or_else(nalgebra::UnitQuaternion::identity);
+            current[k] = current[p] + turn * offset;
+            // An unsure keypoint the estimator still placed near there is the better guess.
+            if *confidence > 0 && norm(&(*position - current[k])) <= UNSURE_WITHIN_M {
+                current[k] = *position;
             }
         }
         let ready = self.seen.count_ones() as usize == self.joints;
@@ -311,11 +332,11 @@ impl PoseStream {
         Ok(())
     }
 
-    /// The frame's joints in metres with their confidence test, in the format's joint order.
+    /// The frame's joints in metres with their confidence, in the format's joint order.
     fn check(
         &self,
         frame: &PoseFrame,
-    ) -> Result<heapless::Vec<(Vec3, bool), MAX_JOINTS>, StreamError> {
+    ) -> Result<heapless::Vec<(Vec3, u8), MAX_JOINTS>, StreamError> {
         let format = frame.format;
         let table = format.joints();
         if table.is_empty() || self.format.is_some_and(|f| f != format) {
@@ -335,7 +356,7 @@ impl PoseStream {
             let confidence = frame.confidence.get(i).copied().unwrap_or(u8::MAX);
             (
                 Vec3::new(f32::from(x), f32::from(y), f32::from(z)) * 1e-3,
-                confidence >= self.config.min_confidence,
+                confidence,
             )
         };
         Ok(table
@@ -345,7 +366,7 @@ impl PoseStream {
                 Source::Keypoint(i) => keypoint(i),
                 Source::Mid(a, b) => {
                     let ((pa, ca), (pb, cb)) = (keypoint(a), keypoint(b));
-                    ((pa + pb) * 0.5, ca && cb)
+                    ((pa + pb) * 0.5, ca.min(cb))
                 }
             })
             .collect())
@@ -481,6 +502,46 @@ mod tests {
         );
         assert_eq!(got.len(), 2);
         assert!((got[0].unwrap() - 0.2).abs() < 1e-6 && (got[1].unwrap() - 0.3).abs() < 1e-5);
+    }
+
+    #[test]
+    fn an_unsure_keypoint_counts_near_where_its_parent_carries_it() {
+        // Keypoint k at (k/10, 1, 0) m; the next frame moves everything 0.1 m along X, with
+        // the right ankle (keypoint 3, below the knee) unsure and sent `off` from there.
+        let at = |seq: u32, dx: f32, off: [f32; 3], confidence: u8| {
+            let mut f = frame(seq, u64::from(seq) * 33_333, 0);
+            for (k, p) in f.joints_mm.iter_mut().enumerate() {
+                *p = [(k as f32 * 100.0 + dx * 1000.0) as i16, 1000, 0];
+            }
+            f.joints_mm[3] = [
+                300 + (dx * 1000.0 + off[0]) as i16,
+                1000 + off[1] as i16,
+                off[2] as i16,
+            ];
+            f.confidence = core::iter::repeat_n(255, 17).collect();
+            f.confidence[3] = confidence;
+            f
+        };
+        let ankle = |off: [f32; 3], confidence: u8| {
+            let mut stream = PoseStream::new(StreamConfig::new(30)).unwrap();
+            let mut last = Vec3::zeros();
+            for f in [at(0, 0.0, [0.0; 3], 255), at(1, 0.1, off, confidence)] {
+                stream
+                    .push(&f, |e| {
+                        if let StreamEvent::Frame { joints, .. } = e {
+                            last = joints[3];
+                        }
+                    })
+                    .unwrap();
+            }
+            last
+        };
+        let carried = Vec3::new(0.4, 1.0, 0.0);
+        // Sent 5 cm off: taken as sent.
+        assert!((ankle([0.0, 50.0, 0.0], 30) - Vec3::new(0.4, 1.05, 0.0)).norm() < 1e-4);
+        // Sent 50 cm off, or with no confidence: carried along with the knee.
+        assert!((ankle([0.0, 500.0, 0.0], 30) - carried).norm() < 1e-4);
+        assert!((ankle([0.0, 50.0, 0.0], 0) - carried).norm() < 1e-4);
     }
 
     #[test]
