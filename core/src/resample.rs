@@ -116,10 +116,12 @@ mod tests {
                 prop_assert!((i, fraction) >= previous, "frame {k} goes back in time");
                 previous = (i, fraction);
             }
-            // The new frames span the input: the last is within one new frame of its end.
+            // The new frames span the input: the last is within one new frame of its end (to
+            // f32's precision at that many frames: 90 000 new frames are 0.008 apart).
             let (i, fraction) = source(m - 1, from, to, n);
             let end = (i as f32 + fraction) / from;
-            prop_assert!(end * to + 1.0 + 1e-3 >= (n - 1) as f32 * to / from);
+            let span = (n - 1) as f32 * to / from;
+            prop_assert!(end * to + 1.0 + 1e-3 + span * 1e-6 >= span);
         }
     }
 
