@@ -3,7 +3,7 @@
 use crate::{html, teacher};
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_core::dtw::Band;
-use posecoach_core::events::SwingEvents;
+use posecoach_core::events::{Event, SwingEvents};
 use posecoach_core::score::{self, Advice, Report};
 use posecoach_io::{self as io, Motion};
 use serde_json::{json, Map, Value};
@@ -153,6 +153,16 @@ fn events(e: &SwingEvents) -> Value {
     )
 }
 
+/// Each event's time in frames, between frames (the address's is the takeaway).
+fn times(e: &SwingEvents) -> Value {
+    Value::Object(
+        Event::ALL
+            .iter()
+            .filter_map(|&ev| e.time(ev).map(|t| (ev.name().to_string(), json!(t))))
+            .collect::<Map<_, _>>(),
+    )
+}
+
 /// The report in the documented JSON shape.
 pub fn to_json(r: &Report) -> Value {
     let cm = |m: f32| (m * 1000.0).round() / 10.0;
@@ -160,6 +170,7 @@ pub fn to_json(r: &Report) -> Value {
         "score": r.score,
         "dtw": {"distance": r.distance, "normalized": r.normalized, "path": r.path.iter().map(|&(i, j)| [i, j]).collect::<Vec<_>>()},
         "events": {"student": events(&r.student_events), "coach": events(&r.coach_events),
+                   "student_times": times(&r.student_events), "coach_times": times(&r.coach_events),
                    "lead_side": format!("{:?}", r.student_events.lead).to_lowercase(),
                    "kind": format!("{:?}", r.student_events.kind).to_lowercase()},
         "tempo": {
