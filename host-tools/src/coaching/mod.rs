@@ -3,7 +3,7 @@
 //! Cases are made from real swings (the source files, with their club) on bodies of other
 //! statures and proportions ([`bodies`]): a clean swing, with flaws planted in it
 //! ([`flaws`]), laid out as a session (T-pose, set-up, waggle, swing, return), filmed by a
-//! phone ([`phone`](crate::phone)) facing the golfer or down the line at 30 or 60 frames per
+//! phone ([`crate::phone`]) facing the golfer or down the line at 30 or 60 frames per
 //! second, and sent through the device's own session with the bundled coach of the swing's club.
 //! Every figure compares the report with the planted truth:
 //!
