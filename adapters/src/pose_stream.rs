@@ -6,8 +6,9 @@
 //! linearly interpolated between the two received frames around it, so capture jitter does not
 //! reach the swing's timing. It drops repeated and late frames (by sequence number and time), masks
 //! keypoints under `min_confidence` (the joint is carried by its parent at the offset it last
-//! had from it, turned as the parent's bone turned, unless the unsure keypoint lies within
-//! [`UNSURE_WITHIN_M`] of that; a masked root holds its last confident position), and breaks
+//! had from it, turned as the parent's bone turned, unless the unsure keypoint lies at about its
+//! bone's length from the parent ([`UNSURE_BONE_SHARE`]); a masked root holds its last
+//! confident position), and breaks
 //! the stream at a gap longer than `max_gap_s`: it emits [`StreamEvent::Gap`] and starts a
 //! new grid at the next frame, so a swing is never stitched across missing time. Nothing
 //! allocates and nothing panics.
@@ -50,10 +51,10 @@ use posecoach_core::Vec3;
 pub const MAX_GAP_S: f32 = 0.25;
 /// Keypoints under this confidence (of 255) are unsure: see [`UNSURE_WITHIN_M`].
 pub const MIN_CONFIDENCE: u8 = 77;
-/// An unsure keypoint (under the minimum confidence, but above 0) is taken as sent when it lies
-/// this close to where its parent carries the joint, metres; else, and for a keypoint of
-/// confidence 0, the carried position is used.
-pub const UNSURE_WITHIN_M: f32 = 0.15;
+/// An unsure keypoint (under the minimum confidence, but above 0) is taken as sent when its
+/// distance from its parent is within this share of the bone's last length; else, and for a
+/// keypoint of confidence 0, the joint is carried by its parent.
+pub const UNSURE_BONE_SHARE: f32 = 0.3;
 
 /// Settings of a [`PoseStream`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -287,8 +288,10 @@ impl PoseStream {
                 })
                 .unwrap_or_else(nalgebra::UnitQuaternion::identity);
             current[k] = current[p] + turn * offset;
-            // An unsure keypoint the estimator still placed near there is the better guess.
-            if *confidence > 0 && norm(&(*position - current[k])) <= UNSURE_WITHIN_M {
+            // An unsure keypoint the estimator still placed at about its bone's length from the
+            // parent is the better guess.
+            let (bone, sent) = (norm(&offset), norm(&(*position - current[p])));
+            if *confidence > 0 && libm::fabsf(sent - bone) <= UNSURE_BONE_SHARE * bone {
                 current[k] = *position;
             }
         }
@@ -505,7 +508,7 @@ mod tests {
     }
 
     #[test]
-    fn an_unsure_keypoint_counts_near_where_its_parent_carries_it() {
+    fn an_unsure_keypoint_counts_at_about_its_bones_length_from_its_parent() {
         // Keypoint k at (k/10, 1, 0) m; the next frame moves everything 0.1 m along X, with
         // the right ankle (keypoint 3, below the knee) unsure and sent `off` from there.
         let at = |seq: u32, dx: f32, off: [f32; 3], confidence: u8| {
@@ -537,9 +540,10 @@ mod tests {
             last
         };
         let carried = Vec3::new(0.4, 1.0, 0.0);
-        // Sent 5 cm off: taken as sent.
+        // Sent 5 cm off (the shin 0.4 m long, 5 % longer): taken as sent.
         assert!((ankle([0.0, 50.0, 0.0], 30) - Vec3::new(0.4, 1.05, 0.0)).norm() < 1e-4);
-        // Sent 50 cm off, or with no confidence: carried along with the knee.
+        // Sent 50 cm off (the shin twice as long), or with no confidence: carried along with
+        // the knee.
         assert!((ankle([0.0, 500.0, 0.0], 30) - carried).norm() < 1e-4);
         assert!((ankle([0.0, 50.0, 0.0], 0) - carried).norm() < 1e-4);
     }
