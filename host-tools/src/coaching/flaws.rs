@@ -118,6 +118,9 @@ pub fn times(events: &SwingEvents, rate_hz: f32) -> Times {
     Event::ALL.map(|e| events.frame(e).map_or(f32::NAN, |f| f as f32 / rate_hz))
 }
 
+/// An offset flaw lasts at least this long either side of its event, seconds.
+pub const OFFSET_HALF_S: f32 = 0.1;
+
 /// A displacement counts toward the truth when it is at least this share of the flaw's largest.
 pub const TRUTH_SHARE: f32 = 0.7;
 
@@ -131,6 +134,9 @@ pub struct Planted {
     pub tempo_ratio: f32,
     /// Every statement that names a planted flaw rightly.
     pub truths: Vec<Truth>,
+    /// The largest displacement the flaws leave at an event, metres (an offset on a body that
+    /// keeps its bones' lengths shows less than was planted).
+    pub shown_m: f32,
 }
 
 /// Plants `flaws` in `clean` (on its body, at its rate, from the takeaway) whose events are
@@ -139,10 +145,21 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
     let (warped, warped_times) = warp(clean, times, flaws);
     let skeleton = &clean.skeleton;
     let joints = skeleton.len();
-    let mut swing = warped.clone();
+    let mut moved = warped.clone();
     for flaw in flaws {
-        move_joints(&mut swing, &warped_times, lead, flaw);
+        move_joints(&mut moved, &warped_times, lead, flaw);
     }
+    // A body keeps its bones' lengths: the moved joints are put back on the skeleton as its
+    // bones' directions (the analytic retargeter onto the same skeleton, as the device fits
+    // what it receives), so an offset knee turns the thigh and the shin with it. The truth is
+    // what this body shows.
+    let spatial = flaws
+        .iter()
+        .any(|f| matches!(f, Flaw::Offset { .. } | Flaw::Body { .. }));
+    let swing = match spatial {
+        true => moved.retarget_analytic(&moved).unwrap_or(moved),
+        false => moved,
+    };
     let stance = Stance::new(skeleton, warped.frame(0), lead);
     let at = |m: &Motion, t: f32, k: usize| {
         let x = (t * m.rate_hz).clamp(0.0, (m.frames() - 1) as f32);
@@ -189,6 +206,7 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
         tempo_ratio: t[top] / (t[impact] - t[top]),
         times: warped_times,
         truths,
+        shown_m: largest,
     }
 }
 
@@ -392,14 +410,15 @@ fn move_joints(swing: &mut Motion, times: &Times, lead: Side, flaw: &Flaw) {
                 metres,
             } => {
                 let i = event as usize;
-                // Around the event, reaching halfway to the events either side.
+                // Around the event, reaching halfway to the events either side and at least
+                // OFFSET_HALF_S (a golfer holds a fault for a moment, not a frame).
                 let before = if i == 0 {
                     -1.0
                 } else {
-                    0.5 * (times[i - 1] + times[i])
+                    (0.5 * (times[i - 1] + times[i])).min(times[i] - OFFSET_HALF_S)
                 };
                 let after = if i + 1 < 8 {
-                    0.5 * (times[i] + times[i + 1])
+                    (0.5 * (times[i] + times[i + 1])).max(times[i] + OFFSET_HALF_S)
                 } else {
                     times[i] + 0.3
                 };
@@ -599,11 +618,20 @@ mod tests {
             "{:?}",
             planted.truths
         );
+        // The forearm keeps its length: the wrist shows part of the 12 cm, and the bones do too.
         let f = (t[Event::Top as usize] * 240.0).round() as usize;
         let k = swing.skeleton.index_of(Joint::LeftWrist).unwrap();
         let j = swing.skeleton.len();
         let drop = swing.positions[f * j + k].y - planted.swing.positions[f * j + k].y;
-        assert!((drop - 0.12).abs() < 0.005, "{drop}");
+        assert!(drop > 0.05 && drop <= 0.12 + 1e-3, "{drop}");
+        assert!(
+            (planted.shown_m - drop).abs() < 0.05,
+            "{} {drop}",
+            planted.shown_m
+        );
+        let elbow = swing.skeleton.index_of(Joint::LeftElbow).unwrap();
+        let forearm = |m: &Motion| (m.positions[f * j + k] - m.positions[f * j + elbow]).norm();
+        assert!((forearm(&planted.swing) - forearm(&swing)).abs() < 1e-3);
     }
 
     #[test]

@@ -105,6 +105,8 @@ struct Outcome1 {
     /// Measured minus true, ms: takeaway, top, impact.
     timing_ms: Option<[f32; 3]>,
     tempo_error: Option<f32>,
+    /// The largest displacement the flaws show at an event, metres.
+    shown_m: f32,
     first: Option<String>,
     right_first: bool,
     any_advice: bool,
@@ -422,6 +424,7 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     others.retain(|(_, _, r)| r.is_ok());
     let mut outcome = Outcome1 {
         false_swings: others.len() + ours.len().saturating_sub(1),
+        shown_m: planted.shown_m,
         ..Outcome1::default()
     };
     let Some((at, _, result)) = ours.drain(..).next() else {
@@ -523,15 +526,19 @@ fn summary(level: f32, pairs: &[(&Case, &Outcome1)]) -> Value {
     };
     let unflawed: Vec<&&(&Case, &Outcome1)> =
         found.iter().filter(|(c, _)| c.flaws.is_empty()).collect();
-    let recall = |f: &dyn Fn(&Case) -> bool| {
-        let of: Vec<_> = found.iter().filter(|(c, _)| f(c)).collect();
+    let recall = |f: &dyn Fn(&Case, &Outcome1) -> bool| {
+        let of: Vec<_> = found.iter().filter(|(c, o)| f(c, o)).collect();
         share(of.iter().filter(|(_, o)| o.right_first).count(), of.len())
     };
-    let offset_at_least = |cm: f32| move |c: &Case| matches!(c.flaws[..], [Flaw::Offset { metres, .. }] if metres * 100.0 >= cm);
-    let mean_score = |f: &dyn Fn(&Case) -> bool| {
+    let offset_at_least = |cm: f32| {
+        move |c: &Case, o: &Outcome1| {
+            matches!(c.flaws[..], [Flaw::Offset { .. }]) && o.shown_m * 100.0 >= cm
+        }
+    };
+    let mean_score = |f: &dyn Fn(&Case, &Outcome1) -> bool| {
         let s: Vec<f32> = found
             .iter()
-            .filter(|(c, _)| f(c))
+            .filter(|(c, o)| f(c, o))
             .filter_map(|(_, o)| o.score)
             .collect();
         if s.is_empty() {
@@ -540,8 +547,12 @@ fn summary(level: f32, pairs: &[(&Case, &Outcome1)]) -> Value {
             json!({"mean": s.iter().sum::<f32>() / s.len() as f32, "min": s.iter().copied().fold(f32::INFINITY, f32::min), "n": s.len()})
         }
     };
-    let offset_in = |lo: f32, hi: f32| move |c: &Case| matches!(c.flaws[..], [Flaw::Offset { metres, .. }] if (lo..hi).contains(&(metres * 100.0)));
-    let tempo_in = |lo: f32, hi: f32| move |c: &Case| matches!(c.flaws[..], [Flaw::Tempo { factor, .. }] if (lo..hi).contains(&((factor - 1.0).abs() * 100.0)));
+    let offset_in = |lo: f32, hi: f32| {
+        move |c: &Case, o: &Outcome1| {
+            matches!(c.flaws[..], [Flaw::Offset { .. }]) && (lo..hi).contains(&(o.shown_m * 100.0))
+        }
+    };
+    let tempo_in = |lo: f32, hi: f32| move |c: &Case, _: &Outcome1| matches!(c.flaws[..], [Flaw::Tempo { factor, .. }] if (lo..hi).contains(&((factor - 1.0).abs() * 100.0)));
     json!({
         "level_mm": level,
         "cases": pairs.len(),
@@ -553,14 +564,14 @@ fn summary(level: f32, pairs: &[(&Case, &Outcome1)]) -> Value {
         "false_tempo": share(unflawed.iter().filter(|(_, o)| o.tempo_verdict).count(), unflawed.len()),
         "false_advice": share(unflawed.iter().filter(|(_, o)| o.any_advice).count(), unflawed.len()),
         "recall_at_1": {
-            "tempo": recall(&|c| family(&c.flaws) == "tempo"),
-            "offset": recall(&|c| family(&c.flaws) == "offset"),
+            "tempo": recall(&|c, _| family(&c.flaws) == "tempo"),
+            "offset": recall(&|c, _| family(&c.flaws) == "offset"),
             "offset_8cm": recall(&offset_at_least(8.0)),
-            "body": recall(&|c| family(&c.flaws) == "body"),
-            "combined": recall(&|c| family(&c.flaws) == "combined"),
+            "body": recall(&|c, _| family(&c.flaws) == "body"),
+            "combined": recall(&|c, _| family(&c.flaws) == "combined"),
         },
         "score": {
-            "unflawed": mean_score(&|c| c.flaws.is_empty()),
+            "unflawed": mean_score(&|c, _| c.flaws.is_empty()),
             "offset_5_10cm": mean_score(&offset_in(5.0, 10.0)),
             "offset_10_15cm": mean_score(&offset_in(10.0, 15.0)),
             "offset_15_20cm": mean_score(&offset_in(15.0, 20.01)),
@@ -575,7 +586,7 @@ fn case_json(clean: &Clean, case: &Case, o: &Outcome1) -> Value {
         "source": clean.source.file_name().map(|n| n.to_string_lossy().into_owned()),
         "height_m": clean.body.skeleton.height(), "flaws": case.flaws, "level_mm": case.level_mm,
         "seed": case.seed, "rate_hz": case.rate_hz, "camera": if case.face_on { "face_on" } else { "down_the_line" },
-        "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
+        "shown_cm": o.shown_m * 100.0, "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
         "tempo_error": o.tempo_error, "score": o.score, "first": o.first, "right_first": o.right_first,
         "any_advice": o.any_advice, "error": o.error,
     })
