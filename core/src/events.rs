@@ -513,22 +513,40 @@ pub fn takeaway_against(
     let c_line = (c_home, pose(&c, c_top));
     let s_line = (s_home, pose(&s, s_top));
     // The first moment (frames, between frames) the progress passes `share` in `from..=to`.
-    let passes = |t: &Track<'_>, line: &(Arms, Arms), from: usize, to: usize, share: f32| {
-        let p = |f: usize| progress(t, &line.0, &line.1, f);
-        (from..to).find(|&f| p(f + 1) >= share).map(|f| {
-            if p(f) >= share {
-                f as f32
-            } else {
-                between(p, share, f, f + 1)
+    // The moments (frames, between frames) the progress first passes each share, in one walk
+    // from `from` to `to`; `None` for a share it never reaches.
+    const SHARES: usize = PROGRESS_SHARES.2;
+    let passes = |t: &Track<'_>, line: &(Arms, Arms), from: usize, to: usize| {
+        let mut at = [None; SHARES];
+        let mut next = 0;
+        let mut before = progress(t, &line.0, &line.1, from);
+        for f in from..to {
+            let after = progress(t, &line.0, &line.1, f + 1);
+            while next < SHARES {
+                let share = PROGRESS_SHARES.0 + PROGRESS_SHARES.1 * next as f32;
+                if after < share {
+                    break;
+                }
+                let w = if before >= share || after <= before {
+                    0.0
+                } else {
+                    (share - before) / (after - before)
+                };
+                at[next] = Some(f as f32 + w);
+                next += 1;
             }
-        })
+            before = after;
+        }
+        at
     };
+    let (c_at, s_at) = (
+        passes(&c, &c_line, c_start, c_top as usize),
+        passes(&s, &s_line, start, s_top as usize),
+    );
     let c_span = c_top - c0;
     let (mut num, mut den) = (0.0f32, 0.0f32);
-    for i in 0..PROGRESS_SHARES.2 {
-        let share = PROGRESS_SHARES.0 + PROGRESS_SHARES.1 * i as f32;
-        let c_at = passes(&c, &c_line, c_start, c_top as usize, share)?;
-        let s_at = passes(&s, &s_line, start, s_top as usize, share)?;
+    for (c_at, s_at) in c_at.into_iter().zip(s_at) {
+        let (c_at, s_at) = (c_at?, s_at?);
         // s_at = t0 + f (s_top − t0), f the coach's share of its backswing's time there. Pose
         // noise moves a crossing in time inversely to how fast the progress goes through it
         // (the coach's pace there, per share of the backswing): each is weighted so.

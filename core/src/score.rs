@@ -33,6 +33,13 @@ use heapless::Vec as HVec;
 pub const TEMPO_TOLERANCE: f32 = 0.15;
 /// Joint deviations at or below this (metres) are not reported.
 pub const SPATIAL_THRESHOLD_M: f32 = 0.05;
+/// Nor are those within this many times their uncertainty (how much the joint's offset from the
+/// coach wanders over the swing).
+pub const NOISE_FACTOR: f32 = 4.0;
+/// A joint's wander is measured at this many moments spread evenly over the cut swing.
+pub const WANDER_SAMPLES: usize = 32;
+/// Poses are compared averaged over ± this long, seconds (zero phase).
+pub const SPATIAL_SMOOTHING_S: f32 = 0.02;
 /// Height fraction of mean error at which the score is `100 / e`.
 pub const SCORE_SCALE: f32 = 0.1;
 /// Most advice items a report holds.
@@ -160,6 +167,9 @@ pub struct Deviation {
     pub joint: Joint,
     /// Length of the offset, metres.
     pub distance_m: f32,
+    /// Its uncertainty, metres: how much this joint's offset from the coach wanders over the
+    /// whole swing (pose noise, and what the retargeting cannot match).
+    pub uncertainty_m: f32,
     /// Student minus coach in the stance frame: toward target, toward ball, up (metres).
     pub offset_m: [f32; 3],
     /// The offset's largest component.
@@ -184,8 +194,14 @@ impl Advice {
             Advice::Tempo(t) => {
                 libm::fabsf(libm::logf(t.ratio)) / libm::logf(1.0 + TEMPO_TOLERANCE)
             }
-            Advice::Spatial(d) => d.distance_m / SPATIAL_THRESHOLD_M,
+            Advice::Spatial(d) => Advice::severity_of(d),
         }
+    }
+
+    /// A deviation's severity: how far past the larger of [`SPATIAL_THRESHOLD_M`] and
+    /// [`NOISE_FACTOR`] times its uncertainty it is, as a multiple of that.
+    pub fn severity_of(d: &Deviation) -> f32 {
+        d.distance_m / SPATIAL_THRESHOLD_M.max(NOISE_FACTOR * d.uncertainty_m)
     }
 }
 
@@ -217,6 +233,7 @@ impl core::fmt::Display for Advice {
                     Event::Finish => "At the finish",
                 };
                 let cm = libm::roundf(d.distance_m * 100.0) as u32;
+                let within = (libm::ceilf(d.uncertainty_m * 100.0) as u32).max(1);
                 let joint = d.joint.name();
                 write!(f, "{event} your ")?;
                 for (i, word) in joint.split('_').enumerate() {
@@ -224,7 +241,7 @@ impl core::fmt::Display for Advice {
                 }
                 write!(
                     f,
-                    " is {cm} cm {} than the coach's.",
+                    " is {cm} ± {within} cm {} than the coach's.",
                     d.direction.comparative()
                 )
             }
@@ -457,59 +474,55 @@ fn frame(swing: &[Vec3], joints: usize, f: usize) -> &[Vec3] {
     &swing[f * joints..(f + 1) * joints]
 }
 
-/// The coach's pose closest to the student's frame `i` (`pose`): the point of the coach's
-/// trajectory, between consecutive frames around those the path matches with `i`, whose
-/// root-relative pose is nearest in least squares. Comparing there keeps timing (a frame's
-/// quantization is 12 cm of hand travel at impact at 60 Hz) out of the spatial advice.
-/// Returns joint `k`'s world position on the coach's side.
-fn closest_coach_pose<'c>(
-    joints: usize,
-    pose: &[Vec3],
-    coach: &'c [Vec3],
-    path: &[(u16, u16)],
-    i: usize,
-) -> impl Fn(usize) -> Vec3 + 'c {
-    let m = coach.len() / joints;
-    let matched = path
-        .iter()
-        .filter(|&&(a, _)| a as usize == i)
-        .map(|&(_, b)| b as usize);
-    let (lo, hi) = matched.fold((usize::MAX, 0), |(lo, hi), j| (lo.min(j), hi.max(j)));
-    let (lo, hi) = (lo.min(hi).saturating_sub(1), (hi + 1).min(m - 1));
-    let relative = |f: &[Vec3], k: usize| f[k] - f[0];
-    let mut best = (f32::INFINITY, lo, 0.0f32);
-    for j in lo..hi.max(lo + 1).min(m) {
-        let (c0, c1) = (
-            frame(coach, joints, j),
-            frame(coach, joints, (j + 1).min(m - 1)),
-        );
-        let (mut along, mut norm) = (0.0f32, 0.0f32);
-        for k in 0..joints {
-            let step = relative(c1, k) - relative(c0, k);
-            along += (relative(pose, k) - relative(c0, k)).dot(&step);
-            norm += step.norm_squared();
-        }
-        let t = if norm > 0.0 {
-            (along / norm).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let residual: f32 = (0..joints)
-            .map(|k| {
-                (relative(pose, k) - relative(c0, k) - (relative(c1, k) - relative(c0, k)) * t)
-                    .norm_squared()
-            })
-            .sum();
-        if residual < best.0 {
-            best = (residual, j, t);
-        }
+/// Joint `k` of a swing of `joints` joints at fractional frame `x` (linear between frames,
+/// clamped to the swing), averaged over `x ± half` frames: zero-phase smoothing of the cut
+/// swing, computed where it is needed.
+fn smoothed(swing: &[Vec3], joints: usize, x: f32, k: usize, half: usize) -> Vec3 {
+    let last = (swing.len() / joints).saturating_sub(1);
+    let at = |x: f32| {
+        let x = x.clamp(0.0, last as f32);
+        let (f, w) = (x as usize, x - libm::floorf(x));
+        let g = (f + 1).min(last);
+        swing[f * joints + k] * (1.0 - w) + swing[g * joints + k] * w
+    };
+    let sum = (0..=2 * half).fold(Vec3::zeros(), |s, i| s + at(x + i as f32 - half as f32));
+    sum / (2 * half + 1) as f32
+}
+
+/// The coach's frame matching the student's frame `x`: linear between the events both swings
+/// have (their times), the coach's rate beyond them.
+fn coach_frame(x: f32, student: &SwingEvents, coach: &SwingEvents, ratio: f32) -> f32 {
+    let mut pairs = Event::ALL
+        .into_iter()
+        .filter_map(|e| Some((student.time(e)?, coach.time(e)?)));
+    let Some(mut before) = pairs.next() else {
+        return x * ratio;
+    };
+    if x <= before.0 {
+        return before.1 + (x - before.0) * ratio;
     }
-    let (_, j, t) = best;
-    let (c0, c1) = (
-        frame(coach, joints, j),
-        frame(coach, joints, (j + 1).min(m - 1)),
-    );
-    move |k| c0[k] + (c1[k] - c0[k]) * t
+    for after in pairs {
+        if x <= after.0 {
+            let span = after.0 - before.0;
+            let w = if span > 0.0 {
+                (x - before.0) / span
+            } else {
+                0.0
+            };
+            return before.1 + (after.1 - before.1) * w;
+        }
+        before = after;
+    }
+    before.1 + (x - before.0) * ratio
+}
+
+/// The median of `values` (reordered), 0 for none.
+fn median(values: &mut [f32]) -> f32 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let mid = values.len() / 2;
+    *values.select_nth_unstable_by(mid, f32::total_cmp).1
 }
 
 /// Scores `student` (frames × skeleton joints at `student_hz`) against the coach's virtual
@@ -705,7 +718,9 @@ pub fn compare(
         duration(e, hz, Phase::Backswing) / duration(e, hz, Phase::Downswing)
     };
 
-    // Spatial deviations at each event, in each swing's stance frame.
+    // Spatial deviations at each event, in each swing's stance frame, the student's pose at its
+    // event time against the coach's at its own (a pure offset keeps its direction), both
+    // smoothed over ±SPATIAL_SMOOTHING_S.
     let stance_s = Stance::new(
         skeleton,
         frame(student, joints, student_events.address()),
@@ -716,39 +731,82 @@ pub fn compare(
         frame(coach, joints, coach_events.address()),
         coach_events.lead,
     );
+    let ratio = coach_hz / student_hz;
+    let (half_s, half_c) = (
+        libm::roundf(SPATIAL_SMOOTHING_S * student_hz) as usize,
+        libm::roundf(SPATIAL_SMOOTHING_S * coach_hz) as usize,
+    );
+    let offset = |k: usize, x: f32, (hs, hc): (usize, usize)| {
+        let c = coach_frame(x, &student_events, &coach_events, ratio);
+        stance_s.local(smoothed(student, joints, x, k, hs))
+            - stance_c.local(smoothed(coach, joints, c, k, hc))
+    };
+    // How much each joint's offset wanders over the whole cut, set-up to finish:
+    // per axis 1.4826 times the median absolute deviation from the median (the standard
+    // deviation of a normal spread, untouched by a flaw confined to part of the swing), the
+    // largest of the three.
+    let (from, to) = (0.0, (n - 1) as f32);
+    let samples = (libm::ceilf(to - from) as usize + 1).clamp(1, WANDER_SAMPLES);
+    let step = (to - from) / samples.saturating_sub(1).max(1) as f32;
+    let mut wander = [0.0f32; crate::config::MAX_JOINTS];
+    let mut series = [[0.0f32; WANDER_SAMPLES]; 3];
+    for (k, w) in wander.iter_mut().enumerate().take(joints) {
+        for i in 0..samples {
+            // Unsmoothed: the wander of single frames bounds the smoothed one's from above.
+            let o = offset(k, from + step * i as f32, (0, 0));
+            for (axis, values) in series.iter_mut().enumerate() {
+                values[i] = o[axis];
+            }
+        }
+        for axis in series.iter_mut() {
+            let values = &mut axis[..samples];
+            let middle = median(values);
+            for v in values.iter_mut() {
+                *v = libm::fabsf(*v - middle);
+            }
+            *w = w.max(1.4826 * median(values));
+        }
+    }
     let mut spatial: HVec<Deviation, MAX_DEVIATIONS> = HVec::new();
-    for (event, i) in student_events.iter() {
-        let fs = frame(student, joints, i);
-        let fc = closest_coach_pose(joints, fs, coach, &path, i);
+    for event in Event::ALL {
+        let Some(x) = student_events.time(event) else {
+            continue;
+        };
         let mut worst: HVec<Deviation, DEVIATIONS_PER_EVENT> = HVec::new();
-        for (k, &p) in fs.iter().enumerate() {
+        for (k, &uncertainty_m) in wander.iter().enumerate().take(joints) {
             let Some(joint) = skeleton.joint(k).filter(|j| !j.is_club()) else {
                 continue;
             };
-            let offset = stance_s.local(p) - stance_c.local(fc(k));
-            let distance_m = norm(&offset);
-            if distance_m <= SPATIAL_THRESHOLD_M {
+            let o = offset(k, x, (half_s, half_c));
+            let distance_m = norm(&o);
+            if distance_m <= SPATIAL_THRESHOLD_M.max(NOISE_FACTOR * uncertainty_m) {
                 continue;
             }
-            let axis = offset.iamax();
-            let direction = match (axis, offset[axis] > 0.0) {
-                (0, true) => Direction::TowardTarget,
-                (0, false) => Direction::AwayFromTarget,
-                (1, true) => Direction::TowardBall,
-                (1, false) => Direction::AwayFromBall,
-                (_, true) => Direction::Up,
-                (_, false) => Direction::Down,
-            };
             let deviation = Deviation {
                 event,
                 joint,
                 distance_m,
-                offset_m: [offset.x, offset.y, offset.z],
-                direction,
+                uncertainty_m,
+                offset_m: [o.x, o.y, o.z],
+                direction: direction(o),
             };
-            insert_sorted(&mut worst, deviation, |d| d.distance_m);
+            insert_sorted(&mut worst, deviation, Advice::severity_of);
         }
+        // One fact once: a joint next to one already listed, off the same way, is left out.
+        let mut kept: HVec<Deviation, DEVIATIONS_PER_EVENT> = HVec::new();
         for d in worst {
+            let k = skeleton.index_of(d.joint);
+            let adjacent = |e: &Deviation| {
+                let j = skeleton.index_of(e.joint);
+                e.direction == d.direction
+                    && (k.and_then(|k| skeleton.parent(k)) == j
+                        || j.and_then(|j| skeleton.parent(j)) == k)
+            };
+            if !kept.iter().any(adjacent) {
+                let _ = kept.push(d);
+            }
+        }
+        for d in kept {
             let _ = spatial.push(d);
         }
     }
@@ -775,6 +833,19 @@ pub fn compare(
         spatial,
         advice,
     })
+}
+
+/// The stance direction of `offset`'s largest component.
+fn direction(offset: Vec3) -> Direction {
+    let axis = offset.iamax();
+    match (axis, offset[axis] > 0.0) {
+        (0, true) => Direction::TowardTarget,
+        (0, false) => Direction::AwayFromTarget,
+        (1, true) => Direction::TowardBall,
+        (1, false) => Direction::AwayFromBall,
+        (_, true) => Direction::Up,
+        (_, false) => Direction::Down,
+    }
 }
 
 /// Inserts `item` into `list`, kept sorted by `key` descending; when full, the smallest goes.

@@ -182,6 +182,7 @@ pub fn to_json(r: &Report) -> Value {
         },
         "spatial": r.spatial.iter().map(|d| json!({
             "event": d.event.name(), "joint": d.joint.name(), "distance_cm": cm(d.distance_m),
+            "uncertainty_cm": cm(d.uncertainty_m),
             "direction": d.direction.name(),
             "offset_cm": {"toward_target": cm(d.offset_m[0]), "toward_ball": cm(d.offset_m[1]), "up": cm(d.offset_m[2])}})).collect::<Vec<_>>(),
         "advice": r.advice.iter().map(Advice::to_string).collect::<Vec<_>>(),

@@ -252,12 +252,12 @@ fn advice_reads_as_sentences() {
         axes[2] * -0.12,
     );
     let report = run(&student, &coach);
-    // The nearest point of the coach's trajectory absorbs about a centimetre of the 12.
+    // Compared at the top's time, a pure offset keeps its size and direction; the uncertainty is
+    // how much the wrist's offset wanders over the swing (a centimetre at most here).
     let sentence = report.advice[0].to_string();
-    assert!(
-        ["11", "12"].iter().any(|cm| sentence
-            == format!("At the top your left wrist is {cm} cm lower than the coach's.")),
-        "{sentence}"
+    assert_eq!(
+        sentence,
+        "At the top your left wrist is 12 ± 1 cm lower than the coach's."
     );
     let slow = warp_phase(
         &coach,
