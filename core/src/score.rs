@@ -5,15 +5,16 @@
 //! phase, the joints that deviate most at each key event (in the golfer's stance frame), and
 //! advice items ordered by importance.
 //!
-//! - **Score**: `100 · exp(−e / (SCORE_SCALE · h))`, with `e` the DTW distance divided by the
-//!   path length (the mean joint distance along the alignment, root at the origin) and `h` the
-//!   student's height: identical swings score 100 and the score falls strictly as `e` grows. A
-//!   mean error of 10 % of the height (18 cm on a 1.8 m skeleton) scores 37.
+//! - **Score**: `100 · exp(−(Σ_events p / SPATIAL_POINTS_M + Σ_phases q / TEMPO_POINTS))`:
+//!   `p` is the event's worst joint's [`excess`] over the larger of [`SPATIAL_THRESHOLD_M`] and
+//!   [`NOISE_FACTOR`] times its uncertainty, `q` a phase's excess of `|ln ratio|` over
+//!   `ln(1 + TEMPO_TOLERANCE)`. Identical swings score 100 (to rounding); the score falls
+//!   strictly as a deviation or a tempo change grows, by nearly nothing while it is within its
+//!   noise; a 10 cm offset at one event costs 10 points, a phase 30 % slower 11.
 //! - **Tempo**: each phase's duration, student over coach; beyond ±[`TEMPO_TOLERANCE`] the
 //!   verdict is `slow` or `fast`.
-//! - **Spatial**: at each event the student's pose is compared with the nearest point of the
-//!   coach's trajectory around the frames the alignment matches with it, so a swing that is
-//!   only faster or slower is not reported as out of position.
+//! - **Spatial**: at each event the student's pose at its time against the coach's at its own
+//!   (see [`compare`]), each joint with its uncertainty.
 //! - **Stance frame**: origin between the feet at address, `toward_target` from the trail foot
 //!   to the lead foot (horizontal), `toward_ball` the horizontal direction the chest faces
 //!   (the side it leans out to, past the hips), `up` = +Y; each swing in its own frame, so a pelvis that moves toward
@@ -40,8 +41,26 @@ pub const NOISE_FACTOR: f32 = 4.0;
 pub const WANDER_SAMPLES: usize = 32;
 /// Poses are compared averaged over ± this long, seconds (zero phase).
 pub const SPATIAL_SMOOTHING_S: f32 = 0.02;
-/// Height fraction of mean error at which the score is `100 / e`.
-pub const SCORE_SCALE: f32 = 0.1;
+/// The score's spatial scale: an event's worst excess of this many metres costs a factor `e`.
+pub const SPATIAL_POINTS_M: f32 = 0.5;
+/// The score's tempo scale: a phase's excess of this much `|ln ratio|` costs a factor `e`.
+pub const TEMPO_POINTS: f32 = 1.0;
+/// Softness of the excess over a spatial threshold, metres: well below the threshold a
+/// deviation costs next to nothing, past it the excess grows as the deviation does.
+pub const SPATIAL_SOFTNESS_M: f32 = 0.01;
+/// Softness of the excess of a tempo change over its tolerance, in `|ln ratio|`.
+pub const TEMPO_SOFTNESS: f32 = 0.03;
+
+/// How far a non-negative `value` is past `threshold`, softly: `s · ln(1 + e^((value −
+/// threshold) / s))` less its value at 0 (`s` the softness), which is 0 at 0, grows strictly
+/// with `value`, is about `value − threshold` well past it and next to nothing well below.
+pub fn excess(value: f32, threshold: f32, softness: f32) -> f32 {
+    let soft = |x: f32| {
+        let x = x / softness;
+        softness * if x > 20.0 { x } else { libm::log1pf(libm::expf(x)) }
+    };
+    soft(value - threshold) - soft(-threshold)
+}
 /// Most advice items a report holds.
 pub const MAX_ADVICE: usize = 8;
 /// Longest warping path a report holds.
@@ -680,7 +699,6 @@ pub fn compare(
     for &p in &path_buf[..alignment.path_len] {
         let _ = path.push(p);
     }
-    let score = 100.0 * libm::expf(-alignment.normalized / (SCORE_SCALE * skeleton.height()));
 
     // Tempo.
     // Between the events' times (the backswing from the takeaway), not their frames.
@@ -741,16 +759,21 @@ pub fn compare(
         stance_s.local(smoothed(student, joints, x, k, hs))
             - stance_c.local(smoothed(coach, joints, c, k, hc))
     };
-    // How much each joint's offset wanders over the whole cut, set-up to finish:
-    // per axis 1.4826 times the median absolute deviation from the median (the standard
-    // deviation of a normal spread, untouched by a flaw confined to part of the swing), the
-    // largest of the three.
-    let (from, to) = (0.0, (n - 1) as f32);
+    // Each joint's usual offset from the coach over the swing, takeaway to finish (per axis the
+    // median: a keypoint's constant bias, or a joint another format places elsewhere), and how
+    // much the offset wanders around it (per axis 1.4826 times the median absolute deviation,
+    // the standard deviation of a normal spread; the largest axis). Neither moves for a flaw
+    // confined to part of the swing.
+    let (from, to) = (
+        student_events.time(Event::Address).unwrap_or(0.0),
+        student_events.time(Event::Finish).unwrap_or((n - 1) as f32),
+    );
     let samples = (libm::ceilf(to - from) as usize + 1).clamp(1, WANDER_SAMPLES);
     let step = (to - from) / samples.saturating_sub(1).max(1) as f32;
+    let mut usual = [Vec3::zeros(); crate::config::MAX_JOINTS];
     let mut wander = [0.0f32; crate::config::MAX_JOINTS];
     let mut series = [[0.0f32; WANDER_SAMPLES]; 3];
-    for (k, w) in wander.iter_mut().enumerate().take(joints) {
+    for (k, (u, w)) in usual.iter_mut().zip(wander.iter_mut()).enumerate().take(joints) {
         for i in 0..samples {
             // Unsmoothed: the wander of single frames bounds the smoothed one's from above.
             let o = offset(k, from + step * i as f32, (0, 0));
@@ -758,28 +781,33 @@ pub fn compare(
                 values[i] = o[axis];
             }
         }
-        for axis in series.iter_mut() {
-            let values = &mut axis[..samples];
-            let middle = median(values);
+        for (axis, values) in series.iter_mut().enumerate() {
+            let values = &mut values[..samples];
+            u[axis] = median(values);
             for v in values.iter_mut() {
-                *v = libm::fabsf(*v - middle);
+                *v = libm::fabsf(*v - u[axis]);
             }
             *w = w.max(1.4826 * median(values));
         }
     }
     let mut spatial: HVec<Deviation, MAX_DEVIATIONS> = HVec::new();
+    let mut spatial_excess = 0.0f32;
     for event in Event::ALL {
         let Some(x) = student_events.time(event) else {
             continue;
         };
         let mut worst: HVec<Deviation, DEVIATIONS_PER_EVENT> = HVec::new();
+        let mut event_excess = 0.0f32;
         for (k, &uncertainty_m) in wander.iter().enumerate().take(joints) {
             let Some(joint) = skeleton.joint(k).filter(|j| !j.is_club()) else {
                 continue;
             };
-            let o = offset(k, x, (half_s, half_c));
+            // This moment's own offset, beyond the joint's usual one.
+            let o = offset(k, x, (half_s, half_c)) - usual[k];
             let distance_m = norm(&o);
-            if distance_m <= SPATIAL_THRESHOLD_M.max(NOISE_FACTOR * uncertainty_m) {
+            let threshold = SPATIAL_THRESHOLD_M.max(NOISE_FACTOR * uncertainty_m);
+            event_excess = event_excess.max(excess(distance_m, threshold, SPATIAL_SOFTNESS_M));
+            if distance_m <= threshold {
                 continue;
             }
             let deviation = Deviation {
@@ -809,7 +837,20 @@ pub fn compare(
         for d in kept {
             let _ = spatial.push(d);
         }
+        spatial_excess += event_excess;
     }
+    let tempo_excess: f32 = tempo
+        .iter()
+        .map(|t| {
+            excess(
+                libm::fabsf(libm::logf(t.ratio)),
+                libm::logf(1.0 + TEMPO_TOLERANCE),
+                TEMPO_SOFTNESS,
+            )
+        })
+        .sum();
+    let score =
+        100.0 * libm::expf(-(spatial_excess / SPATIAL_POINTS_M + tempo_excess / TEMPO_POINTS));
 
     // Advice: tempo and spatial items by severity.
     let mut advice: HVec<Advice, MAX_ADVICE> = HVec::new();

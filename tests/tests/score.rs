@@ -241,6 +241,33 @@ fn the_score_falls_strictly_as_a_planted_offset_grows() {
 }
 
 #[test]
+fn a_10_cm_fault_or_a_30_percent_phase_costs_at_least_5_points() {
+    let coach = driver();
+    let events = run(&coach, &coach).coach_events;
+    let axes = stance_axes(&coach, events.frame(Event::Address).unwrap());
+    let offset = plant(
+        &coach,
+        Joint::RightElbow,
+        events.frame(Event::Top).unwrap(),
+        axes[1] * 0.1,
+    );
+    let score = run(&offset, &coach).score;
+    assert!(score <= 95.0, "a 10 cm elbow offset at the top scores {score}");
+    for (from, to) in [(Event::Address, Event::Top), (Event::Top, Event::Impact)] {
+        for factor in [1.3, 1.0 / 1.3] {
+            let warped = warp_phase(
+                &coach,
+                events.frame(from).unwrap(),
+                events.frame(to).unwrap(),
+                factor,
+            );
+            let score = run(&warped, &coach).score;
+            assert!(score <= 95.0, "{from:?} to {to:?} x{factor}: {score}");
+        }
+    }
+}
+
+#[test]
 fn advice_reads_as_sentences() {
     let coach = driver();
     let events = run(&coach, &coach).coach_events;

@@ -204,7 +204,10 @@ fn a_stream_in_another_format_is_mapped_onto_the_profile() {
     let (same, mapped) = (scores(&coach, &same), scores(&coach, &mapped));
     assert_eq!((same.len(), mapped.len()), (1, 1));
     eprintln!("H3.6M stream {:?}\nCMU-31 stream {:?}", same[0], mapped[0]);
-    assert!(mapped[0].0 > 95.0 && (mapped[0].0 - same[0].0).abs() < 3.0);
+    // The events are the same and the score nearly so: CMU-31's head end, mapped onto the
+    // H3.6M head top, sits 11 cm higher at the finish, the one deviation the score counts
+    // (it was 1 point with the score from the alignment's mean distance, 9 now).
+    assert!(mapped[0].0 > 85.0 && (mapped[0].0 - same[0].0).abs() < 10.0);
     for (a, b) in same[0].1.iter().zip(&mapped[0].1) {
         assert!(a.abs_diff(*b) <= 1);
     }
