@@ -57,7 +57,12 @@ pub const TEMPO_SOFTNESS: f32 = 0.03;
 pub fn excess(value: f32, threshold: f32, softness: f32) -> f32 {
     let soft = |x: f32| {
         let x = x / softness;
-        softness * if x > 20.0 { x } else { libm::log1pf(libm::expf(x)) }
+        softness
+            * if x > 20.0 {
+                x
+            } else {
+                libm::log1pf(libm::expf(x))
+            }
     };
     soft(value - threshold) - soft(-threshold)
 }
@@ -791,7 +796,12 @@ pub fn compare(
     let mut usual = [Vec3::zeros(); crate::config::MAX_JOINTS];
     let mut wander = [0.0f32; crate::config::MAX_JOINTS];
     let mut series = [[0.0f32; WANDER_SAMPLES]; 3];
-    for (k, (u, w)) in usual.iter_mut().zip(wander.iter_mut()).enumerate().take(joints) {
+    for (k, (u, w)) in usual
+        .iter_mut()
+        .zip(wander.iter_mut())
+        .enumerate()
+        .take(joints)
+    {
         for i in 0..samples {
             // Unsmoothed: the wander of single frames bounds the smoothed one's from above.
             let o = offset(k, from + step * i as f32, (0, 0));

@@ -252,7 +252,10 @@ fn a_10_cm_fault_or_a_30_percent_phase_costs_at_least_5_points() {
         axes[1] * 0.1,
     );
     let score = run(&offset, &coach).score;
-    assert!(score <= 95.0, "a 10 cm elbow offset at the top scores {score}");
+    assert!(
+        score <= 95.0,
+        "a 10 cm elbow offset at the top scores {score}"
+    );
     for (from, to) in [(Event::Address, Event::Top), (Event::Top, Event::Impact)] {
         for factor in [1.3, 1.0 / 1.3] {
             let warped = warp_phase(
