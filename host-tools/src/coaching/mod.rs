@@ -22,7 +22,8 @@ pub mod flaws;
 use crate::coaches;
 use crate::phone::{self, Camera, PhoneNoise};
 use crate::progress::Progress;
-use crate::synth::{self, lay_out};
+use crate::synth::{self, lay_out, Placed, Timeline};
+use crate::synth_imu::{self, ImuNoise};
 use anyhow::{bail, Context, Result};
 use flaws::{Body, Flaw, Planted, Times, Truth};
 use posecoach_adapters::session::Outcome;
@@ -45,6 +46,8 @@ use std::sync::mpsc;
 pub const LAYOUT_HZ: f32 = 240.0;
 /// The device's model rate in every case.
 pub const MODEL_HZ: u16 = 60;
+/// The IMUs' sample rate.
+pub const IMU_HZ: f32 = 200.0;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -62,6 +65,9 @@ pub struct Args {
     /// The small configuration CI runs: 3 bodies, one case per flaw family.
     #[arg(long)]
     quick: bool,
+    /// Leave out the two IMU rows (six IMUs at 200 Hz, with and without magnetometers).
+    #[arg(long)]
+    no_imu: bool,
     /// Seed of the flaws, cameras and noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -87,13 +93,41 @@ struct Clean {
     lead: Side,
 }
 
-/// One case: a clean swing, its flaws, and how it is filmed.
+/// How a case reaches the device.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Input {
+    /// A phone's pose frames with errors of a level (mm), at a frame rate, facing the golfer
+    /// or down the line.
+    Phone {
+        level_mm: f32,
+        rate_hz: f32,
+        face_on: bool,
+    },
+    /// Six IMUs at [`IMU_HZ`] with or without magnetometers; the profile's T-pose turned to
+    /// any heading.
+    Imu { magnetometers: bool },
+}
+
+impl Input {
+    /// The row of the table it is counted in.
+    fn row(&self) -> String {
+        match *self {
+            Input::Phone { level_mm, .. } => format!("{level_mm} mm"),
+            Input::Imu {
+                magnetometers: true,
+            } => "IMU, mag".into(),
+            Input::Imu {
+                magnetometers: false,
+            } => "IMU".into(),
+        }
+    }
+}
+
+/// One case: a clean swing, its flaws, and how it reaches the device.
 struct Case {
     clean: usize,
     flaws: Vec<Flaw>,
-    level_mm: f32,
-    rate_hz: f32,
-    face_on: bool,
+    input: Input,
     seed: u64,
 }
 
@@ -204,16 +238,22 @@ pub fn run(args: &Args) -> Result<String> {
             .collect();
         std::fs::write(path, lines).with_context(|| format!("writing {}", path.display()))?;
     }
-    let levels: Vec<Value> = args
-        .levels
+    let mut rows: Vec<String> = Vec::new();
+    for c in &cases {
+        let row = c.input.row();
+        if !rows.contains(&row) {
+            rows.push(row);
+        }
+    }
+    let levels: Vec<Value> = rows
         .iter()
-        .map(|&level| {
+        .map(|row| {
             let pairs: Vec<(&Case, &Outcome1)> = cases
                 .iter()
                 .zip(&outcomes)
-                .filter(|(c, _)| c.level_mm == level)
+                .filter(|(c, _)| c.input.row() == *row)
                 .collect();
-            summary(level, &pairs)
+            summary(row, &pairs)
         })
         .collect();
     let doc = json!({
@@ -251,7 +291,11 @@ fn cases(cleans: &[Clean], args: &Args) -> Vec<Case> {
         Direction::Up,
         Direction::Down,
     ];
-    for &level_mm in &args.levels {
+    let mut inputs: Vec<Option<f32>> = args.levels.iter().map(|&l| Some(l)).collect();
+    if !args.no_imu {
+        inputs.extend([None, None]);
+    }
+    for (i, level) in inputs.into_iter().enumerate() {
         for clean in 0..cleans.len() {
             let mut sets: Vec<Vec<Flaw>> = Vec::new();
             for _ in 0..unflawed {
@@ -294,12 +338,21 @@ fn cases(cleans: &[Clean], args: &Args) -> Vec<Case> {
             sets.push(vec![tempo(&mut rng), offset(&mut rng)]);
             sets.push(vec![offset(&mut rng), offset(&mut rng)]);
             for flaws in sets {
+                let input = match level {
+                    Some(level_mm) => Input::Phone {
+                        level_mm,
+                        rate_hz: if rng.random_bool(0.5) { 30.0 } else { 60.0 },
+                        face_on: rng.random_bool(0.5),
+                    },
+                    // The first IMU row with magnetometers, the second without.
+                    None => Input::Imu {
+                        magnetometers: i == args.levels.len(),
+                    },
+                };
                 cases.push(Case {
                     clean,
                     flaws,
-                    level_mm,
-                    rate_hz: if rng.random_bool(0.5) { 30.0 } else { 60.0 },
-                    face_on: rng.random_bool(0.5),
+                    input,
                     seed: rng.random(),
                 });
             }
@@ -317,70 +370,29 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     let swing_end_s = placed[0].end as f64 / f64::from(LAYOUT_HZ);
     let mut rng = ChaCha8Rng::seed_from_u64(case.seed);
 
-    // Into the phone's frame: its depth axis is Z, the golfer's stance square to it give or
-    // take 15°.
-    let joints = timeline.joints;
-    let stance = Stance::new(
-        &clean.body.skeleton,
-        &timeline.positions[placed[0].start * joints..][..joints],
-        clean.lead,
-    );
-    let depth = if case.face_on {
-        stance.toward_ball()
-    } else {
-        stance.toward_target()
-    };
-    let square = depth.z.atan2(depth.x) - std::f32::consts::FRAC_PI_2;
-    let skew = rng.random_range(-15f32..=15.0).to_radians();
-    let turn = nalgebra::Rotation3::from_axis_angle(&Vec3::y_axis(), square + skew);
-    for p in &mut timeline.positions {
-        *p = turn * *p;
-    }
-    let camera = Camera {
-        rate_hz: case.rate_hz,
-        depth: Vec3::z(),
-    };
-    let noise = PhoneNoise::level(case.level_mm);
-    let format = Format::H36m17;
-    let keypoint_joints = synth::keypoint_sources(format, &clean.body.skeleton)?;
-    let frames = phone::record(
-        |t, k| timeline.at(t, k),
-        timeline.duration_s(),
-        format,
-        &keypoint_joints,
-        &camera,
-        &noise,
-        &mut rng,
-    );
-    // The profile: the T-pose the phone saw in the first second.
-    let mut sum = vec![(Vec3::zeros(), 0u32); keypoint_joints.len()];
-    for frame in frames.iter().filter(|f| f.t_us < 1_000_000) {
-        for (k, (p, &c)) in frame.joints_mm.iter().zip(&frame.confidence).enumerate() {
-            if c >= 180 {
-                sum[k].0 += Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32);
-                sum[k].1 += 1;
-            }
+    let mut messages = match case.input {
+        Input::Phone {
+            level_mm,
+            rate_hz,
+            face_on,
+        } => {
+            let camera = PhoneView {
+                level_mm,
+                rate_hz,
+                face_on,
+            };
+            phone_messages(clean, &mut timeline, &placed, &camera, &mut rng)?
         }
-    }
-    if sum.iter().any(|s| s.1 == 0) {
-        bail!("a joint was never seen in the T-pose");
-    }
-    let profile = StudentProfile {
-        format,
-        joints_mm: sum
-            .iter()
-            .map(|(p, n)| phone::to_mm(p / (*n as f32) * 1e-3))
-            .collect(),
+        Input::Imu { magnetometers } => imu_messages(clean, &timeline, magnetometers, &mut rng)?,
     };
-    let mut messages = vec![
-        Message::StudentProfile(profile),
+    messages.insert(
+        1,
         Message::Config(Config {
             model_rate_hz: MODEL_HZ,
             band: Band::DEFAULT,
         }),
-        Message::CoachSelect { coach: clean.coach },
-    ];
-    messages.extend(frames.into_iter().map(Message::PoseFrame));
+    );
+    messages.insert(2, Message::CoachSelect { coach: clean.coach });
 
     if let Some(dir) = logs_out {
         let mut bytes = posecoach_adapters::log::header().to_vec();
@@ -466,6 +478,123 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     Ok(outcome)
 }
 
+/// A phone filming a case.
+struct PhoneView {
+    level_mm: f32,
+    rate_hz: f32,
+    face_on: bool,
+}
+
+/// The profile then the pose frames a phone sends of `timeline` (turned into its frame).
+fn phone_messages(
+    clean: &Clean,
+    timeline: &mut Timeline,
+    placed: &[Placed],
+    view: &PhoneView,
+    rng: &mut ChaCha8Rng,
+) -> Result<Vec<Message>> {
+    // Into the phone's frame: its depth axis is Z, the golfer's stance square to it give or
+    // take 15°.
+    let joints = timeline.joints;
+    let stance = Stance::new(
+        &clean.body.skeleton,
+        &timeline.positions[placed[0].start * joints..][..joints],
+        clean.lead,
+    );
+    let depth = if view.face_on {
+        stance.toward_ball()
+    } else {
+        stance.toward_target()
+    };
+    let square = depth.z.atan2(depth.x) - std::f32::consts::FRAC_PI_2;
+    let skew = rng.random_range(-15f32..=15.0).to_radians();
+    let turn = nalgebra::Rotation3::from_axis_angle(&Vec3::y_axis(), square + skew);
+    for p in &mut timeline.positions {
+        *p = turn * *p;
+    }
+    let camera = Camera {
+        rate_hz: view.rate_hz,
+        depth: Vec3::z(),
+    };
+    let noise = PhoneNoise::level(view.level_mm);
+    let format = Format::H36m17;
+    let keypoint_joints = synth::keypoint_sources(format, &clean.body.skeleton)?;
+    let frames = phone::record(
+        |t, k| timeline.at(t, k),
+        timeline.duration_s(),
+        format,
+        &keypoint_joints,
+        &camera,
+        &noise,
+        rng,
+    );
+    // The profile: the T-pose the phone saw in the first second.
+    let mut sum = vec![(Vec3::zeros(), 0u32); keypoint_joints.len()];
+    for frame in frames.iter().filter(|f| f.t_us < 1_000_000) {
+        for (k, (p, &c)) in frame.joints_mm.iter().zip(&frame.confidence).enumerate() {
+            if c >= 180 {
+                sum[k].0 += Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32);
+                sum[k].1 += 1;
+            }
+        }
+    }
+    if sum.iter().any(|s| s.1 == 0) {
+        bail!("a joint was never seen in the T-pose");
+    }
+    let profile = StudentProfile {
+        format,
+        joints_mm: sum
+            .iter()
+            .map(|(p, n)| phone::to_mm(p / (*n as f32) * 1e-3))
+            .collect(),
+    };
+    let mut messages = vec![Message::StudentProfile(profile)];
+    messages.extend(frames.into_iter().map(Message::PoseFrame));
+    Ok(messages)
+}
+
+/// The profile (the student's T-pose turned to any heading), the sensor layout and the samples
+/// six IMUs send of `timeline` (3 % lost).
+fn imu_messages(
+    clean: &Clean,
+    timeline: &Timeline,
+    magnetometers: bool,
+    rng: &mut ChaCha8Rng,
+) -> Result<Vec<Message>> {
+    let body = &clean.body;
+    let heading = rng.random_range(0.0f32..std::f32::consts::TAU);
+    let turn = nalgebra::Rotation3::from_axis_angle(&Vec3::y_axis(), heading);
+    let format = Format::H36m17;
+    let keypoint_joints = synth::keypoint_sources(format, &body.skeleton)?;
+    let profile = StudentProfile {
+        format,
+        joints_mm: keypoint_joints
+            .iter()
+            .map(|&k| phone::to_mm(turn * body.positions[k]))
+            .collect(),
+    };
+    let motion = Motion {
+        skeleton: body.skeleton.clone(),
+        names: body.names.clone(),
+        rate_hz: timeline.rate,
+        missing: vec![false; timeline.positions.len()],
+        positions: timeline.positions.clone(),
+    };
+    let layout = synth_imu::default_layout(&body.skeleton);
+    let field = magnetometers.then_some(synth_imu::EARTH_FIELD_UT);
+    let samples = synth_imu::imu_samples(&motion, &layout, IMU_HZ, &ImuNoise::MEMS, field, rng);
+    let mut messages = vec![
+        Message::StudentProfile(profile),
+        Message::SensorLayout(layout),
+    ];
+    for sample in samples {
+        if !rng.random_bool(0.03) {
+            messages.push(Message::ImuSample(sample));
+        }
+    }
+    Ok(messages)
+}
+
 /// Whether `advice` states one of the planted flaws.
 fn states(advice: &Advice, planted: &Planted) -> bool {
     planted.truths.iter().any(|t| match (t, advice) {
@@ -514,7 +643,7 @@ fn family(flaws: &[Flaw]) -> &'static str {
 }
 
 /// The figures of one noise level.
-fn summary(level: f32, pairs: &[(&Case, &Outcome1)]) -> Value {
+fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
     let found: Vec<&(&Case, &Outcome1)> = pairs.iter().filter(|(_, o)| o.found).collect();
     let timing = |i: usize| {
         quantiles(
@@ -554,7 +683,7 @@ fn summary(level: f32, pairs: &[(&Case, &Outcome1)]) -> Value {
     };
     let tempo_in = |lo: f32, hi: f32| move |c: &Case, _: &Outcome1| matches!(c.flaws[..], [Flaw::Tempo { factor, .. }] if (lo..hi).contains(&((factor - 1.0).abs() * 100.0)));
     json!({
-        "level_mm": level,
+        "input": row,
         "cases": pairs.len(),
         "found": share(found.len(), pairs.len()),
         "false_swings": pairs.iter().map(|(_, o)| o.false_swings).sum::<usize>(),
@@ -584,8 +713,11 @@ fn summary(level: f32, pairs: &[(&Case, &Outcome1)]) -> Value {
 fn case_json(clean: &Clean, case: &Case, o: &Outcome1) -> Value {
     json!({
         "source": clean.source.file_name().map(|n| n.to_string_lossy().into_owned()),
-        "height_m": clean.body.skeleton.height(), "flaws": case.flaws, "level_mm": case.level_mm,
-        "seed": case.seed, "rate_hz": case.rate_hz, "camera": if case.face_on { "face_on" } else { "down_the_line" },
+        "height_m": clean.body.skeleton.height(), "flaws": case.flaws, "input": case.input.row(),
+        "seed": case.seed, "camera": match case.input {
+            Input::Phone { rate_hz, face_on, .. } => json!({"rate_hz": rate_hz, "view": if face_on { "face_on" } else { "down_the_line" }}),
+            Input::Imu { .. } => json!(null),
+        },
         "shown_cm": o.shown_m * 100.0, "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
         "tempo_error": o.tempo_error, "score": o.score, "first": o.first, "right_first": o.right_first,
         "any_advice": o.any_advice, "error": o.error,
@@ -600,7 +732,7 @@ fn table(doc: &Value) -> String {
         "coaching benchmark: {} cases, {} bodies, sources {}",
         doc["cases"], doc["bodies"], doc["sources"]
     );
-    let _ = writeln!(out, "noise | found | false | takeaway ms | top ms | impact ms | tempo err | false tempo | false advice | recall@1 offset>=8cm / tempo / body | score unflawed / 10-15cm / tempo 30-50%");
+    let _ = writeln!(out, "input | found | false | takeaway ms | top ms | impact ms | tempo err | false tempo | false advice | recall@1 offset>=8cm / tempo / body | score unflawed / 10-15cm / tempo 30-50%");
     let pct = |v: &Value| {
         v["share"]
             .as_f64()
@@ -616,8 +748,8 @@ fn table(doc: &Value) -> String {
         let r = &l["recall_at_1"];
         let _ = writeln!(
             out,
-            "{:>3} mm | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {}",
-            l["level_mm"],
+            "{:>8} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {}",
+            l["input"].as_str().unwrap_or("-"),
             pct(&l["found"]),
             l["false_swings"],
             q(&l["takeaway_ms"]),
