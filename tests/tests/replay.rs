@@ -15,6 +15,8 @@ use std::path::{Path, PathBuf};
 /// model rate, a frame and a half of a 30 Hz capture (an amateur's slow transition makes the
 /// top a flat speed minimum; on the clean logs every event is within two frames).
 const EVENT_TOLERANCE_S: f64 = 0.05;
+/// A reported backswing's largest relative error against the one the log was made with.
+const BACKSWING_TOLERANCE: f64 = 0.05;
 
 fn logs() -> Vec<PathBuf> {
     let found = files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("logs"), "pclog");
@@ -58,6 +60,19 @@ fn check_swings(name: &str, replay: &Replay, expected: &Value) {
                 );
             }
         }
+        // The backswing as it was made: from the takeaway (the swing's first frame, the golfer
+        // still before it) to the top.
+        let takeaway = truth
+            .get("takeaway_s")
+            .unwrap_or(&truth["start_s"])
+            .as_f64()
+            .unwrap();
+        let made = truth["events_s"]["top"].as_f64().unwrap() - takeaway;
+        let reported = report["tempo"]["phases"][0]["student_s"].as_f64().unwrap();
+        assert!(
+            (reported / made - 1.0).abs() <= BACKSWING_TOLERANCE,
+            "{name}: backswing {reported:.3} s, made {made:.3} s"
+        );
     }
 }
 
