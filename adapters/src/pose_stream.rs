@@ -49,7 +49,7 @@ use posecoach_core::Vec3;
 
 /// A gap between frames longer than this breaks the stream, seconds.
 pub const MAX_GAP_S: f32 = 0.25;
-/// Keypoints under this confidence (of 255) are unsure: see [`UNSURE_WITHIN_M`].
+/// Keypoints under this confidence (of 255) are unsure: see [`UNSURE_BONE_SHARE`].
 pub const MIN_CONFIDENCE: u8 = 77;
 /// An unsure keypoint (under the minimum confidence, but above 0) is taken as sent when its
 /// distance from its parent is within this share of the bone's last length; else, and for a
@@ -88,6 +88,9 @@ pub enum StreamEvent<'a> {
         t_us: u64,
         /// The stream format's joints, metres.
         joints: &'a [Vec3],
+        /// The joints (bit `k` for joint `k`) that were unsure in either received frame it
+        /// lies between: carried by their parents, or taken from an unsure keypoint.
+        unsure: u64,
     },
     /// Time is missing before the next frame: whatever was in progress is broken.
     Gap,
@@ -181,6 +184,8 @@ pub struct PoseStream {
     last: Option<Taken>,
     /// Joint positions of the last frame taken (masked joints held).
     previous: [Vec3; MAX_JOINTS],
+    /// The joints unsure in the last frame taken.
+    previous_unsure: u64,
     /// Joints that have had a confident position.
     seen: u64,
     /// Time of grid frame 0 and the index of the next grid frame, once all joints are seen.
@@ -203,6 +208,7 @@ impl PoseStream {
             joints: 0,
             last: None,
             previous: [Vec3::zeros(); MAX_JOINTS],
+            previous_unsure: 0,
             seen: 0,
             grid: None,
             counters: StreamCounters::default(),
@@ -260,6 +266,7 @@ impl PoseStream {
         self.joints = joints.len();
         self.counters.accepted += 1;
         let mut current = self.previous;
+        let mut unsure = 0u64;
         let table = frame.format.joints();
         for (k, (position, confidence)) in joints.iter().enumerate() {
             if *confidence >= self.config.min_confidence {
@@ -267,6 +274,7 @@ impl PoseStream {
                 self.seen |= 1 << k;
             } else {
                 self.counters.masked += 1;
+                unsure |= 1 << k;
             }
         }
         // A masked joint is carried by its parent: it keeps the offset from it that it had in
@@ -312,6 +320,7 @@ impl PoseStream {
                     emit(StreamEvent::Frame {
                         t_us: t,
                         joints: &out[..self.joints],
+                        unsure: self.previous_unsure | unsure,
                     });
                     k += 1;
                 }
@@ -323,11 +332,13 @@ impl PoseStream {
                 emit(StreamEvent::Frame {
                     t_us,
                     joints: &current[..self.joints],
+                    unsure,
                 });
             }
             _ => {}
         }
         self.previous = current;
+        self.previous_unsure = unsure;
         self.last = Some(Taken {
             seq: frame.seq,
             t_us,

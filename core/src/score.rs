@@ -608,8 +608,37 @@ pub fn score(
         positions: coach,
         hz: coach_hz,
         events: coach_events,
+        unsure: Unsure::default(),
     };
     compare(skeleton, &student, &coach, band, floats, bytes)
+}
+
+/// Which joints a stream was unsure of, frame by frame: a ring of bit masks (bit `k` for
+/// skeleton joint `k`) written at stream frame `n` into slot `n % ring.len()`, and where a swing
+/// starts in the stream. A frame whose slot has since been written again counts as sure.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Unsure<'a> {
+    ring: &'a [u64],
+    start: u64,
+    seen: u64,
+}
+
+impl<'a> Unsure<'a> {
+    /// A swing starting at stream frame `start` of a stream that has pushed `seen` frames, its
+    /// masks in `ring`.
+    pub fn new(ring: &'a [u64], start: u64, seen: u64) -> Unsure<'a> {
+        Unsure { ring, start, seen }
+    }
+
+    /// The joints unsure at the swing's frame `frame`.
+    pub fn at(&self, frame: usize) -> u64 {
+        let n = self.start + frame as u64;
+        let len = self.ring.len() as u64;
+        if len == 0 || n >= self.seen || n + len < self.seen {
+            return 0;
+        }
+        self.ring[(n % len) as usize]
+    }
 }
 
 /// A swing with its events: frames × skeleton joints at `hz`.
@@ -621,6 +650,8 @@ pub struct Detected<'a> {
     pub hz: f32,
     /// Its events, as [`events::detect`] finds them in `positions`.
     pub events: SwingEvents,
+    /// The joints the stream was unsure of, frame by frame (none for a swing read whole).
+    pub unsure: Unsure<'a>,
 }
 
 impl<'a> Detected<'a> {
@@ -634,6 +665,7 @@ impl<'a> Detected<'a> {
             positions,
             hz,
             events,
+            unsure: Unsure::default(),
         })
     }
 }
@@ -657,11 +689,13 @@ pub fn compare(
         positions: student,
         hz: student_hz,
         events: student_events,
+        unsure,
     } = *student;
     let Detected {
         positions: coach,
         hz: coach_hz,
         events: coach_events,
+        ..
     } = *coach;
     if student_events.kind != coach_events.kind {
         return Err(ScoreError::KindMismatch);
@@ -796,21 +830,37 @@ pub fn compare(
     let mut usual = [Vec3::zeros(); crate::config::MAX_JOINTS];
     let mut wander = [0.0f32; crate::config::MAX_JOINTS];
     let mut series = [[0.0f32; WANDER_SAMPLES]; 3];
+    // Whether joint `k` was unsure anywhere within `half` frames (and one more) of frame `x`.
+    let unsure_near = |k: usize, x: f32, half: usize| {
+        let (lo, hi) = (
+            libm::floorf(x).max(0.0) as usize,
+            libm::ceilf(x).max(0.0) as usize,
+        );
+        (lo.saturating_sub(half + 1)..=(hi + half + 1).min(n.saturating_sub(1)))
+            .any(|f| unsure.at(f) & (1 << k) != 0)
+    };
     for (k, (u, w)) in usual
         .iter_mut()
         .zip(wander.iter_mut())
         .enumerate()
         .take(joints)
     {
+        // Unsmoothed (the wander of single frames bounds the smoothed one's from above), and
+        // only where the stream was sure of the joint.
+        let mut count = 0;
         for i in 0..samples {
-            // Unsmoothed: the wander of single frames bounds the smoothed one's from above.
-            let o = offset(k, from + step * i as f32, (0, 0));
-            for (axis, values) in series.iter_mut().enumerate() {
-                values[i] = o[axis];
+            let x = from + step * i as f32;
+            if unsure_near(k, x, 0) {
+                continue;
             }
+            let o = offset(k, x, (0, 0));
+            for (axis, values) in series.iter_mut().enumerate() {
+                values[count] = o[axis];
+            }
+            count += 1;
         }
         for (axis, values) in series.iter_mut().enumerate() {
-            let values = &mut values[..samples];
+            let values = &mut values[..count];
             u[axis] = median(values);
             for v in values.iter_mut() {
                 *v = libm::fabsf(*v - u[axis]);
@@ -830,6 +880,10 @@ pub fn compare(
             let Some(joint) = skeleton.joint(k).filter(|j| !j.is_club()) else {
                 continue;
             };
+            // A joint the stream was unsure of around the event is not judged there.
+            if unsure_near(k, x, half_s) {
+                continue;
+            }
             // This moment's own offset, beyond the joint's usual one.
             let o = offset(k, x, (half_s, half_c)) - usual[k];
             let distance_m = norm(&o);
@@ -934,7 +988,19 @@ fn insert_sorted<T: Copy, const N: usize>(list: &mut HVec<T, N>, item: T, key: i
 
 #[cfg(test)]
 mod tests {
-    use super::median;
+    use super::{median, Unsure};
+
+    #[test]
+    fn unsure_masks_are_read_where_the_ring_still_holds_them() {
+        // A ring of 4 slots after 10 frames: frames 6 to 9 are held, in slots 2, 3, 0, 1.
+        let ring = [0b01, 0b10, 0b100, 0b1000];
+        let swing = Unsure::new(&ring, 5, 10);
+        assert_eq!(swing.at(0), 0); // frame 5: written over
+        assert_eq!(swing.at(1), 0b100); // frame 6
+        assert_eq!(swing.at(4), 0b10); // frame 9
+        assert_eq!(swing.at(5), 0); // frame 10: not yet pushed
+        assert_eq!(Unsure::default().at(3), 0);
+    }
 
     proptest::proptest! {
         #[test]

@@ -32,7 +32,7 @@ echo "| of which int8 weights | $(kib "$weights") |"
 iron=$(stat -c %s ../../coaches/iron.pcr)
 echo "| flash with one coach reference (the budget's measure: without \`iron.pcr\`) | $(kib $((code - log - transcript - golden - iron))) |"
 echo "| static RAM (.data + .bss) | $(kib "$static_ram") |"
-for b in ring coach floats bytes; do
+for b in ring coach floats bytes unsure; do
     echo "| of which session buffer \`$b\` | $(kib "$(field RAM "$b")") |"
 done
 echo "| stack high-water mark | $(kib "$stack") |"

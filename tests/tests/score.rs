@@ -271,6 +271,53 @@ fn a_10_cm_fault_or_a_30_percent_phase_costs_at_least_5_points() {
 }
 
 #[test]
+fn a_joint_the_stream_was_unsure_of_is_not_judged_there() {
+    use posecoach_core::score::{compare, Detected, Unsure};
+    let coach = driver();
+    let events = run(&coach, &coach).coach_events;
+    let axes = stance_axes(&coach, events.frame(Event::Address).unwrap());
+    let top = events.frame(Event::Top).unwrap();
+    let student = plant(&coach, Joint::LeftWrist, top, axes[2] * -0.12);
+    let wrist = coach.skeleton.index_of(Joint::LeftWrist).unwrap();
+    fn detected(m: &Motion) -> Detected<'_> {
+        Detected::new(&m.skeleton, &m.positions, m.rate_hz).unwrap()
+    }
+    // The wrist unsure for a quarter second around the top.
+    let masks: Vec<u64> = (0..student.frames())
+        .map(|f| if f.abs_diff(top) <= 8 { 1 << wrist } else { 0 })
+        .collect();
+    let unsure = Detected {
+        unsure: Unsure::new(&masks, 0, masks.len() as u64),
+        ..detected(&student)
+    };
+    let len = scratch_len(student.frames(), coach.frames());
+    let (mut floats, mut bytes) = (vec![0.0; len.floats], vec![0u8; len.bytes]);
+    let report = compare(
+        &coach.skeleton,
+        &unsure,
+        &detected(&coach),
+        BAND,
+        &mut floats,
+        &mut bytes,
+    )
+    .unwrap();
+    assert!(
+        report
+            .spatial
+            .iter()
+            .all(|d| d.joint != Joint::LeftWrist || d.event != Event::Top),
+        "{:?}",
+        report.spatial
+    );
+    // Sure of it, the same swing is told.
+    let sure = run(&student, &coach);
+    assert!(sure
+        .spatial
+        .iter()
+        .any(|d| d.joint == Joint::LeftWrist && d.event == Event::Top));
+}
+
+#[test]
 fn advice_reads_as_sentences() {
     let coach = driver();
     let events = run(&coach, &coach).coach_events;

@@ -19,6 +19,8 @@ pub struct BufferLens {
     pub floats: usize,
     /// Scoring bytes.
     pub bytes: usize,
+    /// Masks of the joints the pose stream was unsure of, one per frame of the ring.
+    pub unsure: usize,
 }
 
 impl BufferLens {
@@ -38,6 +40,7 @@ impl BufferLens {
             coach: joints * coach_frames,
             floats: scratch.floats,
             bytes: scratch.bytes,
+            unsure: ring_frames,
         }
     }
 
@@ -71,6 +74,8 @@ pub struct Buffers<'b> {
     pub floats: &'b mut [f32],
     /// Scoring bytes.
     pub bytes: &'b mut [u8],
+    /// Masks of the joints the pose stream was unsure of, one per frame.
+    pub unsure: &'b mut [u64],
 }
 
 /// [`Buffers`] of the given lengths on the heap, for host tools and tests.
@@ -81,6 +86,7 @@ pub struct OwnedBuffers {
     coach: std::vec::Vec<Vec3>,
     floats: std::vec::Vec<f32>,
     bytes: std::vec::Vec<u8>,
+    unsure: std::vec::Vec<u64>,
 }
 
 #[cfg(feature = "std")]
@@ -92,6 +98,7 @@ impl OwnedBuffers {
             coach: std::vec![Vec3::zeros(); lens.coach],
             floats: std::vec![0.0; lens.floats],
             bytes: std::vec![0; lens.bytes],
+            unsure: std::vec![0; lens.unsure],
         }
     }
 
@@ -102,6 +109,7 @@ impl OwnedBuffers {
             coach: &mut self.coach,
             floats: &mut self.floats,
             bytes: &mut self.bytes,
+            unsure: &mut self.unsure,
         }
     }
 }

@@ -51,7 +51,7 @@ use posecoach_core::format::Format;
 use posecoach_core::math::norm;
 use posecoach_core::resample;
 use posecoach_core::retarget::Fit;
-use posecoach_core::score::{self, Detected, Report, ScoreError, Stance};
+use posecoach_core::score::{self, Detected, Report, ScoreError, Stance, Unsure};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::weights::Weights;
 use posecoach_core::wire::{Config, ImuSample, Message, PoseFrame, SensorLayout, StudentProfile};
@@ -78,6 +78,9 @@ struct Student<'b> {
     /// made at the first pose frame (the stream keeps to that frame's format) and used for
     /// every one after.
     fit: Option<Fit>,
+    /// For each student joint, the stream joint of the same canonical joint (bit source of
+    /// the unsure masks), `u8::MAX` for none; made with the fit.
+    unsure_source: [u8; MAX_JOINTS],
     stream: PoseStream,
     detector: SwingDetector<'b>,
     /// Stream time of the detector's frame 0.
@@ -105,6 +108,9 @@ pub struct Session<'b> {
     virtual_coach: &'b mut [Vec3],
     floats: &'b mut [f32],
     bytes: &'b mut [u8],
+    /// Per stream frame, the student's joints the pose stream was unsure of (slot: frame index
+    /// modulo its length).
+    unsure: &'b mut [u64],
     swings: u32,
     report: Option<Report>,
     /// Counters of the pose streams before the current one.
@@ -157,6 +163,7 @@ impl<'b> Session<'b> {
             virtual_coach: buffers.coach,
             floats: buffers.floats,
             bytes: buffers.bytes,
+            unsure: buffers.unsure,
             swings: 0,
             report: None,
             counted: StreamCounters::default(),
@@ -333,9 +340,11 @@ impl<'b> Session<'b> {
             }
         };
         let detector = SwingDetector::new(&skeleton, detector, ring).map_err(Refusal::Detector)?;
+        self.unsure.fill(0);
         self.student = Some(Student {
             skeleton,
             fit: None,
+            unsure_source: [u8::MAX; MAX_JOINTS],
             stream,
             detector,
             t0_us: None,
@@ -355,15 +364,21 @@ impl<'b> Session<'b> {
             let source = stream_skeleton(&student.skeleton, frame.format)?;
             let fit = Fit::new(&source, &student.skeleton).map_err(|_| Refusal::Retarget)?;
             student.fit = Some(fit);
+            for (k, slot) in student.unsure_source.iter_mut().enumerate() {
+                let same = student.skeleton.joint(k).and_then(|j| source.index_of(j));
+                *slot = same.map_or(u8::MAX, |i| i as u8);
+            }
         }
         let Student {
             skeleton,
             fit,
+            unsure_source,
             stream,
             detector,
             t0_us,
             ..
         } = student;
+        let masks = &mut *self.unsure;
         let fit = fit.as_ref().ok_or(Refusal::NoProfile)?;
         let rate = f32::from(self.config.model_rate_hz);
         let mut closed: Option<(SwingWindow, u64)> = None;
@@ -371,13 +386,37 @@ impl<'b> Session<'b> {
             .push(frame, |event| match event {
                 StreamEvent::Gap => {
                     detector.clear();
+                    masks.fill(0);
                     *t0_us = None;
                 }
-                StreamEvent::Frame { t_us, joints } => {
+                StreamEvent::Frame {
+                    t_us,
+                    joints,
+                    unsure,
+                } => {
                     let mut out = [Vec3::zeros(); MAX_JOINTS];
                     let out = &mut out[..skeleton.len()];
                     if fit.frame(skeleton, joints, out).is_err() {
                         return;
+                    }
+                    // The student's joints whose stream joint was unsure, at this frame's slot.
+                    let frame = detector.frames_seen();
+                    if let Some(slot) = masks.get_mut((frame % masks.len().max(1) as u64) as usize)
+                    {
+                        let mut mask = unsure_source
+                            .iter()
+                            .take(skeleton.len())
+                            .enumerate()
+                            .filter(|&(_, &i)| i < 64 && unsure & (1 << i) != 0)
+                            .fold(0u64, |m, (k, _)| m | 1 << k);
+                        // The fit places a joint along its bone from its parent: an unsure
+                        // parent makes its children unsure (parents come first).
+                        for k in 0..skeleton.len() {
+                            if skeleton.parent(k).is_some_and(|p| mask & (1 << p) != 0) {
+                                mask |= 1 << k;
+                            }
+                        }
+                        *slot = mask;
                     }
                     let t0 = *t0_us.get_or_insert(t_us);
                     if let Ok(Some(window)) = detector.push(out) {
@@ -464,6 +503,7 @@ impl<'b> Session<'b> {
             &mut *self.bytes,
         );
         let last_report = &mut self.report;
+        let (unsure, seen) = (&*self.unsure, detector.frames_seen());
         // The swing is scored where it lies in the detector's ring (a window that has left the
         // ring is skipped, as a copy of it would fail).
         let _ = detector.with_window(&window, |frames| {
@@ -505,11 +545,13 @@ impl<'b> Session<'b> {
                 positions: compared.coach,
                 hz: coach_hz,
                 events: *coach_events,
+                unsure: Unsure::default(),
             };
             let student = Detected {
                 positions: compared.student,
                 hz: rate,
                 events,
+                unsure: Unsure::new(unsure, window.start + span.start as u64, seen),
             };
             let result = score::compare(skeleton, &student, &coach, config.band, floats, bytes);
             match result {

@@ -42,7 +42,7 @@ pub extern "C" fn posecoach_no_alloc_replay(log: &[u8; 64]) -> i32 {
         return -1;
     };
     let (mut ring, mut coach) = ([Vec3::zeros(); 8], [Vec3::zeros(); 8]);
-    let (mut floats, mut bytes) = ([0.0; 8], [0u8; 8]);
+    let (mut floats, mut bytes, mut unsure) = ([0.0; 8], [0u8; 8], [0u64; 8]);
     let mut session = Session::new(
         &[],
         Buffers {
@@ -50,6 +50,7 @@ pub extern "C" fn posecoach_no_alloc_replay(log: &[u8; 64]) -> i32 {
             coach: &mut coach,
             floats: &mut floats,
             bytes: &mut bytes,
+            unsure: &mut unsure,
         },
     );
     let mut read = 0;

@@ -53,6 +53,7 @@ static VIRTUAL_COACH: ConstStaticCell<[Vec3; LENS.coach]> =
     ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.coach]);
 static FLOATS: ConstStaticCell<[f32; LENS.floats]> = ConstStaticCell::new([0.0; LENS.floats]);
 static BYTES: ConstStaticCell<[u8; LENS.bytes]> = ConstStaticCell::new([0; LENS.bytes]);
+static UNSURE: ConstStaticCell<[u64; LENS.unsure]> = ConstStaticCell::new([0; LENS.unsure]);
 
 /// A microsecond clock from a free-running 32-bit timer, extended to 64 bits.
 struct Clock {
@@ -129,6 +130,7 @@ fn main() -> ! {
         coach: VIRTUAL_COACH.take(),
         floats: FLOATS.take(),
         bytes: BYTES.take(),
+        unsure: UNSURE.take(),
     };
     let own = Config {
         model_rate_hz: MODEL_RATE_HZ,

@@ -72,6 +72,7 @@ static VIRTUAL_COACH: ConstStaticCell<[Vec3; LENS.coach]> =
     ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.coach]);
 static FLOATS: ConstStaticCell<[f32; LENS.floats]> = ConstStaticCell::new([0.0; LENS.floats]);
 static BYTES: ConstStaticCell<[u8; LENS.bytes]> = ConstStaticCell::new([0; LENS.bytes]);
+static UNSURE: ConstStaticCell<[u64; LENS.unsure]> = ConstStaticCell::new([0; LENS.unsure]);
 
 /// Instructions per kind of work.
 #[derive(Default)]
@@ -145,6 +146,7 @@ fn run() -> Result<(), &'static str> {
         coach,
         floats: FLOATS.take(),
         bytes: BYTES.take(),
+        unsure: UNSURE.take(),
     };
     let own = Config {
         model_rate_hz: MODEL_RATE_HZ,
@@ -196,11 +198,12 @@ fn run() -> Result<(), &'static str> {
     print(&stages);
     let vec3 = core::mem::size_of::<Vec3>();
     defmt::println!(
-        "RAM ring {=usize} coach {=usize} floats {=usize} bytes {=usize} stack {=usize}",
+        "RAM ring {=usize} coach {=usize} floats {=usize} bytes {=usize} unsure {=usize} stack {=usize}",
         LENS.ring * vec3,
         LENS.coach * vec3,
         LENS.floats * core::mem::size_of::<f32>(),
         LENS.bytes,
+        LENS.unsure * core::mem::size_of::<u64>(),
         stack::high_water()
     );
     defmt::println!(
