@@ -91,6 +91,11 @@ pub fn replay(log: &[u8], network: Option<&Weights<'_>>) -> Result<Replay> {
 }
 
 fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
+    // The bundled coaches' names, as CoachSelect numbers them.
+    let names: Vec<String> = coaches::all()?
+        .iter()
+        .map(|c| c.name().to_string())
+        .collect();
     let mut reader = LogReader::new(log)?;
     let (mut swings, mut text, mut refused) = (Vec::new(), String::new(), Vec::new());
     let (mut pages, mut sent) = (Vec::new(), Vec::new());
@@ -110,8 +115,11 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
                 Outcome::Refused(r) => return refused.push(r.to_string()),
             };
             let start_s = swing.start_us as f64 * 1e-6;
+            let coach = names
+                .get(usize::from(swing.coach))
+                .map_or("?", String::as_str);
             let heading = format!(
-                "swing {} at {start_s:.2} s ({} frames)",
+                "swing {} at {start_s:.2} s ({} frames) against the {coach}",
                 swing.number, swing.frames
             );
             let _ = write!(text, "{heading}:");
@@ -124,6 +132,7 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
             });
             let mut entry = json!({
                 "swing": swing.number, "start_s": start_s, "frames": swing.frames, "rate_hz": rate_hz,
+                "coach": coach,
             });
             match result {
                 Ok((report, _)) => {

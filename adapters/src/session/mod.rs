@@ -496,7 +496,7 @@ impl<'b> Session<'b> {
             ..
         } = student;
         let joints = skeleton.len();
-        let (swings, config) = (&mut self.swings, self.config);
+        let (swings, config, coach) = (&mut self.swings, self.config, self.coach);
         let (virtual_coach, floats, bytes) = (
             &mut *self.virtual_coach,
             &mut *self.floats,
@@ -516,6 +516,7 @@ impl<'b> Session<'b> {
                         number: *swings,
                         start_us: at(window.start),
                         frames: window.len,
+                        coach,
                     };
                     let error = ScoreError::Events {
                         student: true,
@@ -528,6 +529,7 @@ impl<'b> Session<'b> {
                 number: *swings,
                 start_us: at(window.start + span.start as u64),
                 frames: span.len(),
+                coach,
             };
             let student = &frames[span.start * joints..span.end * joints];
             let coach = &mut virtual_coach[coach_swing.start * joints..coach_swing.end * joints];

@@ -17,6 +17,8 @@ pub struct Swing {
     pub start_us: u64,
     /// Its frames at the model rate.
     pub frames: usize,
+    /// The coach reference it was scored against (as `CoachSelect` numbers them).
+    pub coach: u16,
 }
 
 /// The two swings a report compares, on the student's skeleton: what a report view draws.
