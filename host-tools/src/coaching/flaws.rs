@@ -123,6 +123,8 @@ pub const OFFSET_HALF_S: f32 = 0.1;
 
 /// A displacement counts toward the truth when it is at least this share of the flaw's largest.
 pub const TRUTH_SHARE: f32 = 0.7;
+/// A displacement shorter than this (metres) shows nothing.
+pub const SHOWN_M: f32 = 0.01;
 
 /// A flawed swing and what it should be told.
 pub struct Planted {
@@ -160,7 +162,12 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
         true => moved.retarget_analytic(&moved).unwrap_or(moved),
         false => moved,
     };
-    let stance = Stance::new(skeleton, warped.frame(0), lead);
+    // Each swing in its own stance frame, as the report sees it: a flaw that moves the feet
+    // with the rest (a whole body shifted at address) shows nothing.
+    let (stance_flawed, stance_clean) = (
+        Stance::new(skeleton, swing.frame(0), lead),
+        Stance::new(skeleton, warped.frame(0), lead),
+    );
     let at = |m: &Motion, t: f32, k: usize| {
         let x = (t * m.rate_hz).clamp(0.0, (m.frames() - 1) as f32);
         let (i, w) = (x.floor() as usize, x.fract());
@@ -174,14 +181,14 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
             let Some(joint) = skeleton.joint(k) else {
                 continue;
             };
-            let d = stance.local(at(&swing, t, k)) - stance.local(at(&warped, t, k));
+            let d = stance_flawed.local(at(&swing, t, k)) - stance_clean.local(at(&warped, t, k));
             moved.push((*e, joint, d));
         }
     }
     let largest = moved.iter().map(|m| m.2.norm()).fold(0.0, f32::max);
     let mut truths: Vec<Truth> = moved
         .iter()
-        .filter(|m| largest > 0.0 && m.2.norm() >= TRUTH_SHARE * largest)
+        .filter(|m| m.2.norm() >= (TRUTH_SHARE * largest).max(SHOWN_M))
         .map(|&(event, joint, d)| Truth::Spatial {
             event,
             joint,
