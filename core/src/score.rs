@@ -8,13 +8,21 @@
 //! - **Score**: `100 · exp(−(Σ_events p / SPATIAL_POINTS_M + Σ_phases q / TEMPO_POINTS))`:
 //!   `p` is the event's worst joint's [`excess`] over the larger of [`SPATIAL_THRESHOLD_M`] and
 //!   [`NOISE_FACTOR`] times its uncertainty, `q` a phase's excess of `|ln ratio|` over
-//!   `ln(1 + TEMPO_TOLERANCE)`. Identical swings score 100 (to rounding); the score falls
+//!   `ln(1 + TEMPO_TOLERANCE)` (the score is a measure, not a verdict: a tempo change counts
+//!   whatever its uncertainty). Identical swings score 100 (to rounding); the score falls
 //!   strictly as a deviation or a tempo change grows, by nearly nothing while it is within its
-//!   noise; a 10 cm offset at one event costs 10 points, a phase 30 % slower 11.
-//! - **Tempo**: each phase's duration, student over coach; beyond ±[`TEMPO_TOLERANCE`] the
-//!   verdict is `slow` or `fast`.
+//!   noise; on a clean input a 10 cm offset at one event costs 10 points, a phase 30 % slower
+//!   11.
+//! - **Event timing**: each of the student's events may be found early or late by about as
+//!   long as the hands' velocity takes to change by its noise there (the velocity the still
+//!   set-up shows), at least [`EVENT_TIMING_S`].
+//! - **Tempo**: each phase's duration, student over coach, with its uncertainty from the event
+//!   timing; where the ratio is past ±[`TEMPO_TOLERANCE`] by more than [`TEMPO_CONFIDENCE`]
+//!   times its uncertainty the verdict is `slow` or `fast`.
 //! - **Spatial**: at each event the student's pose at its time against the coach's at its own
-//!   (see [`compare`]), each joint with its uncertainty.
+//!   (see [`compare`]), each joint with its uncertainty along its offset: the wander of its
+//!   offset over the swing per axis (a camera's depth axis is noisier), and along its path its
+//!   speed times the event's timing uncertainty.
 //! - **Stance frame**: origin between the feet at address, `toward_target` from the trail foot
 //!   to the lead foot (horizontal), `toward_ball` the horizontal direction the chest faces
 //!   (the side it leans out to, past the hips), `up` = +Y; each swing in its own frame, so a pelvis that moves toward
@@ -35,8 +43,22 @@ pub const TEMPO_TOLERANCE: f32 = 0.15;
 /// Joint deviations at or below this (metres) are not reported.
 pub const SPATIAL_THRESHOLD_M: f32 = 0.05;
 /// Nor are those within this many times their uncertainty (how much the joint's offset from the
-/// coach wanders over the swing).
-pub const NOISE_FACTOR: f32 = 4.0;
+/// coach wanders over the swing): four standard deviations, the wander over one swing
+/// understating an error that drifts over most of a second by about a fifth (its variance
+/// around the swing's own median is 0.37 to 0.78 of the error's for correlation times of 1 to
+/// 0.2 s over a 1.6 s swing).
+pub const NOISE_FACTOR: f32 = 5.0;
+/// The least an event's timing uncertainty is taken to be, seconds (one standard deviation;
+/// a joint's deviation along its own path is uncertain by its speed times it).
+pub const EVENT_TIMING_S: f32 = 0.005;
+/// The least speed a golfer's hands are taken to sway at in a still set-up, m/s (a standing
+/// body sways at about 1 cm/s): the floor of the velocity noise events are timed against.
+pub const STILL_SWAY_M_S: f32 = 0.01;
+/// The most an event's timing uncertainty is taken to be, seconds.
+pub const MAX_EVENT_TIMING_S: f32 = 0.2;
+/// A tempo verdict needs the ratio past its tolerance by this many times its uncertainty
+/// (about 95 % one-sided confidence).
+pub const TEMPO_CONFIDENCE: f32 = 1.65;
 /// A joint's wander is measured at this many moments spread evenly over the cut swing.
 pub const WANDER_SAMPLES: usize = 32;
 /// Poses are compared averaged over ± this long, seconds (zero phase).
@@ -89,6 +111,15 @@ impl Phase {
     /// All phases in swing order.
     pub const ALL: [Phase; 3] = [Phase::Backswing, Phase::Downswing, Phase::FollowThrough];
 
+    /// The events it runs between.
+    pub const fn events(self) -> (Event, Event) {
+        match self {
+            Phase::Backswing => (Event::Address, Event::Top),
+            Phase::Downswing => (Event::Top, Event::Impact),
+            Phase::FollowThrough => (Event::Impact, Event::Finish),
+        }
+    }
+
     /// The snake_case name used in reports.
     pub const fn name(self) -> &'static str {
         match self {
@@ -135,7 +166,11 @@ pub struct PhaseTempo {
     pub coach_s: f32,
     /// `student_s / coach_s`.
     pub ratio: f32,
-    /// Slow or fast beyond [`TEMPO_TOLERANCE`].
+    /// The ratio's uncertainty relative to it (one standard deviation, from how early or late
+    /// the student's events may be found).
+    pub uncertainty: f32,
+    /// Slow or fast where the ratio is beyond [`TEMPO_TOLERANCE`] by more than
+    /// [`TEMPO_CONFIDENCE`] times its uncertainty, else ok.
     pub verdict: Verdict,
 }
 
@@ -234,6 +269,7 @@ impl core::fmt::Display for Advice {
         match self {
             Advice::Tempo(t) => {
                 let percent = libm::roundf(libm::fabsf(t.ratio - 1.0) * 100.0) as u32;
+                let within = (libm::ceilf(t.ratio * t.uncertainty * 100.0) as u32).max(1);
                 let (adjective, hint) = match t.verdict {
                     Verdict::Fast => ("faster", "take it smoother"),
                     _ => ("slower", "keep it moving"),
@@ -243,7 +279,7 @@ impl core::fmt::Display for Advice {
                     Phase::Downswing => "downswing",
                     Phase::FollowThrough => "follow-through",
                 };
-                write!(f, "Your {phase} is {percent}% {adjective} than the coach's ({:.2} s against {:.2} s): {hint}.", t.student_s, t.coach_s)
+                write!(f, "Your {phase} is {percent} ± {within}% {adjective} than the coach's ({:.2} s against {:.2} s): {hint}.", t.student_s, t.coach_s)
             }
             Advice::Spatial(d) => {
                 let event = match d.event {
@@ -757,42 +793,6 @@ pub fn compare(
         let _ = path.push(p);
     }
 
-    // Tempo.
-    // Between the events' times (the backswing from the takeaway), not their frames.
-    let duration = |e: &SwingEvents, hz: f32, phase: Phase| {
-        let (from, to) = match phase {
-            Phase::Backswing => (Event::Address, Event::Top),
-            Phase::Downswing => (Event::Top, Event::Impact),
-            Phase::FollowThrough => (Event::Impact, Event::Finish),
-        };
-        let at = |event| e.time(event).unwrap_or(0.0);
-        (at(to) - at(from)) / hz
-    };
-    let tempo = Phase::ALL.map(|phase| {
-        let (student_s, coach_s) = (
-            duration(&student_events, student_hz, phase),
-            duration(&coach_events, coach_hz, phase),
-        );
-        let ratio = student_s / coach_s;
-        let verdict = if ratio > 1.0 + TEMPO_TOLERANCE {
-            Verdict::Slow
-        } else if ratio < 1.0 / (1.0 + TEMPO_TOLERANCE) {
-            Verdict::Fast
-        } else {
-            Verdict::Ok
-        };
-        PhaseTempo {
-            phase,
-            student_s,
-            coach_s,
-            ratio,
-            verdict,
-        }
-    });
-    let tempo_ratio = |e: &SwingEvents, hz: f32| {
-        duration(e, hz, Phase::Backswing) / duration(e, hz, Phase::Downswing)
-    };
-
     // Spatial deviations at each event, in each swing's stance frame, the student's pose at its
     // event time against the coach's at its own (a pure offset keeps its direction), both
     // smoothed over ±SPATIAL_SMOOTHING_S.
@@ -819,8 +819,8 @@ pub fn compare(
     // Each joint's usual offset from the coach over the swing, takeaway to finish (per axis the
     // median: a keypoint's constant bias, or a joint another format places elsewhere), and how
     // much the offset wanders around it (per axis 1.4826 times the median absolute deviation,
-    // the standard deviation of a normal spread; the largest axis). Neither moves for a flaw
-    // confined to part of the swing.
+    // the standard deviation of a normal spread). Neither moves for a flaw confined to part of
+    // the swing.
     let (from, to) = (
         student_events.time(Event::Address).unwrap_or(0.0),
         student_events.time(Event::Finish).unwrap_or((n - 1) as f32),
@@ -828,7 +828,7 @@ pub fn compare(
     let samples = (libm::ceilf(to - from) as usize + 1).clamp(1, WANDER_SAMPLES);
     let step = (to - from) / samples.saturating_sub(1).max(1) as f32;
     let mut usual = [Vec3::zeros(); crate::config::MAX_JOINTS];
-    let mut wander = [0.0f32; crate::config::MAX_JOINTS];
+    let mut wander = [Vec3::zeros(); crate::config::MAX_JOINTS];
     let mut series = [[0.0f32; WANDER_SAMPLES]; 3];
     // Whether joint `k` was unsure anywhere within `half` frames (and one more) of frame `x`.
     let unsure_near = |k: usize, x: f32, half: usize| {
@@ -839,6 +839,7 @@ pub fn compare(
         (lo.saturating_sub(half + 1)..=(hi + half + 1).min(n.saturating_sub(1)))
             .any(|f| unsure.at(f) & (1 << k) != 0)
     };
+    let judged = |k: usize| skeleton.joint(k).is_some_and(|j| !j.is_club());
     for (k, (u, w)) in usual
         .iter_mut()
         .zip(wander.iter_mut())
@@ -865,9 +866,119 @@ pub fn compare(
             for v in values.iter_mut() {
                 *v = libm::fabsf(*v - u[axis]);
             }
-            *w = w.max(1.4826 * median(values));
+            w[axis] = 1.4826 * median(values);
         }
     }
+    // Over one swing a keypoint error that drifts for most of a second is seen at a few
+    // independent moments, so one joint's wander can come out far below its noise: no joint's
+    // is taken below the median of all judged joints' (per axis; the pose noise is much the
+    // same for all keypoints, the retargeting's mismatch is not).
+    let mut floor = Vec3::zeros();
+    let mut values = [0.0f32; crate::config::MAX_JOINTS];
+    for axis in 0..3 {
+        let mut count = 0;
+        for (k, w) in wander.iter().enumerate().take(joints) {
+            if judged(k) {
+                values[count] = w[axis];
+                count += 1;
+            }
+        }
+        floor[axis] = median(&mut values[..count]);
+    }
+    for w in wander.iter_mut().take(joints) {
+        *w = w.sup(&floor);
+    }
+
+    // How early or late each of the student's events may be found (seconds, one standard
+    // deviation). Every event is a moment of the hands' motion (a turn, a crossing, a start), so
+    // it moves by about as long as their velocity takes to change by its noise (its vertical
+    // part at the finish, which their height defines), the shorter way; the noise is the
+    // velocity the still set-up shows, before the takeaway.
+    let mut timing = [MAX_EVENT_TIMING_S; 8];
+    let hands = skeleton
+        .find(&[Joint::LeftWrist, Joint::LeftHand])
+        .zip(skeleton.find(&[Joint::RightWrist, Joint::RightHand]));
+    if let (Some((l, r)), Some(takeaway)) = (hands, student_events.time(Event::Address)) {
+        let half = libm::roundf(events::SMOOTHING_S * student_hz) as usize;
+        let at = |x: f32| {
+            (smoothed(student, joints, x, l, half) + smoothed(student, joints, x, r, half)) * 0.5
+        };
+        let velocity = |x: f32| (at(x + 1.0) - at(x - 1.0)) * (0.5 * student_hz);
+        let still = libm::floorf(takeaway) as usize;
+        let noise = libm::sqrtf(
+            (0..=still)
+                .map(|f| velocity(f as f32).norm_squared())
+                .sum::<f32>()
+                / (still + 1) as f32,
+        )
+        .max(STILL_SWAY_M_S);
+        let reach = libm::ceilf(MAX_EVENT_TIMING_S * student_hz) as usize;
+        for (event, spread) in Event::ALL.into_iter().zip(timing.iter_mut()) {
+            let Some(x) = student_events.time(event) else {
+                continue;
+            };
+            let here = velocity(x);
+            let (noise, changed): (f32, &dyn Fn(Vec3) -> f32) = match event {
+                Event::Finish => (noise / libm::sqrtf(3.0), &|v: Vec3| {
+                    libm::fabsf(v.y - here.y)
+                }),
+                _ => (noise, &|v: Vec3| norm(&(v - here))),
+            };
+            for way in [-1.0f32, 1.0] {
+                let mut before = 0.0;
+                for k in 1..=reach {
+                    let now = changed(velocity(x + way * k as f32));
+                    if now >= noise {
+                        let w = (noise - before) / (now - before).max(f32::MIN_POSITIVE);
+                        *spread = spread.min((k as f32 - 1.0 + w) / student_hz);
+                        break;
+                    }
+                    before = now;
+                }
+            }
+            *spread = spread.max(EVENT_TIMING_S);
+        }
+    }
+
+    // Tempo.
+    // Between the events' times (the backswing from the takeaway), not their frames.
+    let duration = |e: &SwingEvents, hz: f32, phase: Phase| {
+        let (from, to) = phase.events();
+        let at = |event| e.time(event).unwrap_or(0.0);
+        (at(to) - at(from)) / hz
+    };
+    let tempo = Phase::ALL.map(|phase| {
+        let (student_s, coach_s) = (
+            duration(&student_events, student_hz, phase),
+            duration(&coach_events, coach_hz, phase),
+        );
+        let ratio = student_s / coach_s;
+        let (from, to) = phase.events();
+        // The ratio's uncertainty, relative (the coach's events are taken as exact).
+        let uncertainty = libm::hypotf(timing[from as usize], timing[to as usize])
+            / student_s.max(f32::MIN_POSITIVE);
+        // A verdict only when the whole interval is past the tolerance.
+        let margin = libm::fabsf(libm::logf(ratio)) - TEMPO_CONFIDENCE * uncertainty;
+        // (A NaN margin, from a zero duration, gives no verdict.)
+        let clear = margin > libm::logf(1.0 + TEMPO_TOLERANCE);
+        let verdict = match (clear, ratio > 1.0) {
+            (false, _) => Verdict::Ok,
+            (true, true) => Verdict::Slow,
+            (true, false) => Verdict::Fast,
+        };
+        PhaseTempo {
+            phase,
+            student_s,
+            coach_s,
+            ratio,
+            uncertainty,
+            verdict,
+        }
+    });
+    let tempo_ratio = |e: &SwingEvents, hz: f32| {
+        duration(e, hz, Phase::Backswing) / duration(e, hz, Phase::Downswing)
+    };
+
     let mut spatial: HVec<Deviation, MAX_DEVIATIONS> = HVec::new();
     let mut spatial_excess = 0.0f32;
     for event in Event::ALL {
@@ -876,7 +987,7 @@ pub fn compare(
         };
         let mut worst: HVec<Deviation, DEVIATIONS_PER_EVENT> = HVec::new();
         let mut event_excess = 0.0f32;
-        for (k, &uncertainty_m) in wander.iter().enumerate().take(joints) {
+        for (k, sigma) in wander.iter().enumerate().take(joints) {
             let Some(joint) = skeleton.joint(k).filter(|j| !j.is_club()) else {
                 continue;
             };
@@ -887,6 +998,19 @@ pub fn compare(
             // This moment's own offset, beyond the joint's usual one.
             let o = offset(k, x, (half_s, half_c)) - usual[k];
             let distance_m = norm(&o);
+            // The wander along the offset's own direction (a camera's depth axis is noisier
+            // than the two across it).
+            // Along the joint's path, an event found early or late (`timing`) moves it by its
+            // speed times that.
+            let c = coach_frame(x, &student_events, &coach_events, ratio);
+            let h = (timing[event as usize] * coach_hz).max(0.5);
+            let along = (stance_c.local(smoothed(coach, joints, c + h, k, half_c))
+                - stance_c.local(smoothed(coach, joints, c - h, k, half_c)))
+                * 0.5;
+            let uncertainty_m = match o.try_normalize(f32::MIN_POSITIVE) {
+                Some(u) => libm::hypotf(norm(&sigma.component_mul(&u)), along.dot(&u)),
+                None => libm::hypotf(norm(sigma), norm(&along)) / libm::sqrtf(3.0),
+            };
             let threshold = SPATIAL_THRESHOLD_M.max(NOISE_FACTOR * uncertainty_m);
             event_excess = event_excess.max(excess(distance_m, threshold, SPATIAL_SOFTNESS_M));
             if distance_m <= threshold {

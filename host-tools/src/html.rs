@@ -336,11 +336,12 @@ fn tempo(out: &mut String, n: usize, r: &Report) {
         }
         let _ = write!(
             out,
-            "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"12\" font-weight=\"bold\">{} (&#215;{:.2})</text>",
-            WIDTH - 100.0,
+            "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"12\" font-weight=\"bold\">{} (&#215;{:.2} &#177; {:.2})</text>",
+            WIDTH - 130.0,
             y + 18.0,
             t.verdict.name(),
-            t.ratio
+            t.ratio,
+            t.ratio * t.uncertainty
         );
     }
     let _ = writeln!(

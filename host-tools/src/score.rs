@@ -178,7 +178,8 @@ pub fn to_json(r: &Report) -> Value {
             "coach_ratio": r.coach_tempo_ratio,
             "phases": r.tempo.iter().map(|t| json!({
                 "phase": t.phase.name(), "student_s": t.student_s, "coach_s": t.coach_s,
-                "ratio": t.ratio, "verdict": t.verdict.name()})).collect::<Vec<_>>(),
+                "ratio": t.ratio, "ratio_uncertainty": t.ratio * t.uncertainty,
+                "verdict": t.verdict.name()})).collect::<Vec<_>>(),
         },
         "spatial": r.spatial.iter().map(|d| json!({
             "event": d.event.name(), "joint": d.joint.name(), "distance_cm": cm(d.distance_m),
@@ -206,11 +207,12 @@ pub fn to_text(r: &Report) -> String {
     for t in &r.tempo {
         let _ = writeln!(
             out,
-            "  {:<15} you {:.2} s, coach {:.2} s, x{:.2}  {}",
+            "  {:<15} you {:.2} s, coach {:.2} s, x{:.2} ± {:.2}  {}",
             t.phase.name(),
             t.student_s,
             t.coach_s,
             t.ratio,
+            t.ratio * t.uncertainty,
             t.verdict.name()
         );
     }

@@ -409,3 +409,40 @@ fn putts_are_scored_like_putts() {
         posecoach_core::score::ScoreError::KindMismatch
     );
 }
+
+#[test]
+fn a_tempo_verdict_waits_for_the_ratio_to_be_clear_of_its_noise() {
+    let coach = driver();
+    let events = run(&coach, &coach).coach_events;
+    let (top, impact) = (
+        events.frame(Event::Top).unwrap(),
+        events.frame(Event::Impact).unwrap(),
+    );
+    let slower = warp_phase(&coach, top, impact, 1.25);
+    // The same swing with the jitter of a poor camera: 2 cm standard deviation per axis on
+    // every joint and frame (uniform, a fixed pseudo-random sequence).
+    let mut noisy = slower.clone();
+    let mut state = 0x2545_f491_u32;
+    for p in &mut noisy.positions {
+        for v in p.iter_mut() {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            *v += (state as f32 / u32::MAX as f32 - 0.5) * 0.07;
+        }
+    }
+    let downswing = |r: &Report| r.tempo[Phase::Downswing as usize];
+    let (clean, jittered) = (
+        downswing(&run(&slower, &coach)),
+        downswing(&run(&noisy, &coach)),
+    );
+    assert_eq!(clean.verdict, Verdict::Slow, "{clean:?}");
+    assert!(
+        jittered.uncertainty > 1.5 * clean.uncertainty,
+        "{clean:?} {jittered:?}"
+    );
+    assert!(
+        (jittered.ratio - 1.0).abs() > 0.15 && jittered.verdict == Verdict::Ok,
+        "{jittered:?}"
+    );
+}
