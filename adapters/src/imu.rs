@@ -453,11 +453,14 @@ impl ImuAdapter {
             self.emit_frame(skeleton, emit);
             let latest = self.tracks().iter().filter_map(|t| t.last_us).min();
             if let (Phase::Tracking { origin_us, next }, Some(latest)) = (&mut self.phase, latest) {
-                let passed = latest
-                    .saturating_sub(*origin_us)
-                    .saturating_mul(self.rate_mhz)
-                    / MHZ_US;
-                *next = (*next + 1).max(passed);
+                // Exact (a saturated product would stop the grid short of a far jump in time,
+                // and this loop would then walk the rest of it one frame at a time).
+                let passed = u128::from(latest.saturating_sub(*origin_us))
+                    * u128::from(self.rate_mhz)
+                    / u128::from(MHZ_US);
+                *next = next
+                    .saturating_add(1)
+                    .max(u64::try_from(passed).unwrap_or(u64::MAX));
             }
             let due = self.output_time();
             let len = usize::from(self.len);
@@ -475,7 +478,9 @@ impl ImuAdapter {
         match self.phase {
             Phase::Calibrating(_) => u64::MAX,
             Phase::Tracking { origin_us, next } => {
-                origin_us.saturating_add(next.saturating_mul(MHZ_US) / self.rate_mhz.max(1))
+                let after =
+                    u128::from(next) * u128::from(MHZ_US) / u128::from(self.rate_mhz.max(1));
+                origin_us.saturating_add(u64::try_from(after).unwrap_or(u64::MAX))
             }
         }
     }
@@ -671,6 +676,31 @@ mod tests {
         }
         // 1.495 s: calibration to 1 s, then a frame every 20 ms.
         assert_eq!(frames, 24);
+    }
+
+    #[test]
+    fn a_far_jump_in_time_is_skipped_not_walked() {
+        // Every sensor jumps ahead by 3e14 to 1.8e19 µs (past where a saturating product of
+        // time and rate stalled the grid): each sample still ends after a frame or two.
+        for jump_us in [300_000_000_000_000u64, 1 << 60, u64::MAX - 10 * STEP_US] {
+            let s = skeleton();
+            let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 60.0).unwrap();
+            for k in 0..250 {
+                for sensor in [3, 7] {
+                    adapter.push(&s, &still(sensor, k), |_, _| {}).unwrap();
+                }
+            }
+            assert!(adapter.is_tracking());
+            let mut frames = 0;
+            for k in 0..5 {
+                for sensor in [3, 7] {
+                    let mut sample = still(sensor, k);
+                    sample.t_us = jump_us + k * STEP_US;
+                    let _ = adapter.push(&s, &sample, |_, _| frames += 1);
+                }
+            }
+            assert!(frames <= 5, "{jump_us}: {frames} frames");
+        }
     }
 
     #[test]
