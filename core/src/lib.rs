@@ -26,6 +26,7 @@
 //! - [`events`]: the eight swing events.
 //! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
 //! - [`score`]: the score, tempo, spatial deviations and advice of one swing.
+//! - [`setup`]: a swing's set-up, and the coach whose set-up (so club) it is nearest.
 //! - [`wire`]: the serial protocol: messages, COBS + CRC-32 framing, a streaming decoder.
 //! - [`int8`]: int8 arithmetic of the quantized retargeter (requantization, dot products, layers).
 //! - [`blob`]: the container of stored assets (header, aligned payload, CRC-32).
@@ -54,6 +55,7 @@ pub mod reference;
 pub mod resample;
 pub mod retarget;
 pub mod score;
+pub mod setup;
 pub mod skeleton;
 pub mod weights;
 pub mod wire;

@@ -259,3 +259,41 @@ fn every_swing_survives_a_noisy_link() {
         check_swings(&name, &replay, &sidecar(&log));
     }
 }
+
+#[test]
+fn without_a_coach_selected_each_swing_gets_the_coach_of_its_club() {
+    use posecoach_adapters::log::LogReader;
+    use posecoach_adapters::session::Outcome;
+    // The bundled coaches, in CoachSelect's numbering, and the club each sidecar swing was made
+    // with (its source file's name).
+    let clubs = ["driver", "iron"];
+    for log in logs() {
+        let name = log.file_name().unwrap().to_string_lossy().into_owned();
+        let bytes = std::fs::read(&log).unwrap();
+        let messages: Vec<Message> = LogReader::new(&bytes)
+            .unwrap()
+            .filter(|m| !matches!(m, Message::CoachSelect { .. }))
+            .collect();
+        let mut chosen = Vec::new();
+        posecoach_cli::coaches::session(None, |session| {
+            for m in &messages {
+                session.handle(m, |outcome| {
+                    if let Outcome::Scored { swing, .. } = outcome {
+                        chosen.push(clubs[usize::from(swing.coach)]);
+                    }
+                });
+            }
+        })
+        .unwrap();
+        let made: Vec<&str> = sidecar(&log)["swings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| {
+                let source = s["source"].as_str().unwrap();
+                *clubs.iter().find(|c| source.contains(*c)).unwrap()
+            })
+            .collect();
+        assert_eq!(chosen, made, "{name}");
+    }
+}

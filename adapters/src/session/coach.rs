@@ -79,7 +79,9 @@ impl Coach<'_> {
     }
 
     /// The coach at `rate_hz` retargeted onto `student` frame by frame with the analytic
-    /// retargeter, into `out` (whole frames of the student).
+    /// retargeter, into `out` (whole frames of the student). (Out of line: its retargeter is
+    /// not on the stack while the network runs.)
+    #[inline(never)]
     pub(super) fn retarget_analytic(
         &self,
         student: &Skeleton,

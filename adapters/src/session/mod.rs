@@ -5,7 +5,11 @@
 //! retargets the selected coach reference onto it once: with the int8 network
 //! ([`Session::with_network`]) when the model rate is the network's, else with the analytic
 //! retargeter; the network's scratch is the detector's ring, free while the session is set
-//! up. `Config` and `CoachSelect` change the settings. Pose frames then go through the [`PoseStream`] onto the model rate's grid, are
+//! up. Until a `CoachSelect` arrives no coach is selected: the first [`MAX_COACHES`] coaches'
+//! set-ups ([`Setup`]: stance, hands and club head out toward the ball) are measured on the
+//! student's skeleton, and each swing is scored against the coach whose set-up its own is
+//! nearest, so against the coach of its club; when that is not the coach in the virtual coach,
+//! it is made anew by the analytic retargeter (the ring then holds the swing). `Config` and `CoachSelect` change the settings. Pose frames then go through the [`PoseStream`] onto the model rate's grid, are
 //! put onto the student's skeleton as rigid bones (the analytic retargeter, which also maps a
 //! stream format other than the profile's), and feed the [`SwingDetector`]. Each swing it
 //! closes is scored where it lies in the detector's ring (its last [`MAX_SWING_FRAMES`]
@@ -46,12 +50,13 @@ use core::ops::Range;
 use posecoach_core::config::MAX_SWING_FRAMES;
 use posecoach_core::detector::{DetectorConfig, SwingDetector, SwingWindow};
 use posecoach_core::dtw::Band;
-use posecoach_core::events::{self, EventError, SwingEvents, STILL_S};
+use posecoach_core::events::{self, EventError, Side, SwingEvents, STILL_S};
 use posecoach_core::format::Format;
 use posecoach_core::math::norm;
 use posecoach_core::resample;
 use posecoach_core::retarget::Fit;
 use posecoach_core::score::{self, Detected, Report, ScoreError, Stance, Unsure};
+use posecoach_core::setup::{self, Setup};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::weights::Weights;
 use posecoach_core::wire::{Config, ImuSample, Message, PoseFrame, SensorLayout, StudentProfile};
@@ -67,6 +72,12 @@ pub const RING_S: f32 = 6.0;
 /// Swings are scored from this long before the set-up to this long after the finish (the
 /// still set-up that the event detector looks for), seconds.
 pub const SWING_MARGIN_S: f32 = STILL_S;
+/// Most coaches a session chooses among by the swing's set-up (further ones only by
+/// `CoachSelect`).
+pub const MAX_COACHES: usize = 4;
+/// A swing's set-up is measured over this long before its takeaway (or as much of it as was
+/// kept), seconds: the golfer standing still over the ball.
+pub const SETUP_S: f32 = 0.5;
 /// Lowest and highest model rates, Hz.
 pub const RATES_HZ: (u16, u16) = (20, 120);
 
@@ -89,6 +100,11 @@ struct Student<'b> {
     coach_swing: Range<usize>,
     /// The events of the virtual coach's swing, found once.
     coach_events: SwingEvents,
+    /// The coach reference the virtual coach was made from.
+    coach: u16,
+    /// Each of the first [`MAX_COACHES`] coaches' set-ups on the student's skeleton, while no
+    /// coach is selected (the virtual coach follows each swing's club).
+    setups: [Option<Setup>; MAX_COACHES],
     /// The IMUs' fusion, in a session with a sensor layout.
     imu: Option<ImuAdapter>,
 }
@@ -99,7 +115,9 @@ pub struct Session<'b> {
     coaches: &'b [Coach<'b>],
     network: Option<&'b Weights<'b>>,
     config: Config,
-    coach: u16,
+    /// The phone's `CoachSelect`; until one, each swing is scored against the coach whose
+    /// set-up its own is nearest ([`setup::nearest`]).
+    selected: Option<u16>,
     profile: Option<Skeleton>,
     layout: Option<SensorLayout>,
     student: Option<Student<'b>>,
@@ -155,7 +173,7 @@ impl<'b> Session<'b> {
             coaches,
             network: None,
             config,
-            coach: 0,
+            selected: None,
             profile: None,
             layout: None,
             student: None,
@@ -212,7 +230,7 @@ impl<'b> Session<'b> {
                 if usize::from(*coach) >= self.coaches.len() {
                     Some(Refusal::UnknownCoach(*coach))
                 } else {
-                    self.reconfigure(|s| &mut s.coach, *coach).err()
+                    self.reconfigure(|s| &mut s.selected, Some(*coach)).err()
                 }
             }
             Message::SensorLayout(layout) => self
@@ -270,10 +288,11 @@ impl<'b> Session<'b> {
         let Some(skeleton) = self.profile.clone() else {
             return Ok(());
         };
+        let first = self.selected.unwrap_or(0);
         let coach = self
             .coaches
-            .get(usize::from(self.coach))
-            .ok_or(Refusal::UnknownCoach(self.coach))?;
+            .get(usize::from(first))
+            .ok_or(Refusal::UnknownCoach(first))?;
         let rate = self.config.model_rate_hz;
         let joints = skeleton.len();
         let detector = match self.layout {
@@ -287,7 +306,17 @@ impl<'b> Session<'b> {
             }
             None => core::mem::take(&mut self.spare),
         };
-        let frames = coach.frames_at(rate);
+        // Without a selection any of the first MAX_COACHES may be made.
+        let candidates = match self.selected {
+            Some(_) => &self.coaches[usize::from(first)..=usize::from(first)],
+            None => &self.coaches[..self.coaches.len().min(MAX_COACHES)],
+        };
+        let frames = candidates
+            .iter()
+            .map(|c| c.frames_at(rate))
+            .max()
+            .unwrap_or(0);
+        let mut setups = [None; MAX_COACHES];
         let checked = SwingDetector::check(&skeleton, detector, ring.len())
             .map_err(Refusal::Detector)
             .and_then(|_| {
@@ -304,31 +333,39 @@ impl<'b> Session<'b> {
                     && self.floats.len() >= needed.floats
                     && self.bytes.len() >= needed.bytes;
                 fits.then_some(()).ok_or(Refusal::Buffers)?;
-                let out = &mut self.virtual_coach[..frames * joints];
-                match network {
-                    Some(w) => coach.retarget_network(w, &skeleton, rate, ring, out),
-                    None => coach.retarget_analytic(&skeleton, rate, out),
-                }
-            })
-            .and_then(|()| {
                 let imu = self
                     .layout
                     .as_ref()
                     .map(|layout| ImuAdapter::new(layout, &skeleton, f32::from(rate)))
                     .transpose()
                     .map_err(Refusal::Imu)?;
-                if let Some(imu) = &imu {
-                    // The coach as the student's IMUs would see them.
-                    for frame in self.virtual_coach.chunks_exact_mut(joints).take(frames) {
-                        let mut seen = [Vec3::zeros(); MAX_JOINTS];
-                        imu.view(&skeleton, frame, &mut seen)
-                            .map_err(Refusal::Imu)?;
-                        frame.copy_from_slice(&seen[..joints]);
+                if self.selected.is_none() {
+                    // A coach that cannot be made for this student is never chosen.
+                    for (setup, c) in setups.iter_mut().zip(candidates) {
+                        let made = make_virtual(
+                            c,
+                            &skeleton,
+                            rate,
+                            None,
+                            imu.as_ref(),
+                            self.virtual_coach,
+                        );
+                        *setup = made.ok().and_then(|(swing, events)| {
+                            let address = swing.start + events.address();
+                            let out = &self.virtual_coach[..swing.end * joints];
+                            setup_of(&skeleton, out, address, events.lead, c.rate_at(rate))
+                        });
                     }
                 }
-                let virtual_coach = &self.virtual_coach[..frames * joints];
-                let (swing, events) = swing_span(&skeleton, virtual_coach, coach.rate_at(rate))
-                    .map_err(Refusal::CoachSwing)?;
+                let network = network.map(|w| (w, &mut *ring));
+                let (swing, events) = make_virtual(
+                    coach,
+                    &skeleton,
+                    rate,
+                    network,
+                    imu.as_ref(),
+                    self.virtual_coach,
+                )?;
                 let stream = PoseStream::new(StreamConfig::new(rate)).map_err(Refusal::Stream)?;
                 Ok((stream, swing, events, imu))
             });
@@ -350,6 +387,8 @@ impl<'b> Session<'b> {
             t0_us: None,
             coach_swing,
             coach_events,
+            coach: first,
+            setups,
             imu,
         });
         Ok(())
@@ -476,13 +515,6 @@ impl<'b> Session<'b> {
         let Some(student) = &mut self.student else {
             return;
         };
-        let Some(coach_hz) = self
-            .coaches
-            .get(usize::from(self.coach))
-            .map(|c| c.rate_at(self.config.model_rate_hz))
-        else {
-            return;
-        };
         let cut = window.len.saturating_sub(MAX_SWING_FRAMES);
         let window = SwingWindow {
             start: window.start + cut as u64,
@@ -493,10 +525,14 @@ impl<'b> Session<'b> {
             detector,
             coach_swing,
             coach_events,
+            coach: made,
+            setups,
+            imu,
             ..
         } = student;
         let joints = skeleton.len();
-        let (swings, config, coach) = (&mut self.swings, self.config, self.coach);
+        let (swings, config, coaches, selected) =
+            (&mut self.swings, self.config, self.coaches, self.selected);
         let (virtual_coach, floats, bytes) = (
             &mut *self.virtual_coach,
             &mut *self.floats,
@@ -509,7 +545,29 @@ impl<'b> Session<'b> {
         let _ = detector.with_window(&window, |frames| {
             *swings += 1;
             let at = |frame: u64| t0_us + (frame as f64 * 1e6 / f64::from(rate)) as u64;
-            let (span, events) = match swing_span(skeleton, frames, rate) {
+            let found = swing_span(skeleton, frames, rate);
+            // Without a selection, the coach whose set-up this swing's is nearest, made when it
+            // is not the one in the virtual coach (by the analytic retargeter: the network's
+            // scratch is the ring, which holds this swing).
+            if let (None, Ok((span, events))) = (selected, &found) {
+                let address = span.start + events.address();
+                let chosen = setup_of(skeleton, frames, address, events.lead, rate)
+                    .and_then(|setup| setup::nearest(&setup, setups.iter().copied()))
+                    .and_then(|c| u16::try_from(c).ok());
+                if let Some((c, coach)) = chosen
+                    .filter(|&c| c != *made)
+                    .and_then(|c| Some((c, coaches.get(usize::from(c))?)))
+                {
+                    let rate = config.model_rate_hz;
+                    if let Ok((swing, events)) =
+                        make_virtual(coach, skeleton, rate, None, imu.as_ref(), virtual_coach)
+                    {
+                        (*coach_swing, *coach_events, *made) = (swing, events, c);
+                    }
+                }
+            }
+            let coach = *made;
+            let (span, events) = match found {
                 Ok(found) => found,
                 Err(error) => {
                     let swing = Swing {
@@ -530,6 +588,12 @@ impl<'b> Session<'b> {
                 start_us: at(window.start + span.start as u64),
                 frames: span.len(),
                 coach,
+            };
+            let Some(coach_hz) = coaches
+                .get(usize::from(coach))
+                .map(|c| c.rate_at(config.model_rate_hz))
+            else {
+                return;
             };
             let student = &frames[span.start * joints..span.end * joints];
             let coach = &mut virtual_coach[coach_swing.start * joints..coach_swing.end * joints];
@@ -574,6 +638,62 @@ impl<'b> Session<'b> {
 /// Whether a session can run with `config`.
 fn valid(config: &Config) -> bool {
     (RATES_HZ.0..=RATES_HZ.1).contains(&config.model_rate_hz) && config.band.radius > 0
+}
+
+/// Makes the virtual coach of `coach` on `skeleton` at the model rate `rate` into the front of
+/// `out`: with the int8 network (its scratch the ring) where given, else the analytic
+/// retargeter; as the student's IMUs would see it in a session with them. Returns its swing and
+/// events, as [`swing_span`]. (Kept out of line: three callers, one copy in flash.)
+#[inline(never)]
+fn make_virtual(
+    coach: &Coach<'_>,
+    skeleton: &Skeleton,
+    rate: u16,
+    network: Option<(&Weights<'_>, &mut [Vec3])>,
+    imu: Option<&ImuAdapter>,
+    out: &mut [Vec3],
+) -> Result<(Range<usize>, SwingEvents), Refusal> {
+    let joints = skeleton.len();
+    let out = out
+        .get_mut(..coach.frames_at(rate) * joints)
+        .ok_or(Refusal::Buffers)?;
+    match network {
+        Some((w, ring)) => coach.retarget_network(w, skeleton, rate, ring, out)?,
+        None => coach.retarget_analytic(skeleton, rate, out)?,
+    }
+    if let Some(imu) = imu {
+        seen_by(imu, skeleton, out)?;
+    }
+    swing_span(skeleton, out, coach.rate_at(rate)).map_err(Refusal::CoachSwing)
+}
+
+/// `frames` (whole frames of `skeleton`) as the student's IMUs would see them: the coach seen
+/// the way the student is. (Out of line, so that its frame is not on the stack while a coach
+/// is retargeted.)
+#[inline(never)]
+fn seen_by(imu: &ImuAdapter, skeleton: &Skeleton, frames: &mut [Vec3]) -> Result<(), Refusal> {
+    let joints = skeleton.len();
+    for frame in frames.chunks_exact_mut(joints) {
+        let mut seen = [Vec3::zeros(); MAX_JOINTS];
+        imu.view(skeleton, frame, &mut seen).map_err(Refusal::Imu)?;
+        frame.copy_from_slice(&seen[..joints]);
+    }
+    Ok(())
+}
+
+/// The set-up of the swing in `positions` (at `rate_hz`, events `events`): over its still
+/// frames before the takeaway ([`STILL_S`]).
+fn setup_of(
+    skeleton: &Skeleton,
+    positions: &[Vec3],
+    address: usize,
+    lead: Side,
+    rate_hz: f32,
+) -> Option<Setup> {
+    let joints = skeleton.len();
+    let from = address.saturating_sub((SETUP_S * rate_hz) as usize);
+    let still = positions.get(from * joints..(address + 1) * joints)?;
+    Setup::new(skeleton, still, lead)
 }
 
 /// The swing in `positions`: its frames from [`SWING_MARGIN_S`] before the set-up to as long

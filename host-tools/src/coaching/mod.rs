@@ -4,7 +4,8 @@
 //! statures and proportions ([`bodies`]): a clean swing, with flaws planted in it
 //! ([`flaws`]), laid out as a session (T-pose, set-up, waggle, swing, return), filmed by a
 //! phone ([`crate::phone`]) facing the golfer or down the line at 30 or 60 frames per
-//! second, and sent through the device's own session with the bundled coach of the swing's club.
+//! second, and sent through the device's own session with the bundled coach of the swing's club
+//! (and once more without it, to see whether the device chooses that coach from the set-up).
 //! Every figure compares the report with the planted truth:
 //!
 //! - **timing**: the takeaway (the first frame of the swing: the golfer is still before it),
@@ -143,6 +144,8 @@ struct Outcome1 {
     shown_m: f32,
     first: Option<String>,
     right_first: bool,
+    /// Without a `CoachSelect`, the device chose the coach of the swing's own club.
+    right_coach: bool,
     any_advice: bool,
     tempo_verdict: bool,
     score: Option<f32>,
@@ -392,11 +395,14 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
             band: Band::DEFAULT,
         }),
     );
-    messages.insert(2, Message::CoachSelect { coach: clean.coach });
+    // The coach of the swing's club, as a phone that knows the club selects it; the coach the
+    // device chooses from the swing's set-up without one is measured on its own.
+    let mut selected = messages.clone();
+    selected.insert(2, Message::CoachSelect { coach: clean.coach });
 
     if let Some(dir) = logs_out {
         let mut bytes = posecoach_adapters::log::header().to_vec();
-        for m in &messages {
+        for m in &selected {
             let mut frame = [0u8; MAX_FRAME];
             let n = wire::encode(m, &mut frame)?;
             bytes.extend_from_slice(&frame[..n]);
@@ -404,42 +410,28 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
         let path = dir.join(format!("case_{}.pclog", case.seed));
         std::fs::write(&path, bytes).with_context(|| format!("writing {}", path.display()))?;
     }
-    let mut scored: Vec<(f64, usize, std::result::Result<Report, String>)> = Vec::new();
-    let mut refused = Vec::new();
-    coaches::session(None, |session| {
-        for m in &messages {
-            session.handle(m, |outcome| match outcome {
-                Outcome::Scored { swing, report, .. } => {
-                    scored.push((
-                        swing.start_us as f64 * 1e-6,
-                        swing.frames,
-                        Ok(report.clone()),
-                    ));
-                }
-                Outcome::Unscored { swing, error } => {
-                    scored.push((
-                        swing.start_us as f64 * 1e-6,
-                        swing.frames,
-                        Err(error.to_string()),
-                    ));
-                }
-                Outcome::Refused(r) => refused.push(r.to_string()),
-            });
-        }
-    })?;
+    let (scored, refused) = replay(&selected)?;
+    let model_s = 1.0 / f64::from(MODEL_HZ);
+    let overlaps =
+        |at: f64, frames: usize| at < swing_end_s && at + frames as f64 * model_s > start_s;
+    let chosen = replay(&messages)?
+        .0
+        .into_iter()
+        .find(|(at, frames, _, _)| overlaps(*at, *frames))
+        .map(|(_, _, coach, _)| coach);
 
     // The swing that overlaps the planted one; any other is false.
-    let model_s = 1.0 / f64::from(MODEL_HZ);
     let (mut ours, mut others): (Vec<_>, Vec<_>) = scored
         .into_iter()
-        .partition(|(at, frames, _)| *at < swing_end_s && at + *frames as f64 * model_s > start_s);
-    others.retain(|(_, _, r)| r.is_ok());
+        .partition(|(at, frames, _, _)| overlaps(*at, *frames));
+    others.retain(|(_, _, _, r)| r.is_ok());
     let mut outcome = Outcome1 {
         false_swings: others.len() + ours.len().saturating_sub(1),
         shown_m: planted.shown_m,
         ..Outcome1::default()
     };
-    let Some((at, _, result)) = ours.drain(..).next() else {
+    outcome.right_coach = chosen == Some(clean.coach);
+    let Some((at, _, _, result)) = ours.drain(..).next() else {
         if let Some(r) = refused.first() {
             outcome.error = Some(format!(
                 "{} messages refused, the first: {r}",
@@ -595,6 +587,31 @@ fn imu_messages(
     Ok(messages)
 }
 
+/// A swing found in a session, and how it went: start (s), frames, the coach, the report.
+type Scored = (f64, usize, u16, std::result::Result<Report, String>);
+
+/// What the device's session makes of `messages`: the swings it found, and its refusals.
+fn replay(messages: &[Message]) -> Result<(Vec<Scored>, Vec<String>)> {
+    let mut scored: Vec<Scored> = Vec::new();
+    let mut refused = Vec::new();
+    coaches::session(None, |session| {
+        for m in messages {
+            session.handle(m, |outcome| match outcome {
+                Outcome::Scored { swing, report, .. } => {
+                    let at = swing.start_us as f64 * 1e-6;
+                    scored.push((at, swing.frames, swing.coach, Ok(report.clone())));
+                }
+                Outcome::Unscored { swing, error } => {
+                    let at = swing.start_us as f64 * 1e-6;
+                    scored.push((at, swing.frames, swing.coach, Err(error.to_string())));
+                }
+                Outcome::Refused(r) => refused.push(r.to_string()),
+            });
+        }
+    })?;
+    Ok((scored, refused))
+}
+
 /// Whether `advice` states one of the planted flaws.
 fn states(advice: &Advice, planted: &Planted) -> bool {
     planted.truths.iter().any(|t| match (t, advice) {
@@ -686,6 +703,7 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
         "input": row,
         "cases": pairs.len(),
         "found": share(found.len(), pairs.len()),
+        "right_coach": share(pairs.iter().filter(|(_, o)| o.right_coach).count(), pairs.len()),
         "false_swings": pairs.iter().map(|(_, o)| o.false_swings).sum::<usize>(),
         "errors": pairs.iter().filter(|(_, o)| o.error.is_some()).count(),
         "takeaway_ms": timing(0), "top_ms": timing(1), "impact_ms": timing(2),
@@ -719,7 +737,7 @@ fn case_json(clean: &Clean, case: &Case, o: &Outcome1) -> Value {
             Input::Imu { .. } => json!(null),
         },
         "shown_cm": o.shown_m * 100.0, "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
-        "tempo_error": o.tempo_error, "score": o.score, "first": o.first, "right_first": o.right_first,
+        "tempo_error": o.tempo_error, "score": o.score, "first": o.first, "right_first": o.right_first, "right_coach": o.right_coach,
         "any_advice": o.any_advice, "error": o.error,
     })
 }
@@ -732,7 +750,7 @@ fn table(doc: &Value) -> String {
         "coaching benchmark: {} cases, {} bodies, sources {}",
         doc["cases"], doc["bodies"], doc["sources"]
     );
-    let _ = writeln!(out, "input | found | false | takeaway ms | top ms | impact ms | tempo err | false tempo | false advice | recall@1 offset>=8cm / tempo / body | score unflawed / 10-15cm / tempo 30-50%");
+    let _ = writeln!(out, "input | found | coach | false | takeaway ms | top ms | impact ms | tempo err | false tempo | false advice | recall@1 offset>=8cm / tempo / body | score unflawed / 10-15cm / tempo 30-50%");
     let pct = |v: &Value| {
         v["share"]
             .as_f64()
@@ -748,9 +766,10 @@ fn table(doc: &Value) -> String {
         let r = &l["recall_at_1"];
         let _ = writeln!(
             out,
-            "{:>8} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {}",
+            "{:>8} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {}",
             l["input"].as_str().unwrap_or("-"),
             pct(&l["found"]),
+            pct(&l["right_coach"]),
             l["false_swings"],
             q(&l["takeaway_ms"]),
             q(&l["top_ms"]),
