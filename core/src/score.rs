@@ -166,9 +166,9 @@ pub struct PhaseTempo {
     pub coach_s: f32,
     /// `student_s / coach_s`.
     pub ratio: f32,
-    /// The ratio's uncertainty relative to it (one standard deviation, from how early or late
-    /// the student's events may be found).
-    pub uncertainty: f32,
+    /// The ratio's uncertainty (one standard deviation, from how early or late the student's
+    /// events may be found).
+    pub ratio_uncertainty: f32,
     /// Slow or fast where the ratio is beyond [`TEMPO_TOLERANCE`] by more than
     /// [`TEMPO_CONFIDENCE`] times its uncertainty, else ok.
     pub verdict: Verdict,
@@ -226,8 +226,9 @@ pub struct Deviation {
     pub joint: Joint,
     /// Length of the offset, metres.
     pub distance_m: f32,
-    /// Its uncertainty, metres: how much this joint's offset from the coach wanders over the
-    /// whole swing (pose noise, and what the retargeting cannot match).
+    /// Its uncertainty along it, metres: how much this joint's offset from the coach wanders
+    /// over the whole swing (pose noise, and what the retargeting cannot match), and how far
+    /// the joint moves within the event's timing uncertainty.
     pub uncertainty_m: f32,
     /// Student minus coach in the stance frame: toward target, toward ball, up (metres).
     pub offset_m: [f32; 3],
@@ -269,7 +270,7 @@ impl core::fmt::Display for Advice {
         match self {
             Advice::Tempo(t) => {
                 let percent = libm::roundf(libm::fabsf(t.ratio - 1.0) * 100.0) as u32;
-                let within = (libm::ceilf(t.ratio * t.uncertainty * 100.0) as u32).max(1);
+                let within = (libm::ceilf(t.ratio_uncertainty * 100.0) as u32).max(1);
                 let (adjective, hint) = match t.verdict {
                     Verdict::Fast => ("faster", "take it smoother"),
                     _ => ("slower", "keep it moving"),
@@ -954,11 +955,11 @@ pub fn compare(
         );
         let ratio = student_s / coach_s;
         let (from, to) = phase.events();
-        // The ratio's uncertainty, relative (the coach's events are taken as exact).
-        let uncertainty = libm::hypotf(timing[from as usize], timing[to as usize])
+        // The ratio's relative uncertainty (the coach's events are taken as exact), and a
+        // verdict only when the whole interval is past the tolerance.
+        let relative = libm::hypotf(timing[from as usize], timing[to as usize])
             / student_s.max(f32::MIN_POSITIVE);
-        // A verdict only when the whole interval is past the tolerance.
-        let margin = libm::fabsf(libm::logf(ratio)) - TEMPO_CONFIDENCE * uncertainty;
+        let margin = libm::fabsf(libm::logf(ratio)) - TEMPO_CONFIDENCE * relative;
         // (A NaN margin, from a zero duration, gives no verdict.)
         let clear = margin > libm::logf(1.0 + TEMPO_TOLERANCE);
         let verdict = match (clear, ratio > 1.0) {
@@ -971,7 +972,7 @@ pub fn compare(
             student_s,
             coach_s,
             ratio,
-            uncertainty,
+            ratio_uncertainty: ratio * relative,
             verdict,
         }
     });
@@ -987,8 +988,12 @@ pub fn compare(
         };
         let mut worst: HVec<Deviation, DEVIATIONS_PER_EVENT> = HVec::new();
         let mut event_excess = 0.0f32;
+        // The coach's frame at this event, and the coach frames the event's timing
+        // uncertainty spans.
+        let c = coach_frame(x, &student_events, &coach_events, ratio);
+        let h = (timing[event as usize] * coach_hz).max(0.5);
         for (k, sigma) in wander.iter().enumerate().take(joints) {
-            let Some(joint) = skeleton.joint(k).filter(|j| !j.is_club()) else {
+            let Some(joint) = skeleton.joint(k).filter(|_| judged(k)) else {
                 continue;
             };
             // A joint the stream was unsure of around the event is not judged there.
@@ -998,12 +1003,9 @@ pub fn compare(
             // This moment's own offset, beyond the joint's usual one.
             let o = offset(k, x, (half_s, half_c)) - usual[k];
             let distance_m = norm(&o);
-            // The wander along the offset's own direction (a camera's depth axis is noisier
-            // than the two across it).
-            // Along the joint's path, an event found early or late (`timing`) moves it by its
-            // speed times that.
-            let c = coach_frame(x, &student_events, &coach_events, ratio);
-            let h = (timing[event as usize] * coach_hz).max(0.5);
+            // The uncertainty along the offset: the wander in that direction (a camera's depth
+            // axis is noisier than the two across it) and, along the joint's path, how far it
+            // moves in the event's timing uncertainty.
             let along = (stance_c.local(smoothed(coach, joints, c + h, k, half_c))
                 - stance_c.local(smoothed(coach, joints, c - h, k, half_c)))
                 * 0.5;

@@ -341,7 +341,7 @@ fn tempo(out: &mut String, n: usize, r: &Report) {
             y + 18.0,
             t.verdict.name(),
             t.ratio,
-            t.ratio * t.uncertainty
+            t.ratio_uncertainty
         );
     }
     let _ = writeln!(

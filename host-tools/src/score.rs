@@ -178,7 +178,7 @@ pub fn to_json(r: &Report) -> Value {
             "coach_ratio": r.coach_tempo_ratio,
             "phases": r.tempo.iter().map(|t| json!({
                 "phase": t.phase.name(), "student_s": t.student_s, "coach_s": t.coach_s,
-                "ratio": t.ratio, "ratio_uncertainty": t.ratio * t.uncertainty,
+                "ratio": t.ratio, "ratio_uncertainty": t.ratio_uncertainty,
                 "verdict": t.verdict.name()})).collect::<Vec<_>>(),
         },
         "spatial": r.spatial.iter().map(|d| json!({
@@ -212,7 +212,7 @@ pub fn to_text(r: &Report) -> String {
             t.student_s,
             t.coach_s,
             t.ratio,
-            t.ratio * t.uncertainty,
+            t.ratio_uncertainty,
             t.verdict.name()
         );
     }

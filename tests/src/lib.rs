@@ -3,6 +3,21 @@
 
 use std::path::PathBuf;
 
+/// Adds uniform noise of `width` metres peak to peak (standard deviation `width / √12`) to
+/// every coordinate of `positions`: a fixed xorshift sequence from `seed`, so a test sees the
+/// same noise on every run.
+pub fn jitter(positions: &mut [posecoach_core::Vec3], width: f32, seed: u64) {
+    let mut state = seed;
+    for p in positions {
+        for v in p.iter_mut() {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            *v += ((state >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * width;
+        }
+    }
+}
+
 /// A committed fixture in `tests/fixtures`.
 pub fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

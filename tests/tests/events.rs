@@ -9,7 +9,7 @@
 
 use posecoach_core::events::{detect, Event, Side};
 use posecoach_io as io;
-use posecoach_tests::{fixture, Warp};
+use posecoach_tests::{fixture, jitter, Warp};
 
 /// Allowed distance from a hand label, in frames at 60 Hz.
 const TOLERANCE_FRAMES: i32 = 2;
@@ -73,15 +73,7 @@ fn assert_near(events: &posecoach_core::events::SwingEvents, expected: &[f32], w
 fn events_survive_pose_noise() {
     let (mut swing, labels) = driver();
     // Uniform noise of ±12 mm per coordinate: 7 mm standard deviation, 12 mm per joint.
-    let mut state = 0x2545_F491_4F6C_DD1Du64;
-    for p in &mut swing.positions {
-        for v in p.iter_mut() {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            *v += ((state >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * 0.024;
-        }
-    }
+    jitter(&mut swing.positions, 0.024, 0x2545_F491_4F6C_DD1D);
     let expected: Vec<f32> = labels.iter().map(|&l| l as f32).collect();
     assert_near(&detected(&swing), &expected, "noisy driver");
 }
@@ -253,15 +245,7 @@ fn a_takeaway_timed_against_the_coach_follows_a_slow_backswing_through_noise() {
         positions,
         ..slow
     };
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
-    for p in &mut student.positions {
-        for v in p.iter_mut() {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            *v += ((state >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * 0.04;
-        }
-    }
+    jitter(&mut student.positions, 0.04, 0x9E37_79B9_7F4A_7C15);
     let (s, c) = (detected(&student), detected(&coach));
     let s_hz = student.rate_hz;
     let found = takeaway_against(

@@ -10,7 +10,7 @@ use posecoach_core::joint::Joint;
 use posecoach_core::score::{score, scratch_len, Advice, Direction, Phase, Report, Verdict};
 use posecoach_core::Vec3;
 use posecoach_io::{self as io, Motion};
-use posecoach_tests::{fixture, Warp};
+use posecoach_tests::{fixture, jitter, Warp};
 
 /// The default band: 10 frames at 60 Hz around the event-anchored guide.
 const BAND: Band = Band::DEFAULT;
@@ -420,17 +420,9 @@ fn a_tempo_verdict_waits_for_the_ratio_to_be_clear_of_its_noise() {
     );
     let slower = warp_phase(&coach, top, impact, 1.25);
     // The same swing with the jitter of a poor camera: 2 cm standard deviation per axis on
-    // every joint and frame (uniform, a fixed pseudo-random sequence).
+    // every joint and frame.
     let mut noisy = slower.clone();
-    let mut state = 0x2545_f491_u32;
-    for p in &mut noisy.positions {
-        for v in p.iter_mut() {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            *v += (state as f32 / u32::MAX as f32 - 0.5) * 0.07;
-        }
-    }
+    jitter(&mut noisy.positions, 0.07, 0x2545_F491);
     let downswing = |r: &Report| r.tempo[Phase::Downswing as usize];
     let (clean, jittered) = (
         downswing(&run(&slower, &coach)),
@@ -438,7 +430,7 @@ fn a_tempo_verdict_waits_for_the_ratio_to_be_clear_of_its_noise() {
     );
     assert_eq!(clean.verdict, Verdict::Slow, "{clean:?}");
     assert!(
-        jittered.uncertainty > 1.5 * clean.uncertainty,
+        jittered.ratio_uncertainty > 1.5 * clean.ratio_uncertainty,
         "{clean:?} {jittered:?}"
     );
     assert!(

@@ -9,11 +9,12 @@
 //! set-ups ([`Setup`]: stance, hands and club head out toward the ball) are measured on the
 //! student's skeleton, and each swing is scored against the coach whose set-up its own is
 //! nearest, so against the coach of its club; when that is not the coach in the virtual coach,
-//! it is made anew by the analytic retargeter (the ring then holds the swing). `Config` and `CoachSelect` change the settings. Pose frames then go through the [`PoseStream`] onto the model rate's grid, are
-//! put onto the student's skeleton as rigid bones (the analytic retargeter, which also maps a
-//! stream format other than the profile's), and feed the [`SwingDetector`]. Each swing it
-//! closes is scored where it lies in the detector's ring (its last [`MAX_SWING_FRAMES`]
-//! frames, [`SwingDetector::with_window`]), cut to the swing itself
+//! it is made anew by the analytic retargeter (the ring then holds the swing). `Config` and
+//! `CoachSelect` change the settings. Pose frames then go through the [`PoseStream`] onto the
+//! model rate's grid, are put onto the student's skeleton as rigid bones (the analytic
+//! retargeter, which also maps a stream format other than the profile's), and feed the
+//! [`SwingDetector`]. Each swing it closes is scored where it lies in the detector's ring (its
+//! last [`MAX_SWING_FRAMES`] frames, [`SwingDetector::with_window`]), cut to the swing itself
 //! (set-up to finish with [`SWING_MARGIN_S`] either side, as is the coach's reference) and
 //! scored against the virtual coach; the caller hears of it as an [`Outcome`]. A break in the stream drops a
 //! swing in progress. Every buffer belongs to the caller ([`Buffers`], sized by
@@ -558,6 +559,8 @@ impl<'b> Session<'b> {
                     .filter(|&c| c != *made)
                     .and_then(|c| Some((c, coaches.get(usize::from(c))?)))
                 {
+                    // It cannot fail: the same coach was made onto the same skeleton, at the same
+                    // rate and through the same IMU layout, when its set-up was measured.
                     let rate = config.model_rate_hz;
                     if let Ok((swing, events)) =
                         make_virtual(coach, skeleton, rate, None, imu.as_ref(), virtual_coach)
@@ -681,8 +684,8 @@ fn seen_by(imu: &ImuAdapter, skeleton: &Skeleton, frames: &mut [Vec3]) -> Result
     Ok(())
 }
 
-/// The set-up of the swing in `positions` (at `rate_hz`, events `events`): over its still
-/// frames before the takeaway ([`STILL_S`]).
+/// The set-up of the swing in `positions` (at `rate_hz`) whose takeaway is at frame
+/// `address`: over the [`SETUP_S`] before it.
 fn setup_of(
     skeleton: &Skeleton,
     positions: &[Vec3],

@@ -410,11 +410,11 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
         let path = dir.join(format!("case_{}.pclog", case.seed));
         std::fs::write(&path, bytes).with_context(|| format!("writing {}", path.display()))?;
     }
-    let (scored, refused) = replay(&selected)?;
+    let (scored, refused) = run_session(&selected)?;
     let model_s = 1.0 / f64::from(MODEL_HZ);
     let overlaps =
         |at: f64, frames: usize| at < swing_end_s && at + frames as f64 * model_s > start_s;
-    let chosen = replay(&messages)?
+    let chosen = run_session(&messages)?
         .0
         .into_iter()
         .find(|(at, frames, _, _)| overlaps(*at, *frames))
@@ -591,7 +591,7 @@ fn imu_messages(
 type Scored = (f64, usize, u16, std::result::Result<Report, String>);
 
 /// What the device's session makes of `messages`: the swings it found, and its refusals.
-fn replay(messages: &[Message]) -> Result<(Vec<Scored>, Vec<String>)> {
+fn run_session(messages: &[Message]) -> Result<(Vec<Scored>, Vec<String>)> {
     let mut scored: Vec<Scored> = Vec::new();
     let mut refused = Vec::new();
     coaches::session(None, |session| {
