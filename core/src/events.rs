@@ -434,6 +434,19 @@ fn takeaway(hands: impl Fn(usize) -> Vec3, home: Vec3, from: usize, top: usize) 
 /// the hands' progress: the 13 from 0.1 to 0.7 in steps of 0.05.
 const PROGRESS_SHARES: (f32, f32, usize) = (0.1, 0.05, 13);
 
+/// A student's takeaway timed against a coach's backswing ([`takeaway_against`]), with what
+/// moves it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Takeaway {
+    /// The takeaway, frames (between frames).
+    pub time: f32,
+    /// How much earlier it comes for each frame later the top is found: the backswing's length
+    /// moves by `1 + top_gain` times the top's error.
+    pub top_gain: f32,
+    /// Its standard deviation from the crossings' scatter about the fit alone, frames.
+    pub spread: f32,
+}
+
 /// The student's takeaway (frames, between frames) timed against the coach's: the arms'
 /// (wrists and elbows) progress along the line from their set-up to their top pose passes 10 %
 /// to 70 % of the way at moments that, were the student's backswing the coach's run at its own pace, would
@@ -450,7 +463,7 @@ pub fn takeaway_against(
     coach: &[Vec3],
     coach_events: &SwingEvents,
     coach_hz: f32,
-) -> Option<f32> {
+) -> Option<Takeaway> {
     // The arms: wrists (or hands) and elbows, whose pose errors are independent.
     let arms = [
         skeleton.find(&[Joint::LeftWrist, Joint::LeftHand])?,
@@ -544,7 +557,10 @@ pub fn takeaway_against(
         passes(&s, &s_line, start, s_top as usize),
     );
     let c_span = c_top - c0;
-    let (mut num, mut den) = (0.0f32, 0.0f32);
+    // Per crossing: the coach's share f of its backswing's time there, the weight, and the
+    // student's moment.
+    let mut points = [(0.0f32, 0.0f32, 0.0f32); SHARES];
+    let mut count = 0;
     for (c_at, s_at) in c_at.into_iter().zip(s_at) {
         let (c_at, s_at) = (c_at?, s_at?);
         // s_at = t0 + f (s_top − t0), f the coach's share of its backswing's time there. Pose
@@ -556,11 +572,40 @@ pub fn takeaway_against(
             - progress(&c, &c_line.0, &c_line.1, k.saturating_sub(1)))
             * 0.5
             * c_span;
-        let w = pace * pace;
-        num += w * (1.0 - f) * (s_at - f * s_top);
-        den += w * (1.0 - f) * (1.0 - f);
+        points[count] = (f, pace * pace, s_at);
+        count += 1;
     }
-    (den > 0.0).then(|| num / den)
+    let points = &points[..count];
+    let (num, den, gain) =
+        points
+            .iter()
+            .fold((0.0f32, 0.0f32, 0.0f32), |(n, d, g), &(f, w, s_at)| {
+                (
+                    n + w * (1.0 - f) * (s_at - f * s_top),
+                    d + w * (1.0 - f) * (1.0 - f),
+                    g + w * (1.0 - f) * f,
+                )
+            });
+    // (A NaN sum gives no takeaway.)
+    let time = Some(num / den).filter(|_| den > 0.0)?;
+    // The crossings' own scatter about the fit, carried into the takeaway (a sandwich
+    // estimate, with n / (n − 1) for the fitted parameter).
+    let scatter = points
+        .iter()
+        .map(|&(f, w, s_at)| {
+            let r = s_at - (time * (1.0 - f) + f * s_top);
+            let lever = w * (1.0 - f);
+            lever * lever * r * r
+        })
+        .sum::<f32>()
+        / (den * den)
+        * count as f32
+        / count.saturating_sub(1).max(1) as f32;
+    Some(Takeaway {
+        time,
+        top_gain: gain / den,
+        spread: libm::sqrtf(scatter),
+    })
 }
 
 /// Finds the events of the one swing (eight) or putt (four) in `positions` (frames × skeleton joints,

@@ -738,7 +738,7 @@ pub fn compare(
         return Err(ScoreError::KindMismatch);
     }
     // The student's takeaway timed against the coach's backswing (steadier under pose noise).
-    let student_events = events::takeaway_against(
+    let takeaway = events::takeaway_against(
         skeleton,
         student,
         &student_events,
@@ -746,8 +746,8 @@ pub fn compare(
         coach,
         &coach_events,
         coach_hz,
-    )
-    .map_or(student_events, |t| student_events.with_takeaway(t));
+    );
+    let student_events = takeaway.map_or(student_events, |t| student_events.with_takeaway(t.time));
     let (n, m) = (student.len() / joints, coach.len() / joints);
     for frames in [n, m] {
         if frames > MAX_SWING_FRAMES {
@@ -925,20 +925,39 @@ pub fn compare(
                 }),
                 _ => (noise, &|v: Vec3| norm(&(v - here))),
             };
-            for way in [-1.0f32, 1.0] {
+            let ways = [-1.0f32, 1.0].map(|way| {
                 let mut before = 0.0;
                 for k in 1..=reach {
                     let now = changed(velocity(x + way * k as f32));
                     if now >= noise {
                         let w = (noise - before) / (now - before).max(f32::MIN_POSITIVE);
-                        *spread = spread.min((k as f32 - 1.0 + w) / student_hz);
-                        break;
+                        return (k as f32 - 1.0 + w) / student_hz;
                     }
                     before = now;
                 }
+                MAX_EVENT_TIMING_S
+            });
+            // A turn may lie anywhere the motion stays within its noise of it: the top, the
+            // longer way (a slow backswing turning into a quick downswing); a start or a
+            // crossing, the shorter.
+            *spread = match event {
+                Event::Top => ways[0].max(ways[1]),
+                _ => ways[0].min(ways[1]),
             }
-            *spread = spread.max(EVENT_TIMING_S);
+            .max(EVENT_TIMING_S);
         }
+    }
+    // The takeaway is timed from the top and the crossings of the arms' progress
+    // ([`events::takeaway_against`]): it moves with the top's error, scaled, and with the
+    // crossings' scatter.
+    let top_gain = takeaway.map_or(0.0, |t| t.top_gain);
+    if let Some(t) = takeaway {
+        let (a, top) = (Event::Address as usize, timing[Event::Top as usize]);
+        timing[a] = libm::hypotf(
+            libm::hypotf(timing[a], t.top_gain * top),
+            t.spread / student_hz,
+        )
+        .clamp(EVENT_TIMING_S, MAX_EVENT_TIMING_S);
     }
 
     // Tempo.
@@ -957,8 +976,14 @@ pub fn compare(
         let (from, to) = phase.events();
         // The ratio's relative uncertainty (the coach's events are taken as exact), and a
         // verdict only when the whole interval is past the tolerance.
-        let relative = libm::hypotf(timing[from as usize], timing[to as usize])
-            / student_s.max(f32::MIN_POSITIVE);
+        // The backswing's ends move together: a top found late by δ moves the takeaway
+        // earlier by top_gain × δ.
+        let (a, b) = (timing[from as usize], timing[to as usize]);
+        let together = match phase {
+            Phase::Backswing => 2.0 * top_gain * b * b,
+            _ => 0.0,
+        };
+        let relative = libm::sqrtf(a * a + b * b + together) / student_s.max(f32::MIN_POSITIVE);
         let margin = libm::fabsf(libm::logf(ratio)) - TEMPO_CONFIDENCE * relative;
         // (A NaN margin, from a zero duration, gives no verdict.)
         let clear = margin > libm::logf(1.0 + TEMPO_TOLERANCE);

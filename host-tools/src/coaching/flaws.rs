@@ -115,7 +115,7 @@ pub type Times = [f32; 8];
 
 /// A swing's events in seconds from its first frame, found at `rate_hz`.
 pub fn times(events: &SwingEvents, rate_hz: f32) -> Times {
-    Event::ALL.map(|e| events.frame(e).map_or(f32::NAN, |f| f as f32 / rate_hz))
+    Event::ALL.map(|e| events.time(e).map_or(f32::NAN, |t| t / rate_hz))
 }
 
 /// An offset flaw lasts at least this long either side of its event, seconds.

@@ -11,7 +11,9 @@
 //! - **timing**: the takeaway (the first frame of the swing: the golfer is still before it),
 //!   the top and impact (found in the source swing with its club at its own rate), against the
 //!   report's address, top and impact, in ms;
-//! - **tempo**: the backswing:downswing ratio's relative error;
+//! - **tempo**: the backswing:downswing ratio's relative error; **covered**: the share of
+//!   swings whose true backswing lies within the report's own interval for it (±
+//!   [`TEMPO_CONFIDENCE`] standard deviations, 90 % when the stated uncertainty is honest);
 //! - **recall at 1**: the report's first advice item states a planted flaw (see
 //!   [`flaws::Truth`]);
 //! - **false advice**: an unflawed swing given any advice; **false tempo**: given a tempo verdict;
@@ -32,7 +34,7 @@ use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, Event, Side};
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
-use posecoach_core::score::{Advice, Direction, Phase, Report, Stance};
+use posecoach_core::score::{Advice, Direction, Phase, Report, Stance, TEMPO_CONFIDENCE};
 use posecoach_core::wire::{self, Config, Message, StudentProfile, MAX_FRAME};
 use posecoach_core::Vec3;
 use posecoach_io::{self as io, Motion};
@@ -140,6 +142,8 @@ struct Outcome1 {
     /// Measured minus true, ms: takeaway, top, impact.
     timing_ms: Option<[f32; 3]>,
     tempo_error: Option<f32>,
+    /// The backswing's error in standard deviations of its stated uncertainty.
+    backswing_z: Option<f32>,
     /// The largest displacement the flaws show at an event, metres.
     shown_m: f32,
     first: Option<String>,
@@ -460,6 +464,11 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
             .map(|e| ((measured(e) - truth(e)) * 1000.0) as f32),
     );
     outcome.tempo_error = Some(report.student_tempo_ratio / planted.tempo_ratio - 1.0);
+    let backswing = &report.tempo[0];
+    let sigma = f64::from(backswing.ratio_uncertainty / backswing.ratio * backswing.student_s);
+    let error = (measured(Event::Top) - measured(Event::Address))
+        - (truth(Event::Top) - truth(Event::Address));
+    outcome.backswing_z = Some((error / sigma) as f32);
     outcome.score = Some(report.score);
     outcome.any_advice = !report.advice.is_empty();
     outcome.tempo_verdict = report.advice.iter().any(|a| matches!(a, Advice::Tempo(_)));
@@ -708,6 +717,13 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
         "errors": pairs.iter().filter(|(_, o)| o.error.is_some()).count(),
         "takeaway_ms": timing(0), "top_ms": timing(1), "impact_ms": timing(2),
         "tempo_ratio_error": quantiles(&found.iter().filter_map(|(_, o)| o.tempo_error).collect::<Vec<_>>()),
+        "backswing_covered": share(
+            found
+                .iter()
+                .filter(|(_, o)| o.backswing_z.is_some_and(|z| z.abs() <= TEMPO_CONFIDENCE))
+                .count(),
+            found.len(),
+        ),
         "false_tempo": share(unflawed.iter().filter(|(_, o)| o.tempo_verdict).count(), unflawed.len()),
         "false_advice": share(unflawed.iter().filter(|(_, o)| o.any_advice).count(), unflawed.len()),
         "recall_at_1": {
@@ -737,7 +753,7 @@ fn case_json(clean: &Clean, case: &Case, o: &Outcome1) -> Value {
             Input::Imu { .. } => json!(null),
         },
         "shown_cm": o.shown_m * 100.0, "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
-        "tempo_error": o.tempo_error, "score": o.score, "first": o.first, "right_first": o.right_first, "right_coach": o.right_coach,
+        "tempo_error": o.tempo_error, "backswing_z": o.backswing_z, "score": o.score, "first": o.first, "right_first": o.right_first, "right_coach": o.right_coach,
         "any_advice": o.any_advice, "error": o.error,
     })
 }
@@ -750,7 +766,7 @@ fn table(doc: &Value) -> String {
         "coaching benchmark: {} cases, {} bodies, sources {}",
         doc["cases"], doc["bodies"], doc["sources"]
     );
-    let _ = writeln!(out, "input | found | coach | false | takeaway ms | top ms | impact ms | tempo err | false tempo | false advice | recall@1 offset>=8cm / tempo / body | score unflawed / 10-15cm / tempo 30-50%");
+    let _ = writeln!(out, "input | found | coach | false | takeaway ms | top ms | impact ms | tempo err | covered | false tempo | false advice | recall@1 offset>=8cm / tempo / body | score unflawed / 10-15cm / tempo 30-50%");
     let pct = |v: &Value| {
         v["share"]
             .as_f64()
@@ -766,7 +782,7 @@ fn table(doc: &Value) -> String {
         let r = &l["recall_at_1"];
         let _ = writeln!(
             out,
-            "{:>8} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {}",
+            "{:>8} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {}",
             l["input"].as_str().unwrap_or("-"),
             pct(&l["found"]),
             pct(&l["right_coach"]),
@@ -777,6 +793,7 @@ fn table(doc: &Value) -> String {
             l["tempo_ratio_error"]["median"]
                 .as_f64()
                 .map_or("-".into(), |m| format!("{:.1}%", m * 100.0)),
+            pct(&l["backswing_covered"]),
             pct(&l["false_tempo"]),
             pct(&l["false_advice"]),
             pct(&r["offset_8cm"]),
