@@ -339,9 +339,10 @@ pub struct Report {
 }
 
 impl Report {
-    /// The wire form of swing number `swing`'s report: durations in milliseconds saturate at
-    /// 65.534 s, offsets at ±32.767 m, the score is rounded to hundredths.
-    pub fn to_wire(&self, swing: u32) -> SwingReport {
+    /// The wire form of swing number `swing`'s report, scored against coach reference `coach`:
+    /// durations in milliseconds saturate at 65.534 s, offsets at ±32.767 m (uncertainties at
+    /// 65.535 m), the score is rounded to hundredths.
+    pub fn to_wire(&self, swing: u32, coach: u16) -> SwingReport {
         let frames = |events: &SwingEvents| {
             Event::ALL.map(|e| events.frame(e).map_or(u16::MAX, |f| f as u16))
         };
@@ -349,10 +350,12 @@ impl Report {
         let mm = |m: f32| libm::roundf(m * 1000.0).clamp(-32767.0, 32767.0) as i16;
         SwingReport {
             swing,
+            coach,
             score_centi: libm::roundf(self.score * 100.0).clamp(0.0, 10000.0) as u16,
             student_events: frames(&self.student_events),
             coach_events: frames(&self.coach_events),
             phases_ms: self.tempo.map(|t| [ms(t.student_s), ms(t.coach_s)]),
+            verdicts: self.tempo.map(|t| t.verdict as u8),
             deviations: self
                 .spatial
                 .iter()
@@ -361,6 +364,8 @@ impl Report {
                     joint: d.joint.index() as u8,
                     direction: d.direction as u8,
                     offset_mm: d.offset_m.map(mm),
+                    uncertainty_mm: libm::roundf(d.uncertainty_m * 1000.0)
+                        .clamp(0.0, f32::from(u16::MAX)) as u16,
                 })
                 .collect(),
         }

@@ -37,7 +37,7 @@ use heapless::Vec as HVec;
 use serde::{Deserialize, Serialize};
 
 /// Protocol version carried in every frame.
-pub const VERSION: u8 = 1;
+pub const VERSION: u8 = 2;
 /// Largest frame on the wire, delimiter included.
 pub const MAX_FRAME: usize = 512;
 /// Most joints a pose frame or profile carries (BlazePose's 33 landmarks fit).
@@ -148,6 +148,8 @@ pub struct WireDeviation {
     pub direction: u8,
     /// Student minus coach in the stance frame, millimetres: toward target, toward ball, up.
     pub offset_mm: [i16; 3],
+    /// The offset's uncertainty along it, millimetres.
+    pub uncertainty_mm: u16,
 }
 
 /// A swing's report, small enough for one frame (the frame correspondence stays on the device).
@@ -156,6 +158,8 @@ pub struct WireDeviation {
 pub struct SwingReport {
     /// Swing number since start.
     pub swing: u32,
+    /// The coach reference it was scored against (`CoachSelect`'s numbering).
+    pub coach: u16,
     /// Score in hundredths (0..=10000).
     pub score_centi: u16,
     /// Student's event frames at the model rate (`u16::MAX` where a putt has none).
@@ -164,6 +168,9 @@ pub struct SwingReport {
     pub coach_events: [u16; 8],
     /// Student and coach durations of backswing, downswing, follow-through, milliseconds.
     pub phases_ms: [[u16; 2]; 3],
+    /// Each phase's tempo verdict: 0 ok, 1 slow, 2 fast (given only where the ratio is clear
+    /// of its uncertainty, so not to be recomputed from `phases_ms`).
+    pub verdicts: [u8; 3],
     /// The deviations, largest per event first.
     pub deviations: HVec<WireDeviation, MAX_DEVIATIONS>,
 }
@@ -431,31 +438,47 @@ mod tests {
                 })
             ),
             (
-                any::<u32>(),
-                any::<u16>(),
+                (any::<u32>(), any::<u16>(), any::<u16>()),
                 any::<[u16; 8]>(),
                 any::<[u16; 8]>(),
-                any::<[[u16; 2]; 3]>(),
+                (any::<[[u16; 2]; 3]>(), any::<[u8; 3]>()),
                 prop::collection::vec(
-                    (any::<u8>(), any::<u8>(), any::<u8>(), any::<[i16; 3]>()),
+                    (
+                        any::<u8>(),
+                        any::<u8>(),
+                        any::<u8>(),
+                        any::<[i16; 3]>(),
+                        any::<u16>()
+                    ),
                     0..=MAX_DEVIATIONS
                 )
             )
                 .prop_map(
-                    |(swing, score_centi, student_events, coach_events, phases_ms, d)| {
+                    |(
+                        (swing, coach, score_centi),
+                        student_events,
+                        coach_events,
+                        (phases_ms, verdicts),
+                        d,
+                    )| {
                         Message::SwingReport(SwingReport {
                             swing,
+                            coach,
                             score_centi,
                             student_events,
                             coach_events,
                             phases_ms,
+                            verdicts,
                             deviations: d
                                 .into_iter()
-                                .map(|(event, joint, direction, offset_mm)| WireDeviation {
-                                    event,
-                                    joint,
-                                    direction,
-                                    offset_mm,
+                                .map(|(event, joint, direction, offset_mm, uncertainty_mm)| {
+                                    WireDeviation {
+                                        event,
+                                        joint,
+                                        direction,
+                                        offset_mm,
+                                        uncertainty_mm,
+                                    }
                                 })
                                 .collect(),
                         })
@@ -569,16 +592,19 @@ mod tests {
             }),
             Message::SwingReport(SwingReport {
                 swing: u32::MAX,
+                coach: u16::MAX,
                 score_centi: u16::MAX,
                 student_events: [u16::MAX; 8],
                 coach_events: [u16::MAX; 8],
                 phases_ms: [[u16::MAX; 2]; 3],
+                verdicts: [u8::MAX; 3],
                 deviations: core::iter::repeat_n(
                     WireDeviation {
                         event: 255,
                         joint: 255,
                         direction: 255,
                         offset_mm: [i16::MIN; 3],
+                        uncertainty_mm: u16::MAX,
                     },
                     MAX_DEVIATIONS,
                 )
@@ -600,24 +626,27 @@ mod tests {
 
     #[test]
     fn a_config_carries_its_band_as_radius_then_flag() {
-        // Version 1, variant 4, model rate 60, radius 10 (varints), anchored (one byte).
+        // Version 2, variant 4, model rate 60, radius 10 (varints), anchored (one byte).
         let f = frame(&Message::Config(Config {
             model_rate_hz: 60,
             band: Band::DEFAULT,
         }));
         let mut payload = f[..f.len() - 1].to_vec();
         let n = cobs::decode_in_place(&mut payload).unwrap();
-        assert_eq!(&payload[..n - 4], &[1, 4, 60, 10, 1]);
+        assert_eq!(&payload[..n - 4], &[VERSION, 4, 60, 10, 1]);
     }
 
     #[test]
     fn frames_have_the_documented_layout() {
-        // Ack { seq: 7 }: version 1, variant 7 (varint), seq 7 (varint), CRC-32 LE; COBS; 0x00.
+        // Ack { seq: 7 }: version 2, variant 7 (varint), seq 7 (varint), CRC-32 LE; COBS; 0x00.
         let f = frame(&Message::Ack { seq: 7 });
         let mut payload = f[..f.len() - 1].to_vec();
         let n = cobs::decode_in_place(&mut payload).unwrap();
-        let crc = CRC.checksum(&[1, 7, 7]).to_le_bytes();
-        assert_eq!(&payload[..n], &[1, 7, 7, crc[0], crc[1], crc[2], crc[3]]);
+        let crc = CRC.checksum(&[VERSION, 7, 7]).to_le_bytes();
+        assert_eq!(
+            &payload[..n],
+            &[VERSION, 7, 7, crc[0], crc[1], crc[2], crc[3]]
+        );
         assert_eq!(*f.last().unwrap(), 0);
     }
 }

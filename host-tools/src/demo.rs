@@ -2,9 +2,11 @@
 //!
 //! A recorded session of an amateur (`tests/logs/short_cmu_30hz.pclog`: CMU-31 keypoints at
 //! 30 Hz from a 1.60 m golfer whose backswings take 1.5 times the tour player's, made by
-//! `tests/logs/make.sh` from the real swings in `tests/fixtures`) is replayed through the
-//! device's pipeline against the bundled coach references, as `posecoach replay` does; the
-//! report is written as `report.html` and `report.json` and the advice printed.
+//! `tests/logs/make.sh` from the real swings in `tests/fixtures`; the iron, then the driver) is
+//! replayed through the device's pipeline as `posecoach replay` does. The session selects no
+//! coach, so the device scores each swing against the bundled coach whose set-up its own is
+//! nearest: the iron against the iron, the driver against the driver. The report is written as
+//! `report.html` and `report.json` and the advice printed.
 
 use crate::{html, replay};
 use anyhow::{Context, Result};
@@ -15,7 +17,8 @@ const SESSION: &[u8] = include_bytes!("../../tests/logs/short_cmu_30hz.pclog");
 /// Where the session comes from, for the report.
 const PROVENANCE: &str = "Bundled session: tests/logs/short_cmu_30hz.pclog, an amateur (1.60 m, \
      CMU-31 keypoints at 30 Hz) with a 1.5x slower backswing, made from real tour swings by \
-     tests/logs/make.sh; coach: the bundled driver and iron references; retargeter: analytic \
+     tests/logs/make.sh; coach: the bundled iron or driver reference, chosen by the device from \
+     each swing's set-up; retargeter: analytic \
      (the device's, until int8 weights are bundled)";
 
 #[derive(clap::Args)]

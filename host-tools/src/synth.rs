@@ -6,7 +6,8 @@
 //! recorded the way a phone's pose estimator sends it (pose frames at `--rate` with capture
 //! jitter, keypoint noise, unsure keypoints and lost frames) or, with `--imu-rate`, as body-worn
 //! IMUs send it (a `SensorLayout`, then samples from the segments' motion with bias, noise and
-//! misplaced straps), behind the `StudentProfile`, `Config` and `CoachSelect` messages, as a
+//! misplaced straps), behind the `StudentProfile` and `Config` messages (and a `CoachSelect` with
+//! `--coach`; without one the device chooses the coach of each swing from its set-up), as a
 //! `.pclog`. A sidecar `NAME.swings.json` lists the
 //! swings and their events (from the clean motion) in seconds of the recording; as the golfer
 //! stands still at address from `still_from_s`, an address found anywhere after that is right.
@@ -86,9 +87,10 @@ pub struct Args {
     /// Model rate the recording asks the device for (its `Config`).
     #[arg(long, default_value_t = 60)]
     model_rate: u16,
-    /// Coach reference the recording selects.
-    #[arg(long, default_value_t = 0)]
-    coach: u16,
+    /// Coach reference the recording selects; without it the device chooses one for each
+    /// swing from its set-up.
+    #[arg(long)]
+    coach: Option<u16>,
     /// Seed of the noise, jitter and losses.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -249,14 +251,17 @@ pub fn run(args: &Args) -> Result<String> {
         format,
         joints_mm: keypoint_joints.iter().map(|&k| to_mm(rest[k])).collect(),
     };
+    let select = args.coach.map(|coach| Message::CoachSelect { coach });
     for m in [
         Message::StudentProfile(profile),
         Message::Config(Config {
             model_rate_hz: args.model_rate,
             band: Band::DEFAULT,
         }),
-        Message::CoachSelect { coach: args.coach },
-    ] {
+    ]
+    .into_iter()
+    .chain(select)
+    {
         push_frame(&mut bytes, &m)?;
     }
     let sent = match args.imu_rate {

@@ -40,15 +40,18 @@ fn every_message() -> Vec<Message> {
         }),
         Message::SwingReport(SwingReport {
             swing: 3,
+            coach: 1,
             score_centi: 7745,
             student_events: [8, 34, 49, 64, 73, 80, 84, 99],
             coach_events: [9, 34, 50, 65, 72, 79, 83, 94],
             phases_ms: [[933, 933], [267, 233], [317, 250]],
+            verdicts: [0, 1, 1],
             deviations: [WireDeviation {
                 event: 5,
                 joint: 16,
                 direction: 5,
                 offset_mm: [4, -20, -159],
+                uncertainty_mm: 12,
             }]
             .into_iter()
             .collect(),

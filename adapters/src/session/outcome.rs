@@ -65,9 +65,9 @@ impl Outcome<'_> {
     /// a swing that could not be scored.
     pub fn reply(&self, message: &Message) -> Option<Message> {
         match self {
-            Outcome::Scored { swing, report, .. } => {
-                Some(Message::SwingReport(report.to_wire(swing.number)))
-            }
+            Outcome::Scored { swing, report, .. } => Some(Message::SwingReport(
+                report.to_wire(swing.number, swing.coach),
+            )),
             Outcome::Unscored { .. } => None,
             Outcome::Refused(why) => Some(Message::Nack {
                 seq: match message {
