@@ -600,7 +600,7 @@ fn write_golden(
     bytemuck::cast_slice_mut::<u32, u8>(&mut words)[..bytes.len()].copy_from_slice(bytes);
     let weights = Weights::from_bytes(&bytemuck::cast_slice::<u32, u8>(&words)[..bytes.len()])?;
     let rate = weights.architecture().rate_hz;
-    let source = io::load(coach)?.resampled(rate);
+    let source = io::load(coach)?.resampled(rate)?;
     if source.frames() == 0 {
         bail!("{} holds no frames", coach.display());
     }

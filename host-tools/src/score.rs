@@ -71,8 +71,8 @@ pub fn run(args: &Args) -> Result<String> {
         None => on_body(&coach, "coach")?,
     };
     let (student, virtual_coach) = (
-        student.resampled(args.rate),
-        virtual_coach.resampled(args.rate),
+        student.resampled(args.rate)?,
+        virtual_coach.resampled(args.rate)?,
     );
     let band = Band {
         radius: args.band,

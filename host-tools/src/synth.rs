@@ -226,7 +226,7 @@ pub fn run(args: &Args) -> Result<String> {
         let motion = io::load(path)?.retarget_analytic(&body).map_err(|(f, e)| {
             anyhow::anyhow!("{} frame {f} onto the student: {e}", path.display())
         })?;
-        Ok(motion.resampled(TIMELINE_HZ))
+        Ok(motion.resampled(TIMELINE_HZ)?)
     };
     let swings: Vec<(PathBuf, Motion)> = args
         .swings

@@ -420,14 +420,19 @@ impl Bvh {
         self.forward(None, out);
     }
 
-    /// Whether frame 0 is a T-pose/reference frame as some CMU conversions write it: every
-    /// rotation value of frame 0 is zero (below 1e-6°) and there is more than one frame.
+    /// Whether frame 0 is a T-pose/reference frame as some CMU conversions write it: there is
+    /// more than one frame and at least one rotation channel, and every rotation value of
+    /// frame 0 is zero (below 1e-6°).
     pub fn first_frame_is_rest(&self) -> bool {
         let Some(row) = self.row(0).filter(|_| self.frames > 1) else {
             return false;
         };
-        let mut values = self.joints.iter().flat_map(|j| &j.channels).zip(row);
-        values.all(|(c, v)| !c.is_rotation() || v.abs() < REST_EPS_DEG)
+        let channels = self.joints.iter().flat_map(|j| &j.channels);
+        let mut rotations = channels
+            .zip(row)
+            .filter(|(c, _)| c.is_rotation())
+            .peekable();
+        rotations.peek().is_some() && rotations.all(|(_, v)| v.abs() < REST_EPS_DEG)
     }
 
     /// Removes frame 0 (no-op without frames).
@@ -1062,6 +1067,25 @@ mod tests {
         let missing_brace = "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nJOINT B\nOFFSET 1 0 0\n}\n}\n";
         let err = Bvh::parse(missing_brace).unwrap_err().to_string();
         assert_eq!(err, "line 6: expected `{` after joint name, found `OFFSET`");
+    }
+
+    #[test]
+    fn only_rotations_make_a_rest_frame() {
+        let frames = |channels: &str, values: &str| {
+            let text = format!(
+                "HIERARCHY ROOT A {{ OFFSET 0 0 0 CHANNELS {channels} }} MOTION Frames: 3 \
+                 Frame Time: 0.1 {values}"
+            );
+            let mut bvh = Bvh::parse(&text).unwrap();
+            if bvh.first_frame_is_rest() {
+                bvh.drop_first_frame();
+            }
+            bvh.frames
+        };
+        assert_eq!(frames("0", ""), 3);
+        assert_eq!(frames("1 Xposition", "0 1 2"), 3);
+        assert_eq!(frames("1 Xrotation", "0 1 2"), 2);
+        assert_eq!(frames("2 Xposition Xrotation", "5 0 5 1 5 2"), 2);
     }
 
     #[test]

@@ -25,6 +25,7 @@
 //!
 //! [`C3d::to_bytes`] writes Intel files with metres as units and no analog channels, in either
 //! [`Storage`].
+use crate::motion::{check_limits, LimitError};
 use posecoach_core::Vec3;
 use std::fmt;
 
@@ -109,6 +110,8 @@ pub enum C3dErrorKind {
     },
     /// `POINT:UNITS` is absent or not mm, cm or m.
     UnknownUnits(String),
+    /// The point data is beyond the limits, a label counting as a joint.
+    Limit(LimitError),
 }
 
 impl fmt::Display for C3dError {
@@ -136,6 +139,7 @@ impl fmt::Display for C3dError {
                 write!(f, "parameter {name}: expected {expected}")
             }
             C3dErrorKind::UnknownUnits(u) => write!(f, "POINT:UNITS {u:?} is not mm, cm or m"),
+            C3dErrorKind::Limit(e) => write!(f, "point data: {e}"),
         }
     }
 }
@@ -409,8 +413,9 @@ impl C3d {
     /// # Errors
     /// Returns a [`C3dError`] naming the byte offset when the header key or processor type is
     /// wrong, a parameter entry is malformed, `POINT:UNITS` is missing or unknown, `POINT:SCALE`
-    /// is zero, `POINT:RATE` is not positive, or a declared section extends past the end of the
-    /// input.
+    /// is zero, `POINT:RATE` is not positive, a declared section extends past the end of the
+    /// input, or the point data is beyond the limits ([`check_limits`], checked before it is
+    /// read).
     pub fn parse(data: &[u8]) -> Result<C3d, C3dError> {
         let len = data.len();
         let (param_block, key) = match data {
@@ -518,6 +523,9 @@ impl C3d {
         let what = format!("data section of {frames} frames × {frame_bytes} bytes");
         let total = frame_bytes.saturating_mul(frames);
         bytes.slice(data_start, total, &what)?;
+        let rate_hz = rate as f32;
+        let limit = |e| err(data_start, C3dErrorKind::Limit(e));
+        check_limits(frames, count, rate_hz).map_err(limit)?;
 
         let value = |at: usize| match float {
             true => bytes.f32(at, "point data"),
@@ -533,7 +541,6 @@ impl C3d {
             points.push(if ok { xyz } else { Vec3::zeros() });
             valid.push(ok);
         }
-        let rate_hz = rate as f32;
         Ok(C3d {
             labels,
             rate_hz,
@@ -1041,6 +1048,21 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn point_data_beyond_the_limits_is_refused_before_it_is_read() {
+        // The golf fixture's shape at 0.001 Hz (30 h): resampling it took 1.8 GB.
+        let mut slow = synthetic(109, 38, |f, m| Vec3::new(f as f32, m as f32, 1.0));
+        slow.rate_hz = 0.001;
+        let e = C3d::parse(&slow.to_bytes(Storage::Integer { scale: STEP })).unwrap_err();
+        assert_eq!(e.kind, C3dErrorKind::Limit(LimitError::Rate(0.001)));
+        let message = "point data: a frame rate of 0.001 Hz is outside the limits of 1 to 2000 Hz";
+        assert!(e.to_string().ends_with(message), "{e}");
+        // 70000 frames at 100 Hz: 700 s.
+        let long = synthetic(70_000, 1, |_, _| Vec3::zeros());
+        let e = C3d::parse(&long.to_bytes(Storage::Float)).unwrap_err();
+        assert_eq!(e.kind, C3dErrorKind::Limit(LimitError::Duration(699.99)));
+    }
+
+    #[test]
     fn long_trials_use_the_trial_fields() {
         let extra = [
             trial_field(Format::Intel, "ACTUAL_START_FIELD", 1),
@@ -1098,9 +1120,10 @@ pub(crate) mod tests {
         // 300 labels of 200 bytes: split over LABELS and LABELS2 by the 16-bit record links.
         let mut wide = synthetic(2, 300, |f, m| Vec3::new(f as f32, m as f32, -0.5));
         wide.labels = (0..300).map(|m| format!("{m:_>200}")).collect();
-        // 70000 frames: the frame range only fits the TRIAL fields.
+        // 70000 frames: the frame range only fits the TRIAL fields (194 s at 360 Hz, within
+        // MAX_DURATION_S).
         let mut long = synthetic(70_000, 1, |f, _| Vec3::new(0.0, 1e-4 * f as f32, 0.0));
-        long.first_frame = 3;
+        (long.first_frame, long.rate_hz) = (3, 360.0);
         for c in [wide, long] {
             assert_eq!(C3d::parse(&c.to_bytes(Storage::Float)).unwrap(), c);
         }

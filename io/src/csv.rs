@@ -6,7 +6,7 @@
 //! T-pose: the skeleton is that pose. With more rows the skeleton takes its bone directions
 //! from the standard T-pose and its bone lengths from the mean over the frames.
 
-use crate::motion::{hold_missing, measured_skeleton, Motion};
+use crate::motion::{check_limits, hold_missing, measured_skeleton, LimitError, Motion};
 use posecoach_core::format::t_pose;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
@@ -54,6 +54,8 @@ pub enum CsvErrorKind {
     MissingInTPose(Joint),
     /// The joints do not make a valid skeleton.
     Skeleton(SkeletonError),
+    /// The motion is beyond the limits (the rate comes from the median time step).
+    Limit(LimitError),
 }
 
 impl fmt::Display for CsvError {
@@ -82,6 +84,7 @@ impl fmt::Display for CsvError {
             CsvErrorKind::TimeNotIncreasing => f.write_str("time must increase from row to row"),
             CsvErrorKind::MissingInTPose(j) => write!(f, "a one-row T-pose needs every joint; `{j}` is empty"),
             CsvErrorKind::Skeleton(e) => write!(f, "the joints do not form a skeleton: {e}"),
+            CsvErrorKind::Limit(e) => e.fmt(f),
         }
     }
 }
@@ -95,7 +98,8 @@ fn err(line: usize, column: usize, kind: CsvErrorKind) -> CsvError {
 /// Parses a keypoint CSV file.
 ///
 /// # Errors
-/// A [`CsvError`] naming the line, the column and what was expected.
+/// A [`CsvError`] naming the line, the column and what was expected; a motion beyond the limits
+/// ([`check_limits`]) at the last row's time.
 pub fn read(text: &str) -> Result<Motion, CsvError> {
     let mut lines = text
         .lines()
@@ -109,7 +113,9 @@ pub fn read(text: &str) -> Result<Motion, CsvError> {
     let mut times = Vec::new();
     let mut values: Vec<Vec3> = Vec::new();
     let mut missing = Vec::new();
+    let mut last = 0;
     for (line, row) in lines {
+        last = line;
         let cells: Vec<&str> = row.split(',').map(str::trim).collect();
         if cells.len() != 1 + 3 * n {
             let kind = CsvErrorKind::CellCount {
@@ -152,6 +158,12 @@ pub fn read(text: &str) -> Result<Motion, CsvError> {
     if times.is_empty() {
         return Err(err(2, 0, CsvErrorKind::Empty));
     }
+    let rate_hz = if times.len() > 1 {
+        rate_from_times(&times)
+    } else {
+        0.0
+    };
+    check_limits(times.len(), n, rate_hz).map_err(|e| err(last, 1, CsvErrorKind::Limit(e)))?;
 
     // Reorder the columns into canonical order so parents precede children.
     let mut order: Vec<usize> = (0..n).collect();
@@ -169,20 +181,15 @@ pub fn read(text: &str) -> Result<Motion, CsvError> {
         .collect();
 
     let skeleton_error = |e| err(1, 0, CsvErrorKind::Skeleton(e));
-    let (skeleton, rate_hz) = if times.len() == 1 {
+    let skeleton = if times.len() == 1 {
         if let Some(j) = missing.iter().position(|&m| m) {
             return Err(err(2, 0, CsvErrorKind::MissingInTPose(joints[j])));
         }
-        (
-            Skeleton::canonical(&joints, &positions).map_err(skeleton_error)?,
-            0.0,
-        )
+        Skeleton::canonical(&joints, &positions).map_err(skeleton_error)?
     } else {
         let rest: Vec<Vec3> = joints.iter().map(|&j| t_pose(j)).collect();
         let template = Skeleton::canonical(&joints, &rest).map_err(skeleton_error)?;
-        let skeleton =
-            measured_skeleton(&template, &positions, &missing).map_err(skeleton_error)?;
-        (skeleton, rate_from_times(&times))
+        measured_skeleton(&template, &positions, &missing).map_err(skeleton_error)?
     };
     hold_missing(n, &mut positions, &missing);
     Ok(Motion {
@@ -325,6 +332,13 @@ right_wrist_x,right_wrist_y,right_wrist_z\n\
             assert_eq!((e.line, e.column), (line, column), "{text:?}: {e}");
             assert!(!e.to_string().is_empty());
         }
+        // One 1e4 s step: resampling it to 240 Hz asked for 17 GB.
+        let e = read("time,pelvis_x,pelvis_y,pelvis_z\n0,0,1,0\n\n10000,0,1,0\n").unwrap_err();
+        assert_eq!((e.line, e.column), (4, 1));
+        assert_eq!(e.kind, CsvErrorKind::Limit(LimitError::Rate(1e-4)));
+        assert!(e
+            .to_string()
+            .contains("0.0001 Hz is outside the limits of 1 to 2000 Hz"));
         let e = read("time,pelvis_x,pelvis_y,pelvis_z\n0,0,0,0\n").unwrap_err();
         assert_eq!(
             e.kind,

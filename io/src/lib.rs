@@ -8,7 +8,7 @@ pub mod csv;
 pub mod golf;
 pub mod motion;
 
-pub use motion::Motion;
+pub use motion::{LimitError, Motion};
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -43,6 +43,8 @@ pub enum FileErrorKind {
     Skeleton(posecoach_core::skeleton::SkeletonError),
     /// A coach reference that does not read.
     Reference(posecoach_core::reference::ReferenceError),
+    /// A coach reference beyond the limits ([`motion::check_limits`]).
+    Limit(motion::LimitError),
 }
 
 impl fmt::Display for FileError {
@@ -63,6 +65,7 @@ impl fmt::Display for FileError {
             ),
             FileErrorKind::Skeleton(e) => write!(f, "the joint centres are not a skeleton: {e}"),
             FileErrorKind::Reference(e) => e.fmt(f),
+            FileErrorKind::Limit(e) => e.fmt(f),
         }
     }
 }
@@ -100,7 +103,12 @@ pub fn load(path: &Path) -> Result<Motion, FileError> {
         }
         "pcr" => {
             let bytes = std::fs::read(path).map_err(|e| fail(FileErrorKind::Io(e)))?;
-            Motion::from_reference(&bytes).map_err(|e| fail(FileErrorKind::Reference(e)))
+            let motion =
+                Motion::from_reference(&bytes).map_err(|e| fail(FileErrorKind::Reference(e)))?;
+            let (frames, joints) = (motion.frames(), motion.skeleton.len());
+            motion::check_limits(frames, joints, motion.rate_hz)
+                .map_err(|e| fail(FileErrorKind::Limit(e)))?;
+            Ok(motion)
         }
         _ => Err(fail(FileErrorKind::UnknownExtension)),
     }
@@ -121,4 +129,26 @@ pub fn save(motion: &Motion, path: &Path) -> Result<(), FileError> {
         _ => return Err(fail(FileErrorKind::UnknownExtension)),
     };
     std::fs::write(path, text).map_err(|e| fail(FileErrorKind::Io(e)))
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_coach_reference_beyond_the_limits_is_refused() {
+        let mut swing =
+            csv::read(include_str!("../../tests/fixtures/golf_driver_60hz.csv")).unwrap();
+        swing.rate_hz = 0.001;
+        let path =
+            std::env::temp_dir().join(format!("posecoach-io-slow-{}.pcr", std::process::id()));
+        std::fs::write(&path, swing.to_reference("slow").unwrap()).unwrap();
+        let e = load(&path).unwrap_err();
+        std::fs::remove_file(&path).unwrap();
+        assert!(
+            matches!(e.kind, FileErrorKind::Limit(motion::LimitError::Rate(r)) if r == 0.001),
+            "{e}"
+        );
+    }
 }

@@ -12,6 +12,84 @@ use posecoach_core::skeleton::{Skeleton, SkeletonError};
 use posecoach_core::Vec3;
 use std::fmt;
 
+/// Slowest frame rate read or resampled to, Hz: a second between poses is no longer motion
+/// capture (the real files run at 30 to 360 Hz).
+pub const MIN_RATE_HZ: f32 = 1.0;
+
+/// Fastest frame rate read or resampled to, Hz: high-speed optical capture (the golf files are
+/// 360 Hz).
+pub const MAX_RATE_HZ: f32 = 2000.0;
+
+/// Longest motion read or resampled, seconds: ten minutes, for mocap clips (the longest real
+/// file is 63 s) as well as swings (2 s). It bounds what resampling a file allocates.
+pub const MAX_DURATION_S: f32 = 600.0;
+
+/// Most samples (frames × joints) a motion may hold, 96 MiB of positions: ten minutes at
+/// 360 Hz of 38 markers, or at 240 Hz of [`MAX_JOINTS`](posecoach_core::config::MAX_JOINTS)
+/// joints, fit.
+pub const MAX_SAMPLES: usize = 1 << 23;
+
+/// A motion beyond the limits ([`MIN_RATE_HZ`], [`MAX_RATE_HZ`], [`MAX_DURATION_S`],
+/// [`MAX_SAMPLES`]), refused before it is allocated.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LimitError {
+    /// A frame rate (Hz) outside [`MIN_RATE_HZ`] to [`MAX_RATE_HZ`].
+    Rate(f32),
+    /// A duration (seconds) over [`MAX_DURATION_S`].
+    Duration(f32),
+    /// More samples than [`MAX_SAMPLES`].
+    Samples {
+        /// Frames.
+        frames: usize,
+        /// Joints per frame.
+        joints: usize,
+    },
+}
+
+impl fmt::Display for LimitError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LimitError::Rate(r) => write!(
+                f,
+                "a frame rate of {r} Hz is outside the limits of {MIN_RATE_HZ} to {MAX_RATE_HZ} Hz"
+            ),
+            LimitError::Duration(s) => {
+                write!(
+                    f,
+                    "a duration of {s} s is over the limit of {MAX_DURATION_S} s"
+                )
+            }
+            LimitError::Samples { frames, joints } => write!(
+                f,
+                "{frames} frames of {joints} joints are over the limit of {MAX_SAMPLES} samples"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for LimitError {}
+
+/// Checks a motion of `frames × joints` samples at `rate_hz` against the limits, before any of
+/// it is allocated. The rate and duration of a single frame (a T-pose) are not checked.
+///
+/// # Errors
+/// The first [`LimitError`] found: rate, then duration, then samples.
+pub fn check_limits(frames: usize, joints: usize, rate_hz: f32) -> Result<(), LimitError> {
+    if frames > 1 {
+        if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz) {
+            return Err(LimitError::Rate(rate_hz));
+        }
+        let duration = (frames - 1) as f64 / f64::from(rate_hz);
+        if duration > f64::from(MAX_DURATION_S) {
+            return Err(LimitError::Duration(duration as f32));
+        }
+    }
+    if frames.saturating_mul(joints) > MAX_SAMPLES {
+        return Err(LimitError::Samples { frames, joints });
+    }
+    Ok(())
+}
+
 /// A motion in metres, +Y up: `frames × joints` positions on `skeleton`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Motion {
@@ -77,15 +155,23 @@ impl Motion {
     /// ([`posecoach_core::resample`]); a sample is missing if either neighbour was. A T-pose
     /// (rate 0), and a motion already at that rate ([`resample::SAME_RATE`]), are returned
     /// unchanged.
-    pub fn resampled(&self, rate_hz: f32) -> Motion {
-        if self.rate_hz <= 0.0 || rate_hz <= 0.0 || self.frames() == 0 {
-            return self.clone();
-        }
-        if resample::same_rate(self.rate_hz, rate_hz) {
-            return self.clone();
+    ///
+    /// # Errors
+    /// A [`LimitError`], before anything is allocated, for a motion or a result beyond the
+    /// limits ([`check_limits`]): `rate_hz` outside [`MIN_RATE_HZ`] to [`MAX_RATE_HZ`], a
+    /// motion beyond them (built by hand: the readers refuse one), or more than
+    /// [`MAX_SAMPLES`] samples out.
+    pub fn resampled(&self, rate_hz: f32) -> Result<Motion, LimitError> {
+        if self.rate_hz <= 0.0 || self.frames() == 0 || resample::same_rate(self.rate_hz, rate_hz) {
+            return Ok(self.clone());
         }
         let n = self.skeleton.len();
+        check_limits(self.frames(), n, self.rate_hz)?;
+        if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz) {
+            return Err(LimitError::Rate(rate_hz));
+        }
         let frames = resample::frames(self.frames(), self.rate_hz, rate_hz);
+        check_limits(frames, n, rate_hz)?;
         let mut positions = vec![Vec3::zeros(); frames * n];
         let mut missing = Vec::with_capacity(frames * n);
         for (f, out) in positions.chunks_exact_mut(n).enumerate() {
@@ -96,12 +182,12 @@ impl Motion {
                 missing.push(self.missing[i * n + k] || self.missing[j * n + k]);
             }
         }
-        Motion {
+        Ok(Motion {
             rate_hz,
             positions,
             missing,
             ..self.clone()
-        }
+        })
     }
 
     /// How many samples were missing in the file, per joint.
@@ -143,6 +229,8 @@ pub enum BvhImportError {
     UnknownSkeleton,
     /// The hierarchy does not make a valid skeleton.
     Skeleton(SkeletonError),
+    /// The motion is beyond the limits.
+    Limit(LimitError),
 }
 
 impl fmt::Display for BvhImportError {
@@ -153,6 +241,7 @@ impl fmt::Display for BvhImportError {
                  and the root is not a joint named `pelvis`: rename the joints to canonical names",
             ),
             BvhImportError::Skeleton(e) => write!(f, "the hierarchy is not a usable skeleton: {e}"),
+            BvhImportError::Limit(e) => e.fmt(f),
         }
     }
 }
@@ -167,8 +256,8 @@ impl Motion {
     /// [`guess_bvh_units`] picks when `None`.
     ///
     /// # Errors
-    /// [`BvhImportError`] when no joint can be identified as the pelvis or the tree is not a
-    /// valid skeleton.
+    /// [`BvhImportError`] when no joint can be identified as the pelvis, the tree is not a
+    /// valid skeleton, or the motion is beyond the limits ([`check_limits`]).
     pub fn from_bvh(mut bvh: Bvh, units: Option<f32>) -> Result<Motion, BvhImportError> {
         if bvh.first_frame_is_rest() {
             bvh.drop_first_frame();
@@ -200,6 +289,12 @@ impl Motion {
             }
             start += 1;
         };
+        let rate_hz = if bvh.frame_time > 0.0 {
+            (1.0 / bvh.frame_time) as f32
+        } else {
+            0.0
+        };
+        check_limits(bvh.frames, n - start, rate_hz).map_err(BvhImportError::Limit)?;
         let parents: Vec<Option<usize>> = bvh.joints[start..]
             .iter()
             .map(|j| j.parent.and_then(|p| p.checked_sub(start)))
@@ -237,11 +332,7 @@ impl Motion {
         Ok(Motion {
             skeleton,
             names: bvh.joints[start..].iter().map(|j| j.name.clone()).collect(),
-            rate_hz: if bvh.frame_time > 0.0 {
-                (1.0 / bvh.frame_time) as f32
-            } else {
-                0.0
-            },
+            rate_hz,
             missing: vec![false; positions.len()],
             positions,
         })
@@ -400,6 +491,7 @@ pub fn hold_missing(joints: usize, positions: &mut [Vec3], missing: &[bool]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use posecoach_core::config::MAX_JOINTS;
 
     #[test]
     fn golf_joint_order_matches_the_core_format() {
@@ -425,7 +517,7 @@ mod tests {
             positions,
             skeleton,
         };
-        let fine = motion.resampled(40.0);
+        let fine = motion.resampled(40.0).unwrap();
         assert_eq!(fine.frames(), 9);
         assert_eq!(fine.frame(3)[0].x, 0.75);
         assert_eq!(fine.frame(8)[n - 1].x, 2.0);
@@ -433,12 +525,132 @@ mod tests {
         // falls exactly on an input sample takes only that one.
         let mut gappy = motion.clone();
         gappy.missing[n] = true;
-        let fine = gappy.resampled(40.0);
+        let fine = gappy.resampled(40.0).unwrap();
         let flagged: Vec<usize> = (0..9).filter(|&f| fine.missing[f * n]).collect();
         assert_eq!(flagged, [1, 2, 3, 4, 5, 6, 7]);
-        let coarse = gappy.resampled(5.0);
+        let coarse = gappy.resampled(5.0).unwrap();
         assert_eq!(coarse.frames(), 2);
         assert!(!coarse.missing[0] && !coarse.missing[n]);
+    }
+
+    /// The CMU fixture's hierarchy with no channels, and a MOTION section of `motion`.
+    fn without_channels(motion: &str) -> Bvh {
+        let fixture = include_str!("../../tests/fixtures/cmu_131_01_excerpt.bvh");
+        let hierarchy = fixture.split("MOTION").next().unwrap().lines();
+        let no_channels = |l: &str| match l.trim_start().starts_with("CHANNELS") {
+            true => "CHANNELS 0".to_string(),
+            false => l.to_string(),
+        };
+        let text: Vec<String> = hierarchy.map(no_channels).collect();
+        Bvh::parse(&format!("{}\nMOTION\n{motion}", text.join("\n"))).unwrap()
+    }
+
+    /// A BVH of a `pelvis` and `children` joints under it, with `channels` on the pelvis.
+    fn pelvis(children: usize, channels: &str, motion: &str) -> Bvh {
+        let child = "JOINT j { OFFSET 0 1 0 End Site { OFFSET 0 1 0 } }\n";
+        let text = format!(
+            "HIERARCHY\nROOT pelvis\n{{\nOFFSET 0 0 0\nCHANNELS {channels}\n{}}}\nMOTION\n{motion}",
+            child.repeat(children)
+        );
+        Bvh::parse(&text).unwrap()
+    }
+
+    #[test]
+    fn limits_name_the_limit_and_the_value() {
+        assert_eq!(check_limits(1, 17, 0.0), Ok(()));
+        assert_eq!(check_limits(2, 22, 1.0), Ok(()));
+        assert_eq!(check_limits(654, 38, 360.0), Ok(()));
+        assert_eq!(check_limits(600 * 360 + 1, 38, 360.0), Ok(()));
+        assert_eq!(check_limits(600 * 240 + 1, MAX_JOINTS, 240.0), Ok(()));
+        for rate in [0.0, 0.001, 2000.5, f32::INFINITY, f32::NAN] {
+            let e = check_limits(2, 22, rate).unwrap_err();
+            assert!(matches!(e, LimitError::Rate(r) if r.to_bits() == rate.to_bits()));
+        }
+        assert_eq!(
+            check_limits(2, 22, 0.001).unwrap_err().to_string(),
+            "a frame rate of 0.001 Hz is outside the limits of 1 to 2000 Hz"
+        );
+        let e = check_limits(1202, 22, 2.0).unwrap_err();
+        assert_eq!(e, LimitError::Duration(600.5));
+        assert_eq!(
+            e.to_string(),
+            "a duration of 600.5 s is over the limit of 600 s"
+        );
+        let e = check_limits(300_000, 31, 2000.0).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "300000 frames of 31 joints are over the limit of 8388608 samples"
+        );
+        let e = check_limits(1, usize::MAX, 0.0).unwrap_err();
+        assert!(matches!(e, LimitError::Samples { .. }));
+    }
+
+    #[test]
+    fn hostile_bvh_files_are_refused_before_their_frames_are_made() {
+        use BvhImportError::Limit;
+        // A second of motion stretched over 31 years: resampling it asked for 934 TB.
+        let slow = pelvis(
+            0,
+            "3 Xposition Yposition Zposition",
+            "Frames: 2\nFrame Time: 1000000000\n0 0 0 0 0 1",
+        );
+        let e = Motion::from_bvh(slow, None).unwrap_err();
+        assert_eq!(e, Limit(LimitError::Rate(1e-9)));
+        // No channels, so the frames cost no text: 16777216 frames at 120 Hz (39 h) took 6 GB.
+        let hours = without_channels("Frames: 16777216\nFrame Time: 0.0083333");
+        assert_eq!((hours.frames, hours.motion.len()), (16_777_216, 0));
+        let e = Motion::from_bvh(hours, None).unwrap_err();
+        assert!(
+            matches!(e, Limit(LimitError::Duration(s)) if (s - 139_810.0).abs() < 1.0),
+            "{e}"
+        );
+        // Within the duration limit (150 s at 2000 Hz), the samples limit stops it.
+        let many = pelvis(30, "0", "Frames: 300000\nFrame Time: 0.0005");
+        let e = Motion::from_bvh(many, None).unwrap_err();
+        let samples = LimitError::Samples {
+            frames: 300_000,
+            joints: 31,
+        };
+        assert_eq!(e, Limit(samples));
+    }
+
+    #[test]
+    fn frames_without_channels_are_all_kept() {
+        // Frame 0 of a file without rotation channels is no rest frame: it was dropped.
+        let still = Motion::from_bvh(without_channels("Frames: 3\nFrame Time: 0.01"), None);
+        let still = still.unwrap();
+        assert_eq!((still.frames(), still.rate_hz), (3, 100.0));
+        assert_eq!(still.frame(0), still.frame(2));
+    }
+
+    #[test]
+    fn resampling_refuses_before_allocating() {
+        let skeleton = Skeleton::standard(Format::Canonical).unwrap();
+        let n = skeleton.len();
+        let motion = |frames: usize, rate_hz: f32| Motion {
+            names: vec![String::new(); n],
+            rate_hz,
+            positions: vec![Vec3::zeros(); frames * n],
+            missing: vec![false; frames * n],
+            skeleton: skeleton.clone(),
+        };
+        // Built outside the readers: a source rate or duration beyond the limits.
+        let slow = motion(2, 1e-9);
+        assert_eq!(slow.resampled(60.0), Err(LimitError::Rate(1e-9)));
+        let long = motion(1202, 2.0);
+        assert_eq!(long.resampled(60.0), Err(LimitError::Duration(600.5)));
+        // Rates out of range, and more samples out than the limit.
+        let swing = motion(501, 1.0);
+        for rate in [0.0, -60.0, 0.5, 1e9, f32::NAN] {
+            let e = swing.resampled(rate).unwrap_err();
+            assert!(matches!(e, LimitError::Rate(r) if r.to_bits() == rate.to_bits()));
+        }
+        let samples = LimitError::Samples {
+            frames: 1_000_001,
+            joints: n,
+        };
+        assert_eq!(swing.resampled(2000.0), Err(samples));
+        assert_eq!(swing.resampled(60.0).unwrap().frames(), 30_001);
     }
 
     #[test]

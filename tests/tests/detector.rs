@@ -39,7 +39,8 @@ fn only_the_real_swings_come_out_of_a_stream() {
         .unwrap()
         .retarget_analytic(&driver)
         .unwrap()
-        .resampled(RATE_HZ);
+        .resampled(RATE_HZ)
+        .unwrap();
     let j = driver.skeleton.len();
     let address = driver.frame(0).to_vec();
 

@@ -69,7 +69,8 @@ fn regenerate() {
                 .unwrap();
         let swing = Motion::from_golf(&golf::joint_centres(&c3d).unwrap())
             .unwrap()
-            .resampled(GOLF_RATE_HZ);
+            .resampled(GOLF_RATE_HZ)
+            .unwrap();
         std::fs::write(
             fixture(&format!("golf_{club}_60hz.csv")),
             csv::write(&swing),

@@ -102,7 +102,7 @@ fn bad_messages_are_refused_and_change_nothing() {
 
 /// Pose frames at 30 Hz of `motion` (on a skeleton of `format`, whose keypoints are its joints).
 fn pose_frames(motion: &io::Motion, format: Format) -> Vec<Message> {
-    let swing = motion.resampled(30.0);
+    let swing = motion.resampled(30.0).unwrap();
     (0..swing.frames())
         .map(|f| {
             Message::PoseFrame(PoseFrame {

@@ -185,7 +185,7 @@ pub fn motion_files(data_dir: &Path) -> Vec<MotionFile> {
 /// # Errors
 /// A [`Error::File`] if it cannot be read, else as [`Clip::from_motion`].
 pub fn load_clip(file: &MotionFile) -> Result<Clip, Error> {
-    let motion = io::load(&file.path)?.resampled(CLIP_RATE_HZ);
+    let motion = io::load(&file.path)?.resampled(CLIP_RATE_HZ)?;
     Clip::from_motion(file.stem(), &standard_rest(&motion)?)
 }
 
@@ -339,7 +339,7 @@ impl Pool {
             for i in 0..count {
                 let params = SwingParams::sample(rng.rng());
                 let swing = golfgen::generate(&skeleton, &params, rng.rng())?;
-                let motion = swing.motion.resampled(CLIP_RATE_HZ);
+                let motion = swing.motion.resampled(CLIP_RATE_HZ)?;
                 let name = format!("synthetic_{}_{i}", split.name());
                 let clip = Clip::from_motion(&name, &standard_rest(&motion)?)?;
                 match split {

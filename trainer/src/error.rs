@@ -5,7 +5,7 @@ use posecoach_core::events::EventError;
 use posecoach_core::kinematics::LengthError;
 use posecoach_core::retarget::RetargetError;
 use posecoach_core::skeleton::SkeletonError;
-use posecoach_io::FileError;
+use posecoach_io::{FileError, LimitError};
 use std::fmt;
 
 /// Why a character, clip, pair or metric could not be made.
@@ -36,6 +36,8 @@ pub enum Error {
     Golf(GenError),
     /// A checkpoint could not be written or read.
     Checkpoint(String),
+    /// A motion would be resampled beyond the readers' limits.
+    Limit(LimitError),
 }
 
 impl fmt::Display for Error {
@@ -58,6 +60,7 @@ impl fmt::Display for Error {
             Error::EmptyBatch => f.write_str("a batch needs at least one window"),
             Error::Golf(e) => write!(f, "synthetic swing: {e}"),
             Error::Checkpoint(why) => write!(f, "checkpoint: {why}"),
+            Error::Limit(e) => write!(f, "resampling: {e}"),
         }
     }
 }
@@ -75,4 +78,5 @@ macro_rules! from {
 }
 
 from!(FileError => File, SkeletonError => Skeleton, LengthError => Length,
-      RetargetError => Retarget, EventError => Events, GenError => Golf);
+      RetargetError => Retarget, EventError => Events, GenError => Golf,
+      LimitError => Limit);

@@ -46,7 +46,7 @@ impl Window {
     /// # Errors
     /// [`Error::TooShort`] if fewer than [`WINDOW`] frames follow `start`.
     pub fn new(motion: &Motion, start: usize) -> Result<Window, Error> {
-        let motion = motion.resampled(RATE_HZ);
+        let motion = motion.resampled(RATE_HZ)?;
         let available = motion.frames().saturating_sub(start);
         if available < WINDOW {
             return Err(Error::TooShort {
@@ -360,7 +360,7 @@ mod tests {
             let source = character(from, i as u64);
             let target = character(onto, 10 + i as u64);
             windows.push(Window::new(&clip.on(&source).unwrap(), 0).unwrap());
-            truths.push(clip.on(&target).unwrap().resampled(RATE_HZ));
+            truths.push(clip.on(&target).unwrap().resampled(RATE_HZ).unwrap());
             bodies.push(target.skeleton);
         }
         let onto: Vec<_> = bodies.iter().collect();

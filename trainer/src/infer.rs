@@ -132,7 +132,7 @@ impl Retargeter {
         };
         let scale = prior.trajectory_scale(&source.skeleton, target)?;
         let phases = ((source.rate_hz / RATE_HZ).round() as usize).clamp(1, MAX_PHASES);
-        let fine = held(&source.resampled(RATE_HZ * phases as f32), WINDOW * phases);
+        let fine = held(&source.resampled(RATE_HZ * phases as f32)?, WINDOW * phases);
         let (length, m) = (fine.frames(), target.len());
         let mut positions = vec![Vec3::zeros(); length * m];
         for phase in 0..phases {
@@ -146,7 +146,7 @@ impl Retargeter {
                 positions[(phase + i * phases) * m..][..m].copy_from_slice(pose);
             }
         }
-        let out = motion(target, RATE_HZ * phases as f32, positions).resampled(source.rate_hz);
+        let out = motion(target, RATE_HZ * phases as f32, positions).resampled(source.rate_hz)?;
         Ok(fitted(out, frames))
     }
 

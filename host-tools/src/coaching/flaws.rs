@@ -553,7 +553,11 @@ mod tests {
             csv::read(include_str!("../../../tests/fixtures/golf_driver_60hz.csv")).unwrap();
         let found = events::detect(&source.skeleton, &source.positions, source.rate_hz).unwrap();
         let body = csv::read(include_str!("../../../tests/fixtures/h36m17_tpose.csv")).unwrap();
-        let swing = source.retarget_analytic(&body).unwrap().resampled(240.0);
+        let swing = source
+            .retarget_analytic(&body)
+            .unwrap()
+            .resampled(240.0)
+            .unwrap();
         (swing, times(&found, source.rate_hz), found.lead)
     }
 

@@ -193,7 +193,7 @@ pub fn run(args: &Args) -> Result<String> {
             let swing = motion
                 .retarget_analytic(body)
                 .map_err(|(f, e)| anyhow::anyhow!("{} frame {f}: {e}", path.display()))?
-                .resampled(LAYOUT_HZ);
+                .resampled(LAYOUT_HZ)?;
             cleans.push(Clean {
                 source: path.clone(),
                 coach: coach as u16,
