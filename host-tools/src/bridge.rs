@@ -131,8 +131,9 @@ impl Counting {
     }
 }
 
-/// A connected client: its queue and its socket (to close it).
+/// A connected client: its number, its queue and its socket (to close it).
 struct Client {
+    id: u64,
     lines: SyncSender<String>,
     stream: TcpStream,
 }
@@ -142,9 +143,25 @@ struct Shared {
     clients: Mutex<Vec<Client>>,
     connected: AtomicBool,
     counters: Counting,
+    /// Clients accepted so far: the next one's number.
+    accepted: AtomicU64,
 }
 
 impl Shared {
+    /// Forgets client `id` and closes its socket, which ends its writer: a client that left
+    /// holds nothing, whether or not the device speaks.
+    fn forget(&self, id: u64) {
+        if let Ok(mut clients) = self.clients.lock() {
+            clients.retain(|c| {
+                let keep = c.id != id;
+                if !keep {
+                    let _ = c.stream.shutdown(std::net::Shutdown::Both);
+                }
+                keep
+            });
+        }
+    }
+
     /// Queues `line` for every client; drops a client whose queue is full or gone.
     fn broadcast(&self, line: &str) {
         let Ok(mut clients) = self.clients.lock() else {
@@ -191,6 +208,7 @@ pub fn serve(
         clients: Mutex::new(Vec::new()),
         connected: AtomicBool::new(false),
         counters: Counting::default(),
+        accepted: AtomicU64::new(0),
     });
     let (to_device, frames) = sync_channel::<Vec<u8>>(TO_DEVICE_QUEUE);
     let serial = {
@@ -234,20 +252,34 @@ fn add_client(stream: TcpStream, shared: &Arc<Shared>, to_device: &SyncSender<Ve
     };
     let hello = json!({"bridge": {"event": "hello", "serial": serial}}).to_string();
     let _ = lines.try_send(hello);
+    let id = shared.accepted.fetch_add(1, Ordering::Relaxed);
     if let Ok(mut clients) = shared.clients.lock() {
         clients.push(Client {
+            id,
             lines: lines.clone(),
             stream: closer,
         });
     }
     std::thread::spawn(move || write_lines(writer, &queue));
     let (shared, to_device) = (shared.clone(), to_device.clone());
-    std::thread::spawn(move || read_lines(stream, &lines, &shared, &to_device));
+    std::thread::spawn(move || {
+        read_lines(stream, &lines, &shared, &to_device);
+        shared.forget(id);
+    });
 }
 
-fn write_lines(mut stream: TcpStream, queue: &Receiver<String>) {
-    for line in queue {
-        if writeln!(stream, "{line}").is_err() {
+/// Writes the client's lines as they come, all that are waiting in one write.
+fn write_lines(stream: TcpStream, queue: &Receiver<String>) {
+    let mut out = std::io::BufWriter::new(stream);
+    while let Ok(first) = queue.recv() {
+        let mut next = Some(first);
+        while let Some(line) = next {
+            if writeln!(out, "{line}").is_err() {
+                return;
+            }
+            next = queue.try_recv().ok();
+        }
+        if out.flush().is_err() {
             return;
         }
     }
@@ -256,7 +288,7 @@ fn write_lines(mut stream: TcpStream, queue: &Receiver<String>) {
 /// Each line of a client as a frame for the device; an error line back for one that is not a
 /// message.
 fn read_lines(
-    stream: TcpStream,
+    stream: impl Read,
     replies: &SyncSender<String>,
     shared: &Shared,
     to_device: &SyncSender<Vec<u8>>,
@@ -266,10 +298,11 @@ fn read_lines(
     for n in 1.. {
         let frame = match next_line(&mut reader, &mut line) {
             Ok(None) | Err(_) => return,
-            Ok(Some(_)) if line.trim_ascii().is_empty() => continue,
+            // (Before the blank case: the too-long line's bytes are already gone.)
             Ok(Some(false)) => Err(format!(
                 "line {n}: longer than {MAX_LINE} bytes, dropped: no message is that long"
             )),
+            Ok(Some(true)) if line.trim_ascii().is_empty() => continue,
             Ok(Some(true)) => serde_json::from_slice::<Message>(&line)
                 .map_err(|e| {
                     format!(
@@ -398,6 +431,7 @@ mod tests {
             clients: Mutex::new(Vec::new()),
             connected: AtomicBool::new(true),
             counters: Counting::default(),
+            accepted: AtomicU64::new(0),
         }
     }
 
@@ -417,10 +451,12 @@ mod tests {
         let (fast, fast_queue) = sync_channel(2);
         if let Ok(mut clients) = shared.clients.lock() {
             clients.push(Client {
+                id: 0,
                 lines: slow,
                 stream: slow_stream,
             });
             clients.push(Client {
+                id: 1,
                 lines: fast,
                 stream: fast_stream,
             });
@@ -450,13 +486,51 @@ mod tests {
     }
 
     #[test]
+    fn an_over_long_line_is_answered_and_counted_and_the_next_one_goes_through() {
+        let shared = shared();
+        let text = format!(
+            "{}\n\n{}\n",
+            "x".repeat(MAX_LINE + 1),
+            r#"{"Ack": {"seq": 7}}"#
+        );
+        let (replies, answers) = sync_channel(4);
+        let (to_device, frames) = sync_channel(4);
+        read_lines(text.as_bytes(), &replies, &shared, &to_device);
+        let answer = answers.try_recv().unwrap();
+        assert!(answer.contains("line 1: longer than"), "{answer}");
+        assert!(answers.try_recv().is_err());
+        assert_eq!(shared.counters.now().bad_lines, 1);
+        let ack = device_sim::frame(&Message::Ack { seq: 7 }).unwrap();
+        assert_eq!(frames.try_recv().ok(), Some(ack));
+    }
+
+    #[test]
+    fn a_client_that_closes_is_forgotten_at_once_though_the_device_is_silent() {
+        let shared = Arc::new(shared());
+        let (to_device, _frames) = sync_channel(4);
+        let (near, far) = socket();
+        add_client(near, &shared, &to_device);
+        assert_eq!(shared.clients.lock().map(|c| c.len()).ok(), Some(1));
+        drop(far);
+        let start = std::time::Instant::now();
+        while shared.clients.lock().map(|c| c.len()).ok() != Some(0) {
+            assert!(start.elapsed() < Duration::from_secs(10), "never forgotten");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    #[test]
     fn a_client_that_left_is_forgotten_without_counting() {
         let shared = shared();
         let (stream, _peer) = socket();
         let (lines, queue) = sync_channel(2);
         drop(queue);
         if let Ok(mut clients) = shared.clients.lock() {
-            clients.push(Client { lines, stream });
+            clients.push(Client {
+                id: 0,
+                lines,
+                stream,
+            });
         }
         shared.event("serial_lost", json!({"reason": "test"}));
         assert_eq!(shared.clients.lock().map(|c| c.len()).ok(), Some(0));

@@ -99,15 +99,21 @@ pub fn run(args: &Args) -> Result<String> {
     ))
 }
 
-/// A flag that Ctrl-C or SIGTERM sets.
+/// A flag that Ctrl-C or SIGTERM sets; a second one ends the process at once (status 130),
+/// so that nothing can keep it from stopping.
 ///
 /// # Errors
 /// If a signal handler is already installed.
 pub fn until_interrupted() -> Result<Arc<AtomicBool>> {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
-    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
-        .context("installing the Ctrl-C handler")?;
+    ctrlc::set_handler(move || {
+        if flag.swap(true, Ordering::Relaxed) {
+            eprintln!("interrupted again: stopping now");
+            std::process::exit(130);
+        }
+    })
+    .context("installing the Ctrl-C handler")?;
     Ok(stop)
 }
 
