@@ -19,6 +19,7 @@
 //! - [`joint`]: the canonical joint vocabulary and its parent table.
 //! - [`format`](mod@format): built-in keypoint formats mapped onto the vocabulary.
 //! - [`skeleton`]: joints, parents, rest offsets, body segments, end effectors, height.
+//! - [`plausible`]: the human limits a body and its motion must keep (stature, bones, speed).
 //! - [`kinematics`]: forward and inverse kinematics with per-bone rotations.
 //! - [`resample`]: linear resampling from one frame rate to another.
 //! - [`retarget`]: the analytic retargeter.
@@ -51,6 +52,7 @@ pub mod joint;
 pub mod kinematics;
 pub mod math;
 pub mod network;
+pub mod plausible;
 pub mod reference;
 pub mod resample;
 pub mod retarget;

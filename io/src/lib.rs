@@ -10,6 +10,7 @@ pub mod motion;
 
 pub use motion::{LimitError, Motion};
 
+use posecoach_core::plausible::{self, Implausible};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -45,6 +46,10 @@ pub enum FileErrorKind {
     Reference(posecoach_core::reference::ReferenceError),
     /// A coach reference beyond the limits ([`motion::check_limits`]).
     Limit(motion::LimitError),
+    /// A body or motion beyond human limits, with the name of the joint at fault if one is.
+    Implausible(Implausible, Option<String>),
+    /// A joint (named) that no frame captured.
+    NeverCaptured(String),
 }
 
 impl fmt::Display for FileError {
@@ -66,6 +71,14 @@ impl fmt::Display for FileError {
             FileErrorKind::Skeleton(e) => write!(f, "the joint centres are not a skeleton: {e}"),
             FileErrorKind::Reference(e) => e.fmt(f),
             FileErrorKind::Limit(e) => e.fmt(f),
+            FileErrorKind::Implausible(e, None) => write!(f, "not a human body: {e}"),
+            FileErrorKind::Implausible(e, Some(name)) => {
+                write!(f, "not a human body: {e} (joint `{name}`)")
+            }
+            FileErrorKind::NeverCaptured(name) => write!(
+                f,
+                "joint `{name}` is missing in every frame: a swing cannot be judged without it"
+            ),
         }
     }
 }
@@ -79,11 +92,49 @@ fn extension(path: &Path) -> String {
         .to_ascii_lowercase()
 }
 
-/// Reads a motion, choosing the reader by extension.
+/// Reads a motion, choosing the reader by extension, and checks it against the human limits
+/// ([`posecoach_core::plausible`]: stature, bones, joint speeds) and that every joint was
+/// captured at least once.
 ///
 /// # Errors
-/// A [`FileError`] naming the file and, inside it, the line, frame or byte at fault.
+/// A [`FileError`] naming the file and, inside it, the line, frame, byte or joint at fault.
 pub fn load(path: &Path) -> Result<Motion, FileError> {
+    let fail = |kind| FileError {
+        path: path.to_path_buf(),
+        kind,
+    };
+    let motion = read(path)?;
+    human(&motion).map_err(fail)?;
+    Ok(motion)
+}
+
+/// Whether `motion` is a human body that was seen: every joint captured in some frame, the
+/// skeleton and the joints' speeds within [`posecoach_core::plausible`]'s limits.
+fn human(motion: &Motion) -> Result<(), FileErrorKind> {
+    let n = motion.skeleton.len();
+    let seen = |k: usize| motion.missing.iter().skip(k).step_by(n).any(|&m| !m);
+    if let Some(k) = (0..n).find(|&k| !seen(k)) {
+        return Err(FileErrorKind::NeverCaptured(motion.names[k].clone()));
+    }
+    let name = |e: Implausible| {
+        let joint = match e {
+            Implausible::Stature(_) => None,
+            Implausible::Bone { joint, .. } | Implausible::Speed { joint, .. } => Some(joint),
+        };
+        FileErrorKind::Implausible(e, joint.and_then(|k| motion.names.get(k).cloned()))
+    };
+    plausible::body(&motion.skeleton).map_err(name)?;
+    plausible::motion(
+        &motion.skeleton,
+        &motion.positions,
+        Some(&motion.missing),
+        motion.rate_hz,
+    )
+    .map_err(name)
+}
+
+/// Reads a motion, choosing the reader by extension.
+fn read(path: &Path) -> Result<Motion, FileError> {
     let fail = |kind| FileError {
         path: path.to_path_buf(),
         kind,
@@ -135,6 +186,88 @@ pub fn save(motion: &Motion, path: &Path) -> Result<(), FileError> {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+
+    /// `text` loaded as a file named `name`.
+    fn load_text(name: &str, text: &str) -> Result<Motion, FileError> {
+        let path = std::env::temp_dir().join(format!("posecoach-io-{}-{name}", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        let loaded = load(&path);
+        std::fs::remove_file(&path).unwrap();
+        loaded
+    }
+
+    /// The driver fixture with `change` applied to each data row's cells (row number, column
+    /// name, cell).
+    fn driver_with(change: impl Fn(usize, &str, &mut String)) -> String {
+        let text = include_str!("../../tests/fixtures/golf_driver_60hz.csv");
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let rows = lines.enumerate().map(|(row, line)| {
+            let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
+            for (cell, column) in cells.iter_mut().zip(&header) {
+                change(row, column, cell);
+            }
+            cells.join(",")
+        });
+        let rows: Vec<String> = rows.collect();
+        format!("{}\n{}\n", header.join(","), rows.join("\n"))
+    }
+
+    #[test]
+    fn one_corrupt_coordinate_is_refused_naming_its_joint() {
+        let text = driver_with(|row, column, cell| {
+            if row == 50 && column == "left_wrist_x" {
+                *cell = (cell.parse::<f32>().unwrap() + 10.0).to_string();
+            }
+        });
+        let e = load_text("corrupt.csv", &text).unwrap_err();
+        assert!(
+            matches!(&e.kind, FileErrorKind::Implausible(Implausible::Speed { frame: 50, .. }, Some(n)) if n == "left_wrist"),
+            "{e}"
+        );
+        assert!(load_text("clean.csv", &driver_with(|_, _, _| {})).is_ok());
+    }
+
+    #[test]
+    fn a_joint_never_captured_is_named() {
+        let text = driver_with(|_, column, cell| {
+            if column.starts_with("left_elbow_") {
+                cell.clear();
+            }
+        });
+        let e = load_text("elbowless.csv", &text).unwrap_err();
+        assert!(
+            matches!(&e.kind, FileErrorKind::NeverCaptured(n) if n == "left_elbow"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_t_pose_of_no_human_size_is_refused() {
+        let text = include_str!("../../tests/fixtures/h36m17_tpose.csv");
+        let (header, row) = text.split_once('\n').unwrap();
+        for scale in [1e-2f32, 20.0, 1e20] {
+            let cells: Vec<String> = row
+                .trim()
+                .split(',')
+                .enumerate()
+                .map(|(k, c)| match k {
+                    0 => c.to_string(),
+                    _ => (c.parse::<f32>().unwrap() * scale).to_string(),
+                })
+                .collect();
+            let e =
+                load_text("tpose.csv", &format!("{header}\n{}\n", cells.join(","))).unwrap_err();
+            assert!(
+                matches!(
+                    e.kind,
+                    FileErrorKind::Implausible(Implausible::Stature(_), None)
+                ),
+                "scale {scale}: {e}"
+            );
+        }
+        assert!(load_text("tpose.csv", text).is_ok());
+    }
 
     #[test]
     fn a_coach_reference_beyond_the_limits_is_refused() {

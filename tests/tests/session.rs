@@ -4,6 +4,7 @@
 use posecoach_adapters::session::{BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session};
 use posecoach_core::dtw::Band;
 use posecoach_core::format::Format;
+use posecoach_core::plausible::Implausible;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{Config, Message, PoseFrame, StudentProfile};
 use posecoach_core::Vec3;
@@ -85,6 +86,22 @@ fn bad_messages_are_refused_and_change_nothing() {
         outcomes(&mut session, &Message::StudentProfile(short)),
         [Refusal::ProfileFormat(Format::H36m17)]
     );
+    assert!((session.student().unwrap().height() - height).abs() < 1e-6);
+    // Bodies no person has: a child of 30 cm, a giant of 3 m, one wrist 32 m from its elbow.
+    for tiny_or_huge in [0.3, 3.0] {
+        assert!(matches!(
+            outcomes(&mut session, &profile(tiny_or_huge))[..],
+            [Refusal::Implausible(Implausible::Stature(_))]
+        ));
+    }
+    let Message::StudentProfile(mut stretched) = profile(1.75) else {
+        unreachable!()
+    };
+    stretched.joints_mm[13] = [32_000, -32_000, 32_000];
+    assert!(matches!(
+        outcomes(&mut session, &Message::StudentProfile(stretched))[..],
+        [Refusal::Implausible(Implausible::Bone { joint: 13, .. })]
+    ));
     assert!((session.student().unwrap().height() - height).abs() < 1e-6);
     // Still working: a well-formed pose frame is taken.
     assert_eq!(outcomes(&mut session, &pose), []);

@@ -54,6 +54,7 @@ use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, EventError, Side, SwingEvents, STILL_S};
 use posecoach_core::format::Format;
 use posecoach_core::math::norm;
+use posecoach_core::plausible;
 use posecoach_core::resample;
 use posecoach_core::retarget::Fit;
 use posecoach_core::score::{self, Detected, Report, ScoreError, Stance, Unsure};
@@ -270,6 +271,7 @@ impl<'b> Session<'b> {
         let skeleton = template
             .with_bone_lengths(&lengths[..template.len()])
             .map_err(Refusal::Profile)?;
+        plausible::body(&skeleton).map_err(Refusal::Implausible)?;
         self.reconfigure(|s| &mut s.profile, Some(skeleton))
     }
 

@@ -6,6 +6,7 @@ use crate::pose_stream::StreamError;
 use posecoach_core::detector::DetectorError;
 use posecoach_core::events::EventError;
 use posecoach_core::format::Format;
+use posecoach_core::plausible::Implausible;
 use posecoach_core::skeleton::SkeletonError;
 use posecoach_core::wire::NackReason;
 
@@ -17,6 +18,8 @@ pub enum Refusal {
     NoProfile,
     /// The profile's keypoints do not make a skeleton.
     Profile(SkeletonError),
+    /// The profile's body is beyond human limits.
+    Implausible(Implausible),
     /// The profile's format has no joint table, or its keypoint count is wrong.
     ProfileFormat(Format),
     /// No stored coach reference has this number.
@@ -56,6 +59,7 @@ impl core::fmt::Display for Refusal {
         match self {
             Refusal::NoProfile => f.write_str("pose frames before a student profile"),
             Refusal::Profile(e) => write!(f, "student profile: {e}"),
+            Refusal::Implausible(e) => write!(f, "student profile: {e}"),
             Refusal::ProfileFormat(format) => write!(
                 f,
                 "student profile in format `{}` with no joint table or the wrong keypoint count",
