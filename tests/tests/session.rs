@@ -1,15 +1,18 @@
 //! The session's refusals: each bad message is refused with its reason and leaves the session
 //! as it was.
 
-use posecoach_adapters::session::{BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session};
+use posecoach_adapters::session::{
+    BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session, MAX_FRAMES_PER_MESSAGE,
+};
 use posecoach_core::dtw::Band;
 use posecoach_core::format::Format;
 use posecoach_core::plausible::Implausible;
 use posecoach_core::skeleton::Skeleton;
-use posecoach_core::wire::{Config, Message, PoseFrame, StudentProfile};
+use posecoach_core::wire::{Config, ImuSample, Message, PoseFrame, StudentProfile};
 use posecoach_core::Vec3;
 use posecoach_io as io;
 use posecoach_tests::fixture;
+use proptest::prelude::*;
 
 fn outcomes(session: &mut Session<'_>, message: &Message) -> Vec<Refusal> {
     let mut refused = Vec::new();
@@ -269,5 +272,140 @@ fn a_network_borrows_the_ring_at_its_rate() {
             .unwrap()
             .with_network(&weights);
         assert_eq!(outcomes(&mut session, &profile(1.75)), [], "{rate} Hz");
+    }
+}
+
+/// One message of a hostile phone, its time as a step from the last message's (any `u64`: far
+/// jumps, and wrapping round to a restarted clock).
+#[derive(Clone, Debug)]
+enum Hostile {
+    Pose {
+        seq: u32,
+        step: u64,
+        noise: Vec<[i16; 3]>,
+        confidence: Vec<u8>,
+    },
+    Imu {
+        sensor: u8,
+        step: u64,
+        accel: [i16; 3],
+        gyro: [i16; 3],
+        mag: Option<[i16; 3]>,
+    },
+    Layout,
+    Config {
+        rate: u16,
+        radius: u16,
+        anchored: bool,
+    },
+    Coach(u16),
+    Profile(f32),
+}
+
+fn step() -> impl Strategy<Value = u64> {
+    prop_oneof![8 => 0u64..100_000, 1 => any::<u64>(), 1 => Just(0)]
+}
+
+fn hostile() -> impl Strategy<Value = Hostile> {
+    let pose = (
+        any::<u32>(),
+        step(),
+        prop::collection::vec(any::<[i16; 3]>().prop_map(|v| v.map(|c| c % 300)), 17),
+        prop::option::of(prop::collection::vec(any::<u8>(), 17))
+            .prop_map(Option::unwrap_or_default),
+    )
+        .prop_map(|(seq, step, noise, confidence)| Hostile::Pose {
+            seq,
+            step,
+            noise,
+            confidence,
+        });
+    let imu = (
+        0u8..8,
+        step(),
+        any::<[i16; 3]>(),
+        any::<[i16; 3]>(),
+        any::<Option<[i16; 3]>>(),
+    )
+        .prop_map(|(sensor, step, accel, gyro, mag)| Hostile::Imu {
+            sensor,
+            step,
+            accel,
+            gyro,
+            mag,
+        });
+    prop_oneof![
+        6 => pose,
+        6 => imu,
+        1 => Just(Hostile::Layout),
+        1 => (any::<u16>(), any::<u16>(), any::<bool>())
+            .prop_map(|(rate, radius, anchored)| Hostile::Config { rate, radius, anchored }),
+        1 => any::<u16>().prop_map(Hostile::Coach),
+        1 => (0.2f32..3.0).prop_map(Hostile::Profile),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// Whatever a phone sends (times that jump, wrap or stand still, sequence numbers anywhere,
+    /// settings and layouts at any moment), no message gives swing detection more than
+    /// `MAX_FRAMES_PER_MESSAGE` frames: each message's work stays bounded.
+    #[test]
+    fn no_message_makes_unbounded_work(messages in prop::collection::vec(hostile(), 1..300)) {
+        let coach = io::load(&fixture("golf_driver_60hz.csv")).unwrap();
+        let coaches = [Coach {
+            skeleton: &coach.skeleton,
+            positions: &coach.positions,
+            rate_hz: coach.rate_hz,
+        }];
+        let mut buffers = OwnedBuffers::new(BufferLens::new(17, coach.frames(), 60));
+        let mut session = Session::new(&coaches, buffers.buffers());
+        let Message::StudentProfile(tpose) = profile(1.75) else { unreachable!() };
+        session.handle(&Message::StudentProfile(tpose.clone()), |_| {});
+        let layout = posecoach_cli::synth_imu::default_layout(
+            &Skeleton::standard(Format::H36m17).unwrap(),
+        );
+        let mut clock = 0u64;
+        for m in messages {
+            let message = match m {
+                Hostile::Pose { seq, step, noise, confidence } => {
+                    clock = clock.wrapping_add(step);
+                    Message::PoseFrame(PoseFrame {
+                        seq,
+                        t_us: clock,
+                        format: Format::H36m17,
+                        joints_mm: tpose
+                            .joints_mm
+                            .iter()
+                            .zip(&noise)
+                            .map(|(p, n)| [0, 1, 2].map(|i| p[i].saturating_add(n[i])))
+                            .collect(),
+                        confidence: confidence.into_iter().collect(),
+                    })
+                }
+                Hostile::Imu { sensor, step, accel, gyro, mag } => {
+                    clock = clock.wrapping_add(step);
+                    Message::ImuSample(ImuSample {
+                        sensor,
+                        t_us: clock,
+                        accel_mg: accel,
+                        gyro_ddps: gyro,
+                        mag_dut: mag,
+                    })
+                }
+                Hostile::Layout => Message::SensorLayout(layout.clone()),
+                Hostile::Config { rate, radius, anchored } => Message::Config(Config {
+                    model_rate_hz: rate,
+                    band: Band { radius, anchored },
+                }),
+                Hostile::Coach(coach) => Message::CoachSelect { coach },
+                Hostile::Profile(height) => profile(height),
+            };
+            let before = session.frames();
+            session.handle(&message, |_| {});
+            let given = session.frames() - before;
+            prop_assert!(given <= MAX_FRAMES_PER_MESSAGE, "{given} frames from {message:?}");
+        }
     }
 }

@@ -82,6 +82,13 @@ pub const MAX_COACHES: usize = 4;
 pub const SETUP_S: f32 = 0.5;
 /// Lowest and highest model rates, Hz.
 pub const RATES_HZ: (u16, u16) = (20, 120);
+/// Most frames one message gives swing detection: a pose frame fills the model-rate grid up to
+/// its time, and a longer gap than [`MAX_GAP_S`](crate::pose_stream::MAX_GAP_S) starts the
+/// stream afresh; an IMU sample completes a frame or two. Each frame's work is bounded by the
+/// joints and the ring, each swing's by [`MAX_SWING_FRAMES`](posecoach_core::config::MAX_SWING_FRAMES),
+/// so every message's work is bounded whatever its times, sequence numbers and values.
+pub const MAX_FRAMES_PER_MESSAGE: u64 =
+    (crate::pose_stream::MAX_GAP_S * RATES_HZ.1 as f32) as u64 + 1;
 
 /// Everything that follows the student's body.
 #[derive(Debug)]
@@ -137,6 +144,8 @@ pub struct Session<'b> {
     counted: StreamCounters,
     /// IMU samples not newer than their sensor's last one.
     stale: u32,
+    /// Frames given to swing detection.
+    frames: u64,
 }
 
 impl<'b> Session<'b> {
@@ -188,6 +197,7 @@ impl<'b> Session<'b> {
             report: None,
             counted: StreamCounters::default(),
             stale: 0,
+            frames: 0,
         }
     }
 
@@ -209,6 +219,12 @@ impl<'b> Session<'b> {
     /// on the link); they are not refusals.
     pub fn stale_samples(&self) -> u32 {
         self.stale
+    }
+
+    /// Frames given to swing detection since the session began (at most
+    /// [`MAX_FRAMES_PER_MESSAGE`] per message).
+    pub fn frames(&self) -> u64 {
+        self.frames
     }
 
     /// The student's skeleton, once a profile has been taken.
@@ -421,6 +437,7 @@ impl<'b> Session<'b> {
             ..
         } = student;
         let masks = &mut *self.unsure;
+        let frames = &mut self.frames;
         let fit = fit.as_ref().ok_or(Refusal::NoProfile)?;
         let rate = f32::from(self.config.model_rate_hz);
         let mut closed: Option<(SwingWindow, u64)> = None;
@@ -461,6 +478,7 @@ impl<'b> Session<'b> {
                         *slot = mask;
                     }
                     let t0 = *t0_us.get_or_insert(t_us);
+                    *frames += 1;
                     if let Ok(Some(window)) = detector.push(out) {
                         closed = Some((window, t0));
                     }
@@ -484,9 +502,11 @@ impl<'b> Session<'b> {
         } = student;
         let adapter = imu.as_mut().ok_or(Refusal::Input)?;
         let mut closed: Option<(SwingWindow, u64)> = None;
+        let frames = &mut self.frames;
         let pushed = adapter
             .push(skeleton, sample, |positions, activity| {
                 let t0 = *t0_us.get_or_insert(sample.t_us);
+                *frames += 1;
                 if let Ok(Some(window)) = detector.push_with_activity(positions, activity) {
                     closed = Some((window, t0));
                 }
