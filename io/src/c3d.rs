@@ -25,7 +25,7 @@
 //!
 //! [`C3d::to_bytes`] writes Intel files with metres as units and no analog channels, in either
 //! [`Storage`].
-use crate::motion::{check_limits, LimitError};
+use crate::limits::{check_limits, LimitError};
 use posecoach_core::Vec3;
 use std::fmt;
 

@@ -6,7 +6,8 @@
 //! T-pose: the skeleton is that pose. With more rows the skeleton takes its bone directions
 //! from the standard T-pose and its bone lengths from the mean over the frames.
 
-use crate::motion::{check_limits, hold_missing, measured_skeleton, LimitError, Motion};
+use crate::limits::{check_limits, LimitError};
+use crate::motion::{hold_missing, measured_skeleton, Motion};
 use posecoach_core::format::t_pose;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::{Skeleton, SkeletonError};

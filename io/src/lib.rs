@@ -6,9 +6,11 @@ pub mod bvh;
 pub mod c3d;
 pub mod csv;
 pub mod golf;
+pub mod limits;
 pub mod motion;
 
-pub use motion::{LimitError, Motion};
+pub use limits::LimitError;
+pub use motion::Motion;
 
 use posecoach_core::plausible::{self, Implausible};
 use std::fmt;
@@ -44,8 +46,8 @@ pub enum FileErrorKind {
     Skeleton(posecoach_core::skeleton::SkeletonError),
     /// A coach reference that does not read.
     Reference(posecoach_core::reference::ReferenceError),
-    /// A coach reference beyond the limits ([`motion::check_limits`]).
-    Limit(motion::LimitError),
+    /// A coach reference beyond the limits ([`limits::check_limits`]).
+    Limit(limits::LimitError),
     /// A body or motion beyond human limits, with the name of the joint at fault if one is.
     Implausible(Implausible, Option<String>),
     /// A joint (named) that no frame captured.
@@ -157,7 +159,7 @@ fn read(path: &Path) -> Result<Motion, FileError> {
             let motion =
                 Motion::from_reference(&bytes).map_err(|e| fail(FileErrorKind::Reference(e)))?;
             let (frames, joints) = (motion.frames(), motion.skeleton.len());
-            motion::check_limits(frames, joints, motion.rate_hz)
+            limits::check_limits(frames, joints, motion.rate_hz)
                 .map_err(|e| fail(FileErrorKind::Limit(e)))?;
             Ok(motion)
         }
@@ -280,7 +282,7 @@ mod tests {
         let e = load(&path).unwrap_err();
         std::fs::remove_file(&path).unwrap();
         assert!(
-            matches!(e.kind, FileErrorKind::Limit(motion::LimitError::Rate(r)) if r == 0.001),
+            matches!(e.kind, FileErrorKind::Limit(limits::LimitError::Rate(r)) if r == 0.001),
             "{e}"
         );
     }
