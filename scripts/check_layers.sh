@@ -5,6 +5,8 @@
 #   - adapters imports only core; io imports only core;
 #   - core::wire imports nothing from core::score (the wire is the ground floor; a report
 #     turns itself into its wire form);
+#   - teachfile (the float weights files' layout, which inspect reads without learn) imports no
+#     posecoach crate and no burn;
 #   - no import circle among a crate's modules (tests, at the bottom of each file, left out);
 #   - the default build of posecoach-cli and the tests that do not train link no burn: every
 #     use of the trainer or burn in host-tools and tests sits behind the `learn` feature.
@@ -21,8 +23,10 @@ forbid() { # forbid DIR PATTERN WHY
 forbid core/src 'posecoach_(adapters|io|cli|train|tests)\b' "core imports another posecoach crate"
 forbid adapters/src 'posecoach_(io|cli|train|tests)\b' "adapters imports more than core"
 forbid io/src 'posecoach_(adapters|cli|train|tests)\b' "io imports more than core"
+forbid teachfile/src '\b(posecoach_[a-z]+|burn)::' "teachfile imports another posecoach crate or burn"
 forbid core/src/wire.rs '(crate|super)::score\b' "core::wire imports core::score"
 
+grep -nE '^(burn|posecoach-)' teachfile/Cargo.toml && fail "teachfile/Cargo.toml depends on burn or a posecoach crate"
 for manifest in core/Cargo.toml adapters/Cargo.toml io/Cargo.toml; do
     if grep -nE '^posecoach-(adapters|io|cli|train)' "$manifest" | grep -v '^.*posecoach-core'; then
         fail "$manifest depends on a crate above it"
@@ -63,7 +67,7 @@ module_edges() {
             done
     done
 }
-for dir in core/src adapters/src io/src host-tools/src trainer/src; do
+for dir in core/src adapters/src io/src host-tools/src trainer/src teachfile/src; do
     loops=$(module_edges "$dir" | tsort 2>&1 >/dev/null || true)
     [ -z "$loops" ] || fail "import circle among the modules of $dir:"$'\n'"$loops"
 done

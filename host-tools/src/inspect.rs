@@ -1,15 +1,20 @@
-//! `posecoach inspect`: what a motion file or a weights blob holds.
+//! `posecoach inspect`: what a motion file or a weights file holds: int8 weights (the
+//! device's, `core::weights`) or float weights (a teacher, a distilled network or a training
+//! checkpoint, `posecoach_teachfile`; read without the `learn` feature).
 
 use anyhow::{Context, Result};
 use posecoach_core::skeleton::Segment;
 use posecoach_core::weights::{self, Dense, Table, Weights};
 use posecoach_io::{self as io, Motion};
+use posecoach_teachfile::{self as teachfile, Header};
 use serde_json::{json, Value};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// A motion file (.bvh, .c3d, .csv, .pcr) or int8 weights (.pcw from `posecoach export`).
+    /// A motion file (.bvh, .c3d, .csv, .pcr), int8 weights (.pcw from `posecoach export`) or
+    /// float weights (.pcw from `train --teacher` or `distill --distilled`, or a .pcckpt
+    /// checkpoint).
     file: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -25,6 +30,14 @@ pub fn run(args: &Args) -> Result<String> {
         return Ok(match args.json {
             true => format!("{header}\n"),
             false => weights_text(&header),
+        });
+    }
+    if teachfile::is_float_weights(&bytes) {
+        let report =
+            float_weights(&bytes).with_context(|| format!("reading {}", args.file.display()))?;
+        return Ok(match args.json {
+            true => format!("{report}\n"),
+            false => float_text(&report),
         });
     }
     let motion = io::load(&args.file)?;
@@ -226,4 +239,208 @@ pub fn weights_text(h: &Value) -> String {
         );
     }
     out
+}
+
+/// A float weights file's kind, version, header, parts and checksum, as JSON; a distilling
+/// checkpoint's also the header of the teacher file it carries.
+///
+/// # Errors
+/// If the file is not sound ([`posecoach_teachfile::Error`]: damaged, of an old version, a
+/// header word beyond its bound, parts that do not fit).
+pub fn float_weights(bytes: &[u8]) -> Result<Value> {
+    let file = teachfile::decode(bytes)?;
+    let parts: Vec<Value> = file
+        .kind
+        .parts()
+        .iter()
+        .zip(&file.parts)
+        .map(|(name, p)| json!({"name": name, "bytes": p.len()}))
+        .collect();
+    let mut report = json!({
+        "kind": "float weights",
+        "holds": file.kind.name(),
+        "version": teachfile::VERSION,
+        "bytes": bytes.len(),
+        "header": header_json(&file.header),
+        "parts": parts,
+        "checksum": {"algorithm": "CRC-32/ISO-HDLC", "value": format!("{:#010x}", file.crc),
+                     "ok": true},
+    });
+    if file.kind == teachfile::Kind::Distilling {
+        // The teacher file it distills, one level down (a file inside it is not opened).
+        report["teacher_file"] = match file.parts.last().map(|p| teachfile::decode(p)) {
+            Some(Ok(teacher)) => json!({"holds": teacher.kind.name(),
+                                        "header": header_json(&teacher.header)}),
+            Some(Err(e)) => json!({"error": e.to_string()}),
+            None => Value::Null,
+        };
+    }
+    Ok(report)
+}
+
+fn header_json(h: &Header) -> Value {
+    json!({
+        "step": h.step, "seed": h.seed, "batch": h.batch,
+        "features": h.features, "heads": h.heads, "kernel": h.kernel,
+        "switches": h.switches_on().collect::<Vec<_>>(),
+        "learning_rate": h.learning_rate,
+        "prior": teachfile::PRIORS.get(h.prior as usize).copied().unwrap_or("?"),
+    })
+}
+
+/// [`float_weights`] as text.
+pub fn float_text(r: &Value) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let network = |h: &Value| {
+        format!(
+            "d = {} per segment, {} heads, kernel {}, prior {}",
+            h["features"],
+            h["heads"],
+            h["kernel"],
+            h["prior"].as_str().unwrap_or("")
+        )
+    };
+    let training = |h: &Value| {
+        let losses: Vec<&str> = h["switches"]
+            .as_array()
+            .map(|s| s.iter().filter_map(Value::as_str).collect())
+            .unwrap_or_default();
+        format!(
+            "{} steps, seed {}, batch {}, learning rate {}, losses beyond reconstruction: {}",
+            h["step"],
+            h["seed"],
+            h["batch"],
+            h["learning_rate"],
+            match losses.is_empty() {
+                true => "none".to_string(),
+                false => losses.join(", "),
+            }
+        )
+    };
+    let h = &r["header"];
+    _ = writeln!(
+        out,
+        "kind:     float weights ({}), format version {}, {} bytes",
+        r["holds"].as_str().unwrap_or(""),
+        r["version"],
+        r["bytes"]
+    );
+    _ = writeln!(out, "network:  {}", network(h));
+    _ = writeln!(out, "training: {}", training(h));
+    let parts = r["parts"].as_array().map(Vec::as_slice).unwrap_or(&[]);
+    _ = writeln!(out, "parts:    {}", parts.len());
+    for p in parts {
+        _ = writeln!(
+            out,
+            "  {:<24} {:>9} bytes",
+            p["name"].as_str().unwrap_or(""),
+            p["bytes"]
+        );
+    }
+    let t = &r["teacher_file"];
+    if let Some(e) = t["error"].as_str() {
+        _ = writeln!(out, "teacher:  not sound: {e}");
+    } else if !t.is_null() {
+        _ = writeln!(
+            out,
+            "teacher:  {}; {}",
+            network(&t["header"]),
+            training(&t["header"])
+        );
+    }
+    let c = &r["checksum"];
+    _ = writeln!(
+        out,
+        "checksum: {} {}, {}",
+        c["algorithm"].as_str().unwrap_or(""),
+        c["value"].as_str().unwrap_or(""),
+        match c["ok"].as_bool() {
+            Some(true) => "matches",
+            _ => "does not match",
+        }
+    );
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEADER: Header = Header {
+        step: 12,
+        seed: 3,
+        batch: 8,
+        features: 16,
+        heads: 2,
+        kernel: 3,
+        switches: 0b00101,
+        learning_rate: 1e-3,
+        prior: 0,
+    };
+
+    #[test]
+    fn a_distilling_checkpoint_shows_its_parts_and_the_teacher_it_carries() {
+        let teacher = teachfile::encode(
+            &Header {
+                features: 32,
+                prior: 1,
+                ..HEADER
+            },
+            &[vec![1u8; 10]],
+        )
+        .unwrap();
+        let parts = [vec![2u8; 5], vec![3; 6], vec![4; 7], vec![5; 8], teacher];
+        let bytes = teachfile::encode(&HEADER, &parts).unwrap();
+        let r = float_weights(&bytes).unwrap();
+        assert_eq!(r["holds"], "distilling checkpoint");
+        let names: Vec<&str> = r["parts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p["name"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "network",
+                "discriminator",
+                "network optimizer",
+                "discriminator optimizer",
+                "teacher file"
+            ]
+        );
+        assert_eq!(r["header"]["switches"], json!(["cycle", "adversarial"]));
+        assert_eq!(r["teacher_file"]["header"]["features"], 32);
+        assert_eq!(r["teacher_file"]["header"]["prior"], "rotations");
+        let text = float_text(&r);
+        assert!(
+            text.contains("float weights (distilling checkpoint), format version 3"),
+            "{text}"
+        );
+        assert!(text.contains("teacher:  d = 32 per segment"), "{text}");
+        assert!(
+            text.contains("losses beyond reconstruction: cycle, adversarial"),
+            "{text}"
+        );
+
+        // A damaged teacher inside a sound checkpoint is named, not opened.
+        let mut parts = parts;
+        parts[4][20] ^= 1;
+        let r = float_weights(&teachfile::encode(&HEADER, &parts).unwrap()).unwrap();
+        let error = r["teacher_file"]["error"].as_str().unwrap();
+        assert!(error.starts_with("damaged"), "{error}");
+        assert!(float_text(&r).contains("teacher:  not sound: damaged"));
+    }
+
+    #[test]
+    fn a_checkpoint_has_four_named_parts() {
+        let parts = [vec![2u8; 5], vec![3; 6], vec![4; 7], vec![5; 8]];
+        let r = float_weights(&teachfile::encode(&HEADER, &parts).unwrap()).unwrap();
+        assert_eq!(r["holds"], "checkpoint");
+        assert_eq!(r["parts"][3]["name"], "discriminator optimizer");
+        assert_eq!(r["parts"][3]["bytes"], 8);
+        assert!(r["teacher_file"].is_null());
+        assert!(!float_text(&r).contains("teacher:"));
+    }
 }

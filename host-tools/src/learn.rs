@@ -159,7 +159,11 @@ pub fn train(args: &TrainArgs) -> Result<String> {
     let trainer = match &args.resume {
         Some(path) => Trainer::load(path, &device)
             .with_context(|| format!("resuming from {}", path.display()))?,
-        None => Trainer::new(config, &device),
+        None => {
+            // What the checkpoints could not state is refused now, not at the first one.
+            config.check()?;
+            Trainer::new(config, &device)
+        }
     };
     let pool = args.data.pool(trainer.config().seed)?;
     let steps = args.epochs * STEPS_PER_EPOCH;
@@ -254,6 +258,7 @@ pub fn distill(args: &DistillArgs) -> Result<String> {
                 seed: args.seed,
                 ..TrainConfig::default()
             };
+            config.check()?;
             Trainer::distilling(&args.teacher, config, &device)
                 .with_context(|| format!("loading {}", args.teacher.display()))?
         }

@@ -143,3 +143,61 @@ fn errors_name_the_file_and_what_to_fix() {
     assert!(!ok);
     assert!(err.contains("swing"), "{err}");
 }
+
+fn weights(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../weights")
+        .join(name)
+}
+
+/// `inspect` reads the float weights without the `learn` feature (this build has none): kind,
+/// version, header, parts, checksum.
+#[test]
+fn inspect_describes_float_weights_and_refuses_damaged_ones() {
+    let teacher = weights("teacher.pcw");
+    let (ok, out, err) = posecoach(&["inspect", teacher.to_str().unwrap(), "--json"]);
+    assert!(ok, "{err}");
+    let r: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(r["kind"], "float weights");
+    assert_eq!(r["holds"], "network");
+    assert_eq!(r["version"], 3);
+    assert_eq!(r["bytes"], 343_408);
+    let h = &r["header"];
+    assert_eq!(
+        (&h["features"], &h["heads"], &h["kernel"]),
+        (&32.into(), &2.into(), &3.into())
+    );
+    assert_eq!(
+        (&h["step"], &h["prior"]),
+        (&10_000.into(), &"rotations".into())
+    );
+    assert_eq!(r["parts"][0]["name"], "network");
+    assert_eq!(r["parts"][0]["bytes"], 343_308);
+    assert_eq!(r["checksum"]["ok"], true);
+    let (ok, text, err) = posecoach(&["inspect", weights("distilled.pcw").to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(text.contains("d = 16 per segment"), "{text}");
+    assert!(text.contains("checksum: CRC-32/ISO-HDLC 0x"), "{text}");
+
+    let dir = std::env::temp_dir().join(format!("posecoach-inspect-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut bytes = std::fs::read(&teacher).unwrap();
+    bytes[1000] ^= 4;
+    let damaged = dir.join("damaged.pcw");
+    std::fs::write(&damaged, &bytes).unwrap();
+    let (ok, _, err) = posecoach(&["inspect", damaged.to_str().unwrap()]);
+    assert!(
+        !ok && err.contains("damaged") && err.contains("damaged.pcw"),
+        "{err}"
+    );
+    bytes[1000] ^= 4;
+    bytes[7] = b'2';
+    let old = dir.join("old.pcw");
+    std::fs::write(&old, &bytes).unwrap();
+    let (ok, _, err) = posecoach(&["inspect", old.to_str().unwrap()]);
+    assert!(
+        !ok && err.contains("PCTEACH2") && err.contains("re-save"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -6,6 +6,7 @@ use posecoach_core::kinematics::LengthError;
 use posecoach_core::retarget::RetargetError;
 use posecoach_core::skeleton::SkeletonError;
 use posecoach_io::{FileError, LimitError};
+use posecoach_teachfile::Error as TeachFileError;
 use std::fmt;
 
 /// Why a character, clip, pair or metric could not be made.
@@ -38,6 +39,10 @@ pub enum Error {
     Checkpoint(String),
     /// A motion would be resampled beyond the readers' limits.
     Limit(LimitError),
+    /// A float weights file or checkpoint is damaged (its CRC), of a version no longer read,
+    /// or states a header word beyond its bound ([`posecoach_teachfile`]): found before
+    /// anything is allocated for it.
+    TeachFile(TeachFileError),
 }
 
 impl fmt::Display for Error {
@@ -61,6 +66,7 @@ impl fmt::Display for Error {
             Error::Golf(e) => write!(f, "synthetic swing: {e}"),
             Error::Checkpoint(why) => write!(f, "checkpoint: {why}"),
             Error::Limit(e) => write!(f, "resampling: {e}"),
+            Error::TeachFile(e) => write!(f, "float weights: {e}"),
         }
     }
 }
@@ -79,4 +85,4 @@ macro_rules! from {
 
 from!(FileError => File, SkeletonError => Skeleton, LengthError => Length,
       RetargetError => Retarget, EventError => Events, GenError => Golf,
-      LimitError => Limit);
+      LimitError => Limit, TeachFileError => TeachFile);

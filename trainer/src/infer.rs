@@ -19,7 +19,7 @@ use crate::error::Error;
 use crate::features::{Batch, Window, RATE_HZ, WINDOW};
 use crate::model::{Teacher, TeacherConfig};
 use crate::prior::PriorKind;
-use crate::train::{load_teacher, TrainConfig};
+use crate::train::{read_weights, teacher_from_bytes, TrainConfig};
 use burn::prelude::Device;
 use posecoach_core::network;
 use posecoach_core::skeleton::Skeleton;
@@ -58,17 +58,18 @@ impl Retargeter {
     /// The network in a checkpoint or teacher file ([`crate::train`]) or a weights blob.
     ///
     /// # Errors
-    /// [`Error::Checkpoint`] if the file cannot be read.
+    /// [`Error::Checkpoint`] if the file cannot be read or its network not loaded,
+    /// [`Error::TeachFile`] if a float file is not sound.
     pub fn load(path: &Path) -> Result<Retargeter, Error> {
         let name = path
             .file_stem()
             .map_or("teacher".into(), |s| s.to_string_lossy().into_owned());
-        let bytes = std::fs::read(path).map_err(|e| Error::Checkpoint(e.to_string()))?;
+        let bytes = read_weights(path)?;
         if bytes.starts_with(&weights::MAGIC) {
             return Retargeter::int8(name, &bytes);
         }
         let device = Device::flex();
-        let (teacher, config, steps) = load_teacher(path, &device)?;
+        let (teacher, config, steps) = teacher_from_bytes(&bytes, &device)?;
         Ok(Retargeter {
             name,
             model: Model::Float {

@@ -6,6 +6,10 @@
 //! its own step on real windows against `A → B`. Batches come from `(seed, step)` alone, so a
 //! run resumed from a checkpoint continues exactly as the uninterrupted run would.
 //!
+//! Checkpoints and network files are float weights files ([`posecoach_teachfile`]): a reader
+//! checks the whole file's CRC and every header word against its bound before it builds
+//! anything from them.
+//!
 //! ```no_run
 //! use burn::prelude::Device;
 //! use posecoach_train::dataset::Pool;
@@ -38,7 +42,9 @@ use burn::store::ModuleRecord;
 use burn::tensor::Bytes;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;
+use posecoach_teachfile::{self as teachfile, TeachFile};
 use rand::Rng;
+use std::io::Read;
 use std::path::Path;
 
 /// Adam's starting learning rate. The teacher starts at the analytic solution and learns a
@@ -55,13 +61,6 @@ pub const BATCH: usize = 8;
 pub const WORKERS: usize = 2;
 /// Share of examples whose target is in the source's format.
 pub const INTRA_SHARE: f64 = 0.5;
-/// First bytes of a checkpoint file.
-const MAGIC: &[u8; 8] = b"PCTEACH2";
-/// First bytes of a checkpoint file from before the prior was chosen (read as
-/// [`PriorKind::Chords`], without the header's last word).
-const MAGIC_CHORDS: &[u8; 8] = b"PCTEACH1";
-/// Words of a header.
-const HEADER_WORDS: usize = 9;
 
 /// What a training run is.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -76,6 +75,23 @@ pub struct TrainConfig {
     pub switches: Switches,
     /// Seeds the weights and every batch.
     pub seed: u64,
+}
+
+impl TrainConfig {
+    /// Checks that a file can state this configuration: every size and rate within the
+    /// bounds a reader holds them to ([`posecoach_teachfile::Header::check`]). Check before
+    /// training: [`Trainer::save`] refuses a configuration out of bounds.
+    ///
+    /// # Errors
+    /// [`Error::TeachFile`] naming the first value out of bounds.
+    pub fn check(&self) -> Result<(), Error> {
+        Ok(Header {
+            config: *self,
+            step: 0,
+        }
+        .to_file()
+        .check()?)
+    }
 }
 
 impl Default for TrainConfig {
@@ -194,9 +210,7 @@ impl Trainer {
         config: TrainConfig,
         device: &Device,
     ) -> Result<Trainer, Error> {
-        let bytes = std::fs::read(teacher)
-            .map_err(|e| checkpoint(format!("{}: {e}", teacher.display())))?;
-        Trainer::distilling_bytes(bytes, config, device)
+        Trainer::distilling_bytes(read_weights(teacher)?, config, device)
     }
 
     fn distilling_bytes(
@@ -204,13 +218,7 @@ impl Trainer {
         config: TrainConfig,
         device: &Device,
     ) -> Result<Trainer, Error> {
-        let (header, parts) = decode(&bytes)
-            .ok_or_else(|| checkpoint("the teacher to distill is not a teacher file"))?;
-        let weights = parts
-            .into_iter()
-            .next()
-            .ok_or_else(|| checkpoint("holds no teacher"))?;
-        let reference = load_module(header.config.teacher.init(device), weights)?;
+        let (reference, _, _) = teacher_from_bytes(&bytes, device)?;
         let mut trainer = Trainer::new(config, device);
         trainer.reference = Some((reference, bytes));
         Ok(trainer)
@@ -226,17 +234,14 @@ impl Trainer {
         config: TrainConfig,
         device: &Device,
     ) -> Result<Trainer, Error> {
-        let (header, parts) = read_file(path)?;
-        let bytes = parts
-            .into_iter()
-            .next()
-            .ok_or_else(|| checkpoint("holds no teacher"))?;
+        let bytes = read_weights(path)?;
+        let file = teachfile::decode(&bytes)?;
         let config = TrainConfig {
-            teacher: header.config.teacher,
+            teacher: Header::from_file(&file.header).config.teacher,
             ..config
         };
         let mut trainer = Trainer::new(config, device);
-        trainer.teacher = load_module(trainer.teacher, bytes)?.train();
+        trainer.teacher = load_module(trainer.teacher, network_part(&file)?)?.train();
         Ok(trainer)
     }
 
@@ -466,27 +471,27 @@ impl Trainer {
     /// # Errors
     /// [`Error::Checkpoint`] if the file cannot be read or is not a full checkpoint.
     pub fn load(path: &Path, device: &Device) -> Result<Trainer, Error> {
-        let (header, mut parts) = read_file(path)?;
-        let reference = match parts.len() {
-            5 => parts.pop(),
-            _ => None,
+        let bytes = read_weights(path)?;
+        let file = teachfile::decode(&bytes)?;
+        let header = Header::from_file(&file.header);
+        let [teacher, discriminator, teacher_adam, discriminator_adam, reference @ ..] =
+            file.parts.as_slice()
+        else {
+            return Err(checkpoint("holds the teacher alone, not a training state"));
         };
-        let [teacher, discriminator, teacher_adam, discriminator_adam] =
-            <[Vec<u8>; 4]>::try_from(parts)
-                .map_err(|_| checkpoint("holds the teacher alone, not a training state"))?;
-        let mut trainer = match reference {
-            Some(bytes) => Trainer::distilling_bytes(bytes, header.config, device)?,
+        let mut trainer = match reference.first() {
+            Some(bytes) => Trainer::distilling_bytes(bytes.to_vec(), header.config, device)?,
             None => Trainer::new(header.config, device),
         };
-        trainer.teacher = load_module(trainer.teacher, teacher)?.train();
-        trainer.discriminator = load_module(trainer.discriminator, discriminator)?.train();
+        trainer.teacher = load_module(trainer.teacher, teacher.to_vec())?.train();
+        trainer.discriminator = load_module(trainer.discriminator, discriminator.to_vec())?.train();
         trainer.teacher_adam = trainer
             .teacher_adam
-            .from_bytes(Bytes::from_bytes_vec(teacher_adam))
+            .from_bytes(Bytes::from_bytes_vec(teacher_adam.to_vec()))
             .map_err(checkpoint)?;
         trainer.discriminator_adam = trainer
             .discriminator_adam
-            .from_bytes(Bytes::from_bytes_vec(discriminator_adam))
+            .from_bytes(Bytes::from_bytes_vec(discriminator_adam.to_vec()))
             .map_err(checkpoint)?;
         trainer.step = header.step;
         Ok(trainer)
@@ -625,15 +630,53 @@ fn discriminator_pass(
 /// the configuration and steps it was trained with.
 ///
 /// # Errors
-/// [`Error::Checkpoint`] if the file cannot be read.
+/// As [`teacher_from_bytes`]; [`Error::Checkpoint`] if the file cannot be read.
 pub fn load_teacher(path: &Path, device: &Device) -> Result<(Teacher, TrainConfig, usize), Error> {
-    let (header, parts) = read_file(path)?;
-    let bytes = parts
-        .into_iter()
-        .next()
-        .ok_or_else(|| checkpoint("holds no teacher"))?;
-    let teacher = load_module(header.config.teacher.init(device), bytes)?;
+    teacher_from_bytes(&read_weights(path)?, device)
+}
+
+/// [`load_teacher`] of a file's bytes. The file is checked whole (its CRC, every header word
+/// against its bound, its parts' lengths: [`posecoach_teachfile::decode`]) before the network
+/// is built from its header.
+///
+/// # Errors
+/// [`Error::TeachFile`] if the bytes are not a sound float weights file;
+/// [`Error::Checkpoint`] if its network's part does not load into the network it describes.
+pub fn teacher_from_bytes(
+    bytes: &[u8],
+    device: &Device,
+) -> Result<(Teacher, TrainConfig, usize), Error> {
+    let file = teachfile::decode(bytes)?;
+    let header = Header::from_file(&file.header);
+    let teacher = load_module(header.config.teacher.init(device), network_part(&file)?)?;
     Ok((teacher, header.config, header.step))
+}
+
+/// The bytes of the weights file at `path`, refused unread if larger than any weights file.
+///
+/// # Errors
+/// [`Error::Checkpoint`] if it cannot be read, [`Error::TeachFile`] if it is too large.
+pub(crate) fn read_weights(path: &Path) -> Result<Vec<u8>, Error> {
+    let io = |e: std::io::Error| checkpoint(format!("{}: {e}", path.display()));
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| {
+            f.take(teachfile::MAX_FILE_BYTES + 1)
+                .read_to_end(&mut bytes)
+        })
+        .map_err(io)?;
+    match bytes.len() as u64 {
+        len if len > teachfile::MAX_FILE_BYTES => Err(teachfile::Error::TooLarge { len }.into()),
+        _ => Ok(bytes),
+    }
+}
+
+/// A file's first part, its network's record.
+fn network_part(file: &TeachFile<'_>) -> Result<Vec<u8>, Error> {
+    file.parts
+        .first()
+        .map(|p| p.to_vec())
+        .ok_or_else(|| checkpoint("holds no network"))
 }
 
 /// `module` with every parameter drawn now: burn draws them lazily, at first use, from the
@@ -683,9 +726,9 @@ struct Header {
 }
 
 impl Header {
-    /// As little-endian words: step, seed, batch, d, heads, kernel, switches, learning rate,
-    /// prior (0 chords, 1 rotations).
-    fn to_words(self) -> [u64; HEADER_WORDS] {
+    /// As a file's header (step, seed, batch, d, heads, kernel, switches, learning rate,
+    /// prior: [`posecoach_teachfile::Header`]).
+    fn to_file(self) -> teachfile::Header {
         let c = self.config;
         let s = c.switches;
         let switches = [
@@ -699,31 +742,32 @@ impl Header {
         .enumerate()
         .map(|(i, &on)| u64::from(on) << i)
         .sum();
-        [
-            self.step as u64,
-            c.seed,
-            c.batch as u64,
-            c.teacher.features as u64,
-            c.teacher.heads as u64,
-            c.teacher.kernel as u64,
+        teachfile::Header {
+            step: self.step as u64,
+            seed: c.seed,
+            batch: c.batch as u64,
+            features: c.teacher.features as u64,
+            heads: c.teacher.heads as u64,
+            kernel: c.teacher.kernel as u64,
             switches,
-            c.learning_rate.to_bits(),
-            u64::from(c.teacher.prior == PriorKind::Rotations),
-        ]
+            learning_rate: c.learning_rate,
+            prior: u64::from(c.teacher.prior == PriorKind::Rotations),
+        }
     }
 
-    fn from_words(w: [u64; HEADER_WORDS]) -> Header {
-        let on = |i: u32| w[6] >> i & 1 == 1;
+    /// A checked file header's (every word within its bound, so every size fits a `usize`).
+    fn from_file(h: &teachfile::Header) -> Header {
+        let on = |i: u32| h.switches >> i & 1 == 1;
         Header {
-            step: w[0] as usize,
+            step: h.step as usize,
             config: TrainConfig {
-                seed: w[1],
-                batch: w[2] as usize,
+                seed: h.seed,
+                batch: h.batch as usize,
                 teacher: TeacherConfig {
-                    features: w[3] as usize,
-                    heads: w[4] as usize,
-                    kernel: w[5] as usize,
-                    prior: match w[8] {
+                    features: h.features as usize,
+                    heads: h.heads as usize,
+                    kernel: h.kernel as usize,
+                    prior: match h.prior {
                         0 => PriorKind::Chords,
                         _ => PriorKind::Rotations,
                     },
@@ -735,77 +779,20 @@ impl Header {
                     joint_distances: on(3),
                     geometry: on(4),
                 },
-                learning_rate: f64::from_bits(w[7]),
+                learning_rate: h.learning_rate,
             },
         }
     }
 }
 
-/// `MAGIC`, the header's words, then each part as a length and its bytes.
+/// The header and parts as a float weights file ([`posecoach_teachfile`]: with its CRC),
+/// written whole to a temporary file that then replaces `path`.
 fn write_file(path: &Path, header: &Header, parts: &[Vec<u8>]) -> Result<(), Error> {
-    let out = encode(header, parts);
+    let out = teachfile::encode(&header.to_file(), parts)?;
     let partial = path.with_extension("partial");
     std::fs::write(&partial, out)
         .and_then(|()| std::fs::rename(&partial, path))
         .map_err(|e| checkpoint(format!("{}: {e}", path.display())))
-}
-
-fn encode(header: &Header, parts: &[Vec<u8>]) -> Vec<u8> {
-    let mut out = MAGIC.to_vec();
-    out.extend(header.to_words().iter().flat_map(|w| w.to_le_bytes()));
-    out.extend((parts.len() as u64).to_le_bytes());
-    for part in parts {
-        out.extend((part.len() as u64).to_le_bytes());
-        out.extend(part);
-    }
-    out
-}
-
-fn read_file(path: &Path) -> Result<(Header, Vec<Vec<u8>>), Error> {
-    let bytes = std::fs::read(path).map_err(|e| checkpoint(format!("{}: {e}", path.display())))?;
-    decode(&bytes).ok_or_else(|| {
-        checkpoint(format!(
-            "{} is not a posecoach teacher file",
-            path.display()
-        ))
-    })
-}
-
-fn decode(bytes: &[u8]) -> Option<(Header, Vec<Vec<u8>>)> {
-    let (rest, words_stored) = match bytes.strip_prefix(MAGIC.as_slice()) {
-        Some(rest) => (rest, HEADER_WORDS),
-        None => (
-            bytes.strip_prefix(MAGIC_CHORDS.as_slice())?,
-            HEADER_WORDS - 1,
-        ),
-    };
-    let mut reader = Reader(rest);
-    let mut words = [0u64; HEADER_WORDS];
-    for w in &mut words[..words_stored] {
-        *w = reader.word()?;
-    }
-    let count = reader.word()?;
-    let mut parts = Vec::new();
-    for _ in 0..count {
-        let length = reader.word()?;
-        parts.push(reader.take(length)?.to_vec());
-    }
-    Some((Header::from_words(words), parts))
-}
-
-/// Reads a checkpoint's bytes front to back.
-struct Reader<'a>(&'a [u8]);
-
-impl<'a> Reader<'a> {
-    fn take(&mut self, n: u64) -> Option<&'a [u8]> {
-        let (head, tail) = self.0.split_at_checked(usize::try_from(n).ok()?)?;
-        self.0 = tail;
-        Some(head)
-    }
-
-    fn word(&mut self) -> Option<u64> {
-        Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
-    }
 }
 
 #[cfg(test)]
@@ -1000,7 +987,7 @@ mod tests {
         std::fs::write(&teacher, b"PCTEACH1 short").unwrap();
         assert!(matches!(
             load_teacher(&teacher, &Device::flex()),
-            Err(Error::Checkpoint(_))
+            Err(Error::TeachFile(teachfile::Error::Legacy { version: 1 }))
         ));
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -1030,6 +1017,259 @@ mod tests {
             );
         }
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The smallest network the bounds allow: 2 features, one head, kernel 1.
+    const SMALLEST: TeacherConfig = TeacherConfig {
+        features: 2,
+        heads: 1,
+        kernel: 1,
+        prior: PriorKind::Chords,
+    };
+
+    /// A network file of `teacher`'s sizes, untrained, as `save_teacher` writes it.
+    fn network_file(teacher: TeacherConfig, name: &str) -> Vec<u8> {
+        let dir = std::env::temp_dir().join(format!("posecoach-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("net.pcw");
+        let config = TrainConfig { teacher, ..tiny(2) };
+        Trainer::new(config, &Device::flex().autodiff())
+            .save_teacher(&path)
+            .unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        bytes
+    }
+
+    /// `bytes` with header word `i` (the part count at `HEADER_WORDS`) set to `value` and the
+    /// CRC made to match again: what a deliberate edit, not damage, looks like.
+    fn forged(bytes: &[u8], i: usize, value: u64) -> Vec<u8> {
+        let mut out = bytes.to_vec();
+        let at = teachfile::MAGIC.len() + 8 * i;
+        out[at..at + 8].copy_from_slice(&value.to_le_bytes());
+        let n = out.len() - 4;
+        let crc = teachfile::checksum(&out[..n]);
+        out[n..].copy_from_slice(&crc.to_le_bytes());
+        out
+    }
+
+    #[test]
+    fn every_single_bit_flip_of_a_small_network_file_is_rejected() {
+        let mut bytes = network_file(SMALLEST, "flips");
+        let device = Device::flex();
+        let (teacher, config, _) = teacher_from_bytes(&bytes, &device).unwrap();
+        assert_eq!(config.teacher, SMALLEST);
+        let start = Instant::now();
+        for bit in 0..bytes.len() * 8 {
+            bytes[bit / 8] ^= 1 << (bit % 8);
+            match teacher_from_bytes(&bytes, &device) {
+                Err(Error::TeachFile(_)) => {}
+                Err(e) => panic!("bit {bit}: {e}"),
+                Ok(_) => panic!("bit {bit} flipped was read"),
+            }
+            bytes[bit / 8] ^= 1 << (bit % 8);
+        }
+        eprintln!(
+            "{} bits of a {}-byte file ({} parameters), each flip rejected, in {:?}",
+            bytes.len() * 8,
+            bytes.len(),
+            teacher.num_params(),
+            start.elapsed()
+        );
+    }
+
+    /// What a header word set to a value does to the smallest network's file.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    enum Outcome {
+        /// Refused by its bound, naming the word.
+        Refused,
+        /// Within bounds and the network loads.
+        Loads,
+        /// Within bounds, but the network it describes is not the file's: burn's record
+        /// refuses its shapes.
+        Mismatch,
+    }
+
+    #[test]
+    fn header_words_out_of_bounds_are_refused_before_the_network_is_built() {
+        use Outcome::{Loads, Mismatch, Refused};
+        // 0, odd, huge and all ones, as the hostile-input campaign tried them.
+        const VALUES: [u64; 4] = [0, 3, 1 << 40, u64::MAX];
+        let cases: [(&str, [Outcome; 4]); teachfile::HEADER_WORDS + 1] = [
+            ("step", [Loads, Loads, Refused, Refused]),
+            ("seed", [Loads, Loads, Loads, Loads]),
+            ("batch", [Refused, Loads, Refused, Refused]),
+            ("features", [Refused, Refused, Refused, Refused]),
+            // 3 heads exceed 2 features.
+            ("heads", [Refused, Refused, Refused, Refused]),
+            ("kernel", [Refused, Mismatch, Refused, Refused]),
+            ("switches", [Loads, Loads, Refused, Refused]),
+            // As bits: 0.0, two positive subnormals, a NaN.
+            ("learning_rate", [Refused, Loads, Loads, Refused]),
+            ("prior", [Loads, Refused, Refused, Refused]),
+            (teachfile::PARTS_WORD, [Refused; 4]),
+        ];
+        let bytes = network_file(SMALLEST, "words");
+        let device = Device::flex();
+        for (i, (name, outcomes)) in cases.iter().enumerate() {
+            for (&value, &want) in VALUES.iter().zip(outcomes) {
+                let got =
+                    match teacher_from_bytes(&forged(&bytes, i, value), &device) {
+                        Ok(_) => Loads,
+                        Err(Error::TeachFile(teachfile::Error::Word {
+                            word, value: v, ..
+                        })) if word == *name && v == value => Refused,
+                        Err(Error::Checkpoint(_)) => Mismatch,
+                        Err(e) => panic!("{name} = {value}: {e}"),
+                    };
+                assert_eq!(got, want, "{name} = {value}");
+            }
+        }
+        let error = teacher_from_bytes(&forged(&bytes, 3, 1 << 40), &device).unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "float weights: header word `features` is 1099511627776; it must be even, \
+             from 2 to 256"
+        );
+    }
+
+    #[test]
+    fn a_header_that_describes_another_network_than_its_part_is_refused() {
+        let bytes = network_file(SMALLEST, "other");
+        let device = Device::flex();
+        // Wider, or a wider kernel: the record's shapes are not the network's.
+        for (word, value) in [(3, 4), (3, teachfile::MAX_FEATURES), (5, 15)] {
+            assert!(
+                matches!(
+                    teacher_from_bytes(&forged(&bytes, word, value), &device),
+                    Err(Error::Checkpoint(_))
+                ),
+                "word {word} = {value}"
+            );
+        }
+        // Heads and prior are no parameters' shapes: the network loads, and runs.
+        let heads = forged(&bytes, 4, 2);
+        let prior = forged(&heads, 8, 1);
+        let (teacher, config, _) = teacher_from_bytes(&prior, &device).unwrap();
+        assert_eq!(
+            (config.teacher.heads, teacher.prior()),
+            (2, PriorKind::Rotations)
+        );
+    }
+
+    #[test]
+    fn networks_at_the_size_bounds_train_without_panicking() {
+        let device = Device::flex().autodiff();
+        let pool = pool();
+        for teacher in [
+            SMALLEST,
+            TeacherConfig {
+                features: 2,
+                heads: 2,
+                kernel: teachfile::MAX_KERNEL as usize,
+                prior: PriorKind::Rotations,
+            },
+            TeacherConfig {
+                features: 6,
+                heads: 3,
+                kernel: 5,
+                prior: PriorKind::Chords,
+            },
+        ] {
+            let config = TrainConfig { teacher, ..tiny(2) };
+            config.check().unwrap();
+            let mut trainer = Trainer::new(config, &device);
+            let batch = trainer.batch_for(&pool, 0).unwrap();
+            let losses = trainer.step_on(&batch).unwrap();
+            assert!(losses.total.is_finite(), "{teacher:?}: {losses:?}");
+        }
+        let wide = TrainConfig {
+            teacher: TeacherConfig {
+                features: 7,
+                ..TeacherConfig::TINY
+            },
+            ..tiny(2)
+        };
+        assert!(matches!(
+            wide.check(),
+            Err(Error::TeachFile(teachfile::Error::Word {
+                word: "features",
+                value: 7,
+                ..
+            }))
+        ));
+    }
+
+    fn committed(name: &str) -> Vec<u8> {
+        let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../weights")
+            .join(name);
+        std::fs::read(path).unwrap()
+    }
+
+    /// The committed float networks, converted to version 3 with their words and parts
+    /// unchanged: the headers they were trained with.
+    #[test]
+    fn the_committed_networks_are_version_3_with_their_training_headers() {
+        let rotations = |features| TeacherConfig {
+            features,
+            prior: PriorKind::Rotations,
+            ..TeacherConfig::DEFAULT
+        };
+        let chords = |features| TeacherConfig {
+            features,
+            prior: PriorKind::Chords,
+            ..TeacherConfig::DEFAULT
+        };
+        for (name, teacher, steps, learning_rate) in [
+            ("teacher.pcw", rotations(32), 10_000, 1e-4),
+            ("teacher-chords.pcw", chords(32), 20_000, 1e-3),
+            ("distilled.pcw", chords(16), 10_000, 1e-3),
+        ] {
+            let bytes = committed(name);
+            assert_eq!(&bytes[..8], b"PCTEACH3", "{name}");
+            let file = teachfile::decode(&bytes).unwrap();
+            assert_eq!(file.kind, teachfile::Kind::Network, "{name}");
+            let header = Header::from_file(&file.header);
+            let want = TrainConfig {
+                teacher,
+                batch: 8,
+                learning_rate,
+                switches: Switches::ALL,
+                seed: 0,
+            };
+            assert_eq!((header.config, header.step), (want, steps), "{name}");
+        }
+    }
+
+    /// Flips of the committed teacher, seeded: every one is refused.
+    #[test]
+    fn sampled_bit_flips_of_the_committed_teacher_are_rejected() {
+        use rand::SeedableRng;
+        const FLIPS: usize = 2000;
+        let mut bytes = committed("teacher.pcw");
+        let device = Device::flex();
+        assert!(teacher_from_bytes(&bytes, &device).is_ok());
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(SEED);
+        let (mut damaged, mut magic) = (0, 0);
+        let start = Instant::now();
+        for _ in 0..FLIPS {
+            let bit = rng.random_range(0..bytes.len() * 8);
+            bytes[bit / 8] ^= 1 << (bit % 8);
+            match teacher_from_bytes(&bytes, &device) {
+                Err(Error::TeachFile(teachfile::Error::Checksum { .. })) => damaged += 1,
+                Err(Error::TeachFile(_)) if bit < 64 => magic += 1,
+                Err(e) => panic!("bit {bit}: {e}"),
+                Ok(_) => panic!("bit {bit} flipped was read"),
+            }
+            bytes[bit / 8] ^= 1 << (bit % 8);
+        }
+        eprintln!(
+            "{FLIPS} flips of the committed teacher: {damaged} by the checksum, {magic} by the \
+             magic, in {:?}",
+            start.elapsed()
+        );
+        assert_eq!(damaged + magic, FLIPS);
     }
 
     /// Time per training step of the default teacher with every loss (batch 8): run in
