@@ -1,0 +1,155 @@
+//! Any bytes, read as a phone's messages with hostile times (each a step of any size from the
+//! last: jumps, a clock that wraps or restarts, repeats), must never make the device's session
+//! panic or give swing detection more than `MAX_FRAMES_PER_MESSAGE` frames for one message.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use posecoach_adapters::session::{
+    BufferLens, Coach, OwnedBuffers, Session, MAX_FRAMES_PER_MESSAGE,
+};
+use posecoach_core::dtw::Band;
+use posecoach_core::format::Format;
+use posecoach_core::joint::Joint;
+use posecoach_core::skeleton::Skeleton;
+use posecoach_core::wire::{
+    Config, ImuSample, Message, PoseFrame, SensorLayout, SensorPlacement, StudentProfile,
+};
+use posecoach_core::Vec3;
+use posecoach_io::{csv, Motion};
+use std::sync::OnceLock;
+
+fn coach() -> &'static Motion {
+    static COACH: OnceLock<Motion> = OnceLock::new();
+    COACH.get_or_init(|| {
+        csv::read(include_str!("../../tests/fixtures/golf_driver_60hz.csv"))
+            .expect("the bundled coach reads")
+    })
+}
+
+/// The standard H3.6M T-pose, in millimetres.
+fn tpose() -> Vec<[i16; 3]> {
+    let skeleton = Skeleton::standard(Format::H36m17).expect("a built-in format");
+    let mut rest = vec![Vec3::zeros(); skeleton.len()];
+    skeleton.rest_positions(&mut rest);
+    rest.iter()
+        .map(|p| [p.x, p.y, p.z].map(|v| (v * 1000.0).round() as i16))
+        .collect()
+}
+
+/// Reads fields off the front of the fuzzer's bytes (zeros once they run out).
+struct Bytes<'a>(&'a [u8]);
+
+impl Bytes<'_> {
+    fn take<const N: usize>(&mut self) -> [u8; N] {
+        let mut out = [0u8; N];
+        let n = N.min(self.0.len());
+        out[..n].copy_from_slice(&self.0[..n]);
+        self.0 = &self.0[n..];
+        out
+    }
+
+    fn u8(&mut self) -> u8 {
+        self.take::<1>()[0]
+    }
+
+    fn u16(&mut self) -> u16 {
+        u16::from_le_bytes(self.take())
+    }
+
+    fn i16x3(&mut self) -> [i16; 3] {
+        [0; 3].map(|_| i16::from_le_bytes(self.take()))
+    }
+
+    /// A time step: small mostly, any size when the selector's top bit is set.
+    fn step(&mut self) -> u64 {
+        match self.u8() {
+            s if s & 0x80 != 0 => u64::from_le_bytes(self.take()),
+            s => u64::from(s) * 4_000,
+        }
+    }
+}
+
+fuzz_target!(|data: &[u8]| {
+    let coach = coach();
+    let coaches = [Coach {
+        skeleton: &coach.skeleton,
+        positions: &coach.positions,
+        rate_hz: coach.rate_hz,
+    }];
+    let mut buffers = OwnedBuffers::new(BufferLens::new(17, coach.frames(), 120));
+    let mut session = Session::new(&coaches, buffers.buffers());
+    let tpose = tpose();
+    let profile = Message::StudentProfile(StudentProfile {
+        format: Format::H36m17,
+        joints_mm: tpose.iter().copied().collect(),
+    });
+    session.handle(&profile, |_| {});
+    let joints = [
+        Joint::Pelvis,
+        Joint::Thorax,
+        Joint::LeftElbow,
+        Joint::RightElbow,
+        Joint::LeftWrist,
+        Joint::RightWrist,
+    ];
+    let layout = Message::SensorLayout(SensorLayout {
+        sensors: (0u8..)
+            .zip(joints)
+            .map(|(sensor, joint)| SensorPlacement {
+                sensor,
+                joint,
+                mounting_q14: [16384, 0, 0, 0],
+            })
+            .collect(),
+    });
+    let mut bytes = Bytes(data);
+    let mut clock = 0u64;
+    while !bytes.0.is_empty() {
+        let message = match bytes.u8() % 8 {
+            0..=2 => {
+                clock = clock.wrapping_add(bytes.step());
+                let seq = u32::from(bytes.u16());
+                let wobble = bytes.i16x3();
+                Message::PoseFrame(PoseFrame {
+                    seq,
+                    t_us: clock,
+                    format: Format::H36m17,
+                    joints_mm: tpose
+                        .iter()
+                        .map(|p| [0, 1, 2].map(|i| p[i].saturating_add(wobble[i] % 400)))
+                        .collect(),
+                    confidence: heapless::Vec::new(),
+                })
+            }
+            3..=5 => {
+                clock = clock.wrapping_add(bytes.step());
+                let sensor = bytes.u8() % 8;
+                let (accel_mg, gyro_ddps) = (bytes.i16x3(), bytes.i16x3());
+                let mag_dut = (bytes.u8() & 1 == 1).then(|| bytes.i16x3());
+                Message::ImuSample(ImuSample {
+                    sensor,
+                    t_us: clock,
+                    accel_mg,
+                    gyro_ddps,
+                    mag_dut,
+                })
+            }
+            6 => layout.clone(),
+            _ => match bytes.u8() % 3 {
+                0 => Message::Config(Config {
+                    model_rate_hz: bytes.u16(),
+                    band: Band {
+                        radius: bytes.u16(),
+                        anchored: bytes.u8() & 1 == 1,
+                    },
+                }),
+                1 => Message::CoachSelect { coach: bytes.u16() },
+                _ => profile.clone(),
+            },
+        };
+        let before = session.frames();
+        session.handle(&message, |_| {});
+        let given = session.frames() - before;
+        assert!(given <= MAX_FRAMES_PER_MESSAGE, "{given} frames from {message:?}");
+    }
+});
