@@ -85,8 +85,8 @@ pub const RATES_HZ: (u16, u16) = (20, 120);
 /// Most frames one message gives swing detection: a pose frame fills the model-rate grid up to
 /// its time, and a longer gap than [`MAX_GAP_S`](crate::pose_stream::MAX_GAP_S) starts the
 /// stream afresh; an IMU sample completes a frame or two. Each frame's work is bounded by the
-/// joints and the ring, each swing's by [`MAX_SWING_FRAMES`](posecoach_core::config::MAX_SWING_FRAMES),
-/// so every message's work is bounded whatever its times, sequence numbers and values.
+/// joints and the ring, each swing's by [`MAX_SWING_FRAMES`], so every message's work is
+/// bounded whatever its times, sequence numbers and values.
 pub const MAX_FRAMES_PER_MESSAGE: u64 =
     (crate::pose_stream::MAX_GAP_S * RATES_HZ.1 as f32) as u64 + 1;
 
