@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Runs every fuzz target for a while, from its corpus (fuzz/corpus/TARGET, kept in the repo)
+# Runs every fuzz target for a while, from its corpus (fuzz/corpus/TARGET, kept between runs)
 # and the committed fixtures, then minimizes the corpus (cargo fuzz cmin), so that a longer run
-# leaves what it found for the next one: commit fuzz/corpus afterwards.
+# leaves what it found for the next one. (A 20 s run leaves 23 MB, mostly mutated C3D files and
+# recordings: the corpus is not committed until its inputs are bounded.)
 # Usage: fuzz/run.sh [SECONDS_PER_TARGET]   (default 30). Needs nightly and cargo-fuzz.
 set -euo pipefail
 cd "$(dirname "$0")"
