@@ -5,7 +5,7 @@
 //! joints (see [`Format::joints`]) every `1 / rate_hz` seconds of the sender's clock, each
 //! linearly interpolated between the two received frames around it, so capture jitter does not
 //! reach the swing's timing. It drops repeated and late frames (by sequence number and time), masks
-//! keypoints under `min_confidence` (the joint is carried by its parent at the offset it last
+//! keypoints under `min_confidence` or moving faster than a body part can (the joint is carried by its parent at the offset it last
 //! had from it, turned as the parent's bone turned, unless the unsure keypoint lies at about its
 //! bone's length from the parent ([`UNSURE_BONE_SHARE`]); a masked root holds its last
 //! confident position), and breaks
@@ -43,6 +43,7 @@
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::format::{Format, Source};
 use posecoach_core::math::norm;
+use posecoach_core::plausible;
 use posecoach_core::resample;
 use posecoach_core::wire::{PoseFrame, MAX_WIRE_JOINTS};
 use posecoach_core::Vec3;
@@ -108,7 +109,8 @@ pub struct StreamCounters {
     pub out_of_order: u32,
     /// Breaks longer than the gap limit.
     pub gaps: u32,
-    /// Keypoints masked for low confidence.
+    /// Keypoints masked for low confidence, or for moving faster than a body part can
+    /// ([`plausible::MAX_SPEED_M_S`]) since the last frame.
     pub masked: u32,
     /// Frames emitted on the grid.
     pub emitted: u32,
@@ -268,8 +270,20 @@ impl PoseStream {
         let mut current = self.previous;
         let mut unsure = 0u64;
         let table = frame.format.joints();
+        // A keypoint that moved faster than any body part can since the last frame is a wild
+        // estimate: it is unsure whatever its confidence.
+        let reach = match self.last {
+            Some(last) if frame.t_us > last.t_us => {
+                plausible::MAX_SPEED_M_S * (frame.t_us - last.t_us) as f32 * 1e-6
+            }
+            _ => f32::INFINITY,
+        };
+        let seen = self.seen;
+        let wild = |k: usize, position: &Vec3| {
+            seen & (1 << k) != 0 && norm(&(*position - self.previous[k])) > reach
+        };
         for (k, (position, confidence)) in joints.iter().enumerate() {
-            if *confidence >= self.config.min_confidence {
+            if *confidence >= self.config.min_confidence && !wild(k, position) {
                 current[k] = *position;
                 self.seen |= 1 << k;
             } else {
@@ -282,7 +296,7 @@ impl PoseStream {
         // its elbow through a downswing instead of staying behind.
         for (k, (position, confidence)) in joints.iter().enumerate() {
             let parent = |k: usize| table.get(k).and_then(|j| j.parent).map(usize::from);
-            let unsure = *confidence < self.config.min_confidence;
+            let unsure = unsure & (1 << k) != 0;
             let Some(p) = parent(k).filter(|&p| unsure && p < k) else {
                 continue;
             };
@@ -299,7 +313,10 @@ impl PoseStream {
             // An unsure keypoint the estimator still placed at about its bone's length from the
             // parent is the better guess.
             let (bone, sent) = (norm(&offset), norm(&(*position - current[p])));
-            if *confidence > 0 && libm::fabsf(sent - bone) <= UNSURE_BONE_SHARE * bone {
+            if *confidence > 0
+                && !wild(k, position)
+                && libm::fabsf(sent - bone) <= UNSURE_BONE_SHARE * bone
+            {
                 current[k] = *position;
             }
         }
@@ -516,6 +533,24 @@ mod tests {
         );
         assert_eq!(got.len(), 2);
         assert!((got[0].unwrap() - 0.2).abs() < 1e-6 && (got[1].unwrap() - 0.3).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_keypoint_faster_than_a_body_is_unsure_whatever_its_confidence() {
+        // At 30 Hz a body part moves at most 100 m/s x 33 ms = 3.3 m: the pelvis keypoint
+        // jumping 5 m is held where it was, one moving 3 m is taken.
+        let mut stream = PoseStream::new(StreamConfig::new(30)).unwrap();
+        let mut wild = frame(1, 33_333, 5100);
+        wild.confidence = core::iter::repeat_n(255, 17).collect();
+        let got = run(&mut stream, &[frame(0, 0, 100), wild]);
+        assert_eq!(got, [Some(0.1), Some(0.1)]);
+        assert_eq!(stream.counters().masked, 17);
+        let got = run(&mut stream, &[frame(2, 66_667, 3100)]);
+        assert!(
+            got.len() == 1 && (got[0].unwrap() - 3.1).abs() < 1e-5,
+            "{got:?}"
+        );
+        assert_eq!(stream.counters().masked, 17);
     }
 
     #[test]
