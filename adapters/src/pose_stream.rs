@@ -282,8 +282,11 @@ impl PoseStream {
         let wild = |k: usize, position: &Vec3| {
             seen & (1 << k) != 0 && norm(&(*position - self.previous[k])) > reach
         };
+        let mut wild_mask = 0u64;
         for (k, (position, confidence)) in joints.iter().enumerate() {
-            if *confidence >= self.config.min_confidence && !wild(k, position) {
+            let too_fast = wild(k, position);
+            wild_mask |= u64::from(too_fast) << k;
+            if *confidence >= self.config.min_confidence && !too_fast {
                 current[k] = *position;
                 self.seen |= 1 << k;
             } else {
@@ -314,7 +317,7 @@ impl PoseStream {
             // parent is the better guess.
             let (bone, sent) = (norm(&offset), norm(&(*position - current[p])));
             if *confidence > 0
-                && !wild(k, position)
+                && wild_mask & (1 << k) == 0
                 && libm::fabsf(sent - bone) <= UNSURE_BONE_SHARE * bone
             {
                 current[k] = *position;
