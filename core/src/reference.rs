@@ -44,7 +44,7 @@ pub enum ReferenceError {
     Skeleton(SkeletonError),
     /// The frame rate is not a positive number.
     Rate,
-    /// The payload is not frames × joints positions, or not aligned for `f32`.
+    /// The payload is not one or more frames × joints positions, or not aligned for `f32`.
     Payload,
     /// A position is NaN or infinite.
     NonFinite,
@@ -64,7 +64,7 @@ impl core::fmt::Display for ReferenceError {
             ReferenceError::Skeleton(e) => write!(f, "coach reference skeleton: {e}"),
             ReferenceError::Rate => f.write_str("coach reference: frame rate not positive"),
             ReferenceError::Payload => f.write_str(
-                "coach reference: payload is not frames × joints positions at a 4-byte-aligned address",
+                "coach reference: payload is not one or more frames × joints positions at a 4-byte-aligned address",
             ),
             ReferenceError::NonFinite => f.write_str("coach reference: a position is not finite"),
             ReferenceError::Name => write!(f, "coach reference: name over {MAX_NAME} bytes"),
@@ -140,7 +140,8 @@ impl<'a> Reference<'a> {
         let expected = (header.frames as usize)
             .checked_mul(n * POSITION)
             .ok_or(ReferenceError::Payload)?;
-        if blob.payload.len() != expected {
+        // A swing of no frames is nothing a writer makes (write refuses it).
+        if header.frames == 0 || blob.payload.len() != expected {
             return Err(ReferenceError::Payload);
         }
         let positions: &[Vec3] =
@@ -318,6 +319,7 @@ mod tests {
         let payload = vec![0u8; 17 * POSITION * 2];
         assert_eq!(raw(&header(2), &payload), Ok(()));
         assert_eq!(raw(&header(3), &payload), Err(ReferenceError::Payload));
+        assert_eq!(raw(&header(0), &[]), Err(ReferenceError::Payload));
         assert_eq!(
             raw(
                 &Header {
