@@ -333,6 +333,12 @@ impl ImuAdapter {
         }
         .map_err(fail)?;
         let t_us = sample.t_us;
+        if self.tracks[t]
+            .last_us
+            .is_some_and(|previous| t_us.saturating_add(fusion::MAX_STEP_US) < previous)
+        {
+            self.restart_clock(t_us);
+        }
         let step = match self.tracks[t].last_us {
             Some(previous) => match fusion::time_step(previous, t_us) {
                 Err(e @ FusionError::TimeNotIncreasing { .. }) => return Err(fail(e)),
@@ -354,6 +360,29 @@ impl ImuAdapter {
             Some(Err(e)) => Err(fail(e)),
             _ => result.map_err(fail),
         }
+    }
+
+    /// A sample far behind its sensor's previous one is from a clock that restarted (or
+    /// wrapped): every sensor's time is forgotten, calibration starts its still period over,
+    /// and tracking moves its grid to the new clock, so that the stream goes on instead of
+    /// waiting for the old clock's time to come round again.
+    fn restart_clock(&mut self, t_us: u64) {
+        for track in &mut self.tracks {
+            track.last_us = None;
+            track.snapshot = None;
+        }
+        self.phase = match self.phase {
+            Phase::Calibrating(_) => {
+                for track in &mut self.tracks {
+                    track.still = StillPeriod::new();
+                }
+                Phase::Calibrating(None)
+            }
+            Phase::Tracking { .. } => Phase::Tracking {
+                origin_us: t_us,
+                next: 1,
+            },
+        };
     }
 
     fn tracks(&self) -> &[Track] {
@@ -434,7 +463,10 @@ impl ImuAdapter {
                 self.activity = self.activity.max(gyro.norm());
             }
         }
-        if track.snapshot.is_none() && t_us >= due {
+        let Some(due) = due.filter(|&due| t_us >= due) else {
+            return;
+        };
+        if track.snapshot.is_none() {
             let after = track.filter.orientation();
             track.snapshot = Some(match dt {
                 Some(dt) => {
@@ -467,20 +499,23 @@ impl ImuAdapter {
             for track in &mut self.tracks[..len] {
                 track.snapshot = track
                     .last_us
-                    .filter(|&last| last >= due)
+                    .zip(due)
+                    .filter(|&(last, due)| last >= due)
                     .map(|_| track.filter.orientation());
             }
         }
     }
 
-    /// Time of the pending output frame, microseconds (`u64::MAX` before tracking).
-    fn output_time(&self) -> u64 {
+    /// Time of the pending output frame, microseconds: none before tracking, nor once the
+    /// grid has run past the end of the clock (a saturated time would equal every later one,
+    /// and the frames would never stop coming; a clock that wraps restarts the grid).
+    fn output_time(&self) -> Option<u64> {
         match self.phase {
-            Phase::Calibrating(_) => u64::MAX,
+            Phase::Calibrating(_) => None,
             Phase::Tracking { origin_us, next } => {
                 let after =
                     u128::from(next) * u128::from(MHZ_US) / u128::from(self.rate_mhz.max(1));
-                origin_us.saturating_add(u64::try_from(after).unwrap_or(u64::MAX))
+                origin_us.checked_add(u64::try_from(after).ok()?)
             }
         }
     }
@@ -678,29 +713,67 @@ mod tests {
         assert_eq!(frames, 24);
     }
 
+    /// An adapter for the pelvis and wrist, tracking after a still second of samples 0..250.
+    fn tracking() -> ImuAdapter {
+        let s = skeleton();
+        let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 60.0).unwrap();
+        for k in 0..250 {
+            for sensor in [3, 7] {
+                adapter.push(&s, &still(sensor, k), |_, _| {}).unwrap();
+            }
+        }
+        assert!(adapter.is_tracking());
+        adapter
+    }
+
+    /// Frames emitted by `samples` still samples of both sensors from `from_us` on, the clock
+    /// wrapping round past `u64::MAX`.
+    fn frames_from(adapter: &mut ImuAdapter, from_us: u64, samples: u64) -> usize {
+        let s = skeleton();
+        let mut frames = 0;
+        for k in 0..samples {
+            for sensor in [3, 7] {
+                let mut sample = still(sensor, k);
+                sample.t_us = from_us.wrapping_add(k * STEP_US);
+                let _ = adapter.push(&s, &sample, |_, _| frames += 1);
+            }
+        }
+        frames
+    }
+
     #[test]
     fn a_far_jump_in_time_is_skipped_not_walked() {
         // Every sensor jumps ahead by 3e14 to 1.8e19 µs (past where a saturating product of
-        // time and rate stalled the grid): each sample still ends after a frame or two.
+        // time and rate stalled the grid), the last jump to within ten samples of the end of
+        // the clock, which then reaches u64::MAX exactly (where a saturated grid time once
+        // equalled every later one) and wraps: each sample ends after a frame or two.
         for jump_us in [300_000_000_000_000u64, 1 << 60, u64::MAX - 10 * STEP_US] {
-            let s = skeleton();
-            let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 60.0).unwrap();
-            for k in 0..250 {
-                for sensor in [3, 7] {
-                    adapter.push(&s, &still(sensor, k), |_, _| {}).unwrap();
-                }
-            }
-            assert!(adapter.is_tracking());
-            let mut frames = 0;
-            for k in 0..5 {
-                for sensor in [3, 7] {
-                    let mut sample = still(sensor, k);
-                    sample.t_us = jump_us + k * STEP_US;
-                    let _ = adapter.push(&s, &sample, |_, _| frames += 1);
-                }
-            }
-            assert!(frames <= 5, "{jump_us}: {frames} frames");
+            let mut adapter = tracking();
+            let frames = frames_from(&mut adapter, jump_us, 12);
+            assert!(frames <= 12, "{jump_us}: {frames} frames");
         }
+    }
+
+    #[test]
+    fn a_restarted_clock_restarts_the_stream() {
+        // While tracking: the grid moves to the new clock and frames go on at the rate (60 Hz
+        // over 0.5 s, less the first period), whether the clock restarted or wrapped round.
+        for before_us in [10_000_000u64, u64::MAX - 2 * STEP_US] {
+            let mut adapter = tracking();
+            frames_from(&mut adapter, before_us, 3);
+            let frames = frames_from(&mut adapter, 1_000, 100);
+            assert!((28..=30).contains(&frames), "{before_us}: {frames} frames");
+        }
+        // While calibrating: the still period starts over on the new clock and ends a second
+        // into it.
+        let s = skeleton();
+        let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 60.0).unwrap();
+        frames_from(&mut adapter, 50_000_000, 150);
+        assert!(!adapter.is_tracking());
+        frames_from(&mut adapter, 0, 150);
+        assert!(!adapter.is_tracking());
+        frames_from(&mut adapter, 150 * STEP_US, 60);
+        assert!(adapter.is_tracking());
     }
 
     #[test]
