@@ -37,3 +37,7 @@ pc synth-log --swing $fx/golf_iron_60hz.csv --swing $fx/golf_driver_60hz.csv \
 # 3 % of samples lost: a still T-pose to calibrate, then the driver and the iron.
 pc synth-log --swing $fx/golf_driver_60hz.csv --swing $fx/golf_iron_60hz.csv --imu-rate 200 \
     --coach 0 --seed 4 --out tests/logs/imu_200hz.pclog
+
+# The hostile session (hostile_h36m_30hz: the firmware's session with bursts of what a broken or
+# hostile phone sends) is made from device_h36m_30hz.pclog by its test:
+# POSECOACH_BLESS=1 cargo test -p posecoach-tests --test hostile
