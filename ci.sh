@@ -55,7 +55,7 @@ cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabi
 step "no alloc: link both crates into a Cortex-M4F static library with no global allocator"
 (cd firmware-examples/no-alloc-check && cargo build --release && cargo build --release --features defmt)
 
-step "Cortex-M4F firmware on QEMU mps2-an386: the whole pipeline on a recorded session, every reply equal to the host's, and its costs"
+step "Cortex-M4F firmware on QEMU mps2-an386: the whole pipeline on a recorded session and on a hostile one, every reply equal to the host's, every message within its instruction budget, and its costs"
 command -v qemu-system-arm >/dev/null 2>&1 && command -v size >/dev/null 2>&1 || apt_install qemu-system-arm binutils
 command -v defmt-print >/dev/null 2>&1 || cargo install defmt-print --locked --version 1.2.0
 firmware-examples/qemu-m4f/measure.sh

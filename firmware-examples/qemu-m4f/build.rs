@@ -11,6 +11,8 @@ fn main() {
         "../../coaches/iron.pcr",
         "../../tests/logs/device_h36m_30hz.pclog",
         "../../tests/logs/device_h36m_30hz.int8.device.bin",
+        "../../tests/logs/hostile_h36m_30hz.pclog",
+        "../../tests/logs/hostile_h36m_30hz.int8.device.bin",
         "../../weights/distilled-int8.pcw",
         "../../weights/distilled-int8.golden-in.pcr",
         "../../weights/distilled-int8.golden-out.pcr",

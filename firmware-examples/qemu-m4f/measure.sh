@@ -22,15 +22,16 @@ log=$(field EMBEDDED log)
 transcript=$(field EMBEDDED transcript)
 golden=$(field EMBEDDED golden)
 weights=$(field EMBEDDED weights)
+hostile=$(field EMBEDDED hostile)
 static_ram=$(( $(section .data) + $(section .bss) + $(section .uninit) ))
 stack=$(field RAM stack)
 echo
 echo "| what | measured |"
 echo "| --- | --- |"
-echo "| flash: code, constants, int8 weights, both coach references (without the test's log, transcript and golden vectors) | $(kib $((code - log - transcript - golden))) |"
+echo "| flash: code, constants, int8 weights, both coach references (without the test's logs, transcripts and golden vectors) | $(kib $((code - log - transcript - golden - hostile))) |"
 echo "| of which int8 weights | $(kib "$weights") |"
 iron=$(stat -c %s ../../coaches/iron.pcr)
-echo "| flash with one coach reference (the budget's measure: without \`iron.pcr\`) | $(kib $((code - log - transcript - golden - iron))) |"
+echo "| flash with one coach reference (the budget's measure: without \`iron.pcr\`) | $(kib $((code - log - transcript - golden - hostile - iron))) |"
 echo "| static RAM (.data + .bss) | $(kib "$static_ram") |"
 for b in ring coach floats bytes unsure; do
     echo "| of which session buffer \`$b\` | $(kib "$(field RAM "$b")") |"
@@ -43,4 +44,8 @@ echo "| retarget one 64-frame coach window (int8 network, 22 joints onto 17) | $
 echo "| decode one message (mean, $(field 'STAGE decode' calls) messages) | $(minstr "$(field 'STAGE decode' mean)") |"
 echo "| one pose frame: stream, skeleton fit, detector (mean / max) | $(minstr "$(field 'STAGE frame' mean)") / $(minstr "$(field 'STAGE frame' max)") |"
 echo "| the frame that ends a swing: events, DTW, report (mean of $(field 'STAGE swing' calls)) | $(minstr "$(field 'STAGE swing' mean)") |"
-echo "| student profile or coach selection: coach retargeted (int8 network), its swing found | $(minstr "$(field 'STAGE setup' mean)") |"
+echo "| a set-up (profile, settings or coach selection): coach retargeted (int8 network), its swing found (mean / max) | $(minstr "$(field 'STAGE setup' mean)") / $(minstr "$(field 'STAGE setup' max)") |"
+hostile_stack=$(grep '^STACK after the hostile recording' "$out" | sed -E 's/.* ([0-9]+)$/\1/')
+echo "| hostile recording ($(field 'HOSTILE decode' calls) messages): costliest pose frame / IMU sample / set-up | $(minstr "$(field 'HOSTILE frame' max)") / $(minstr "$(field 'HOSTILE imu' max)") / $(minstr "$(field 'HOSTILE setup' max)") |"
+echo "| costliest message of either recording, against the budget | $(minstr "$(field BUDGET message)") of $(minstr "$(field BUDGET budget)") |"
+echo "| stack high-water mark after the hostile recording | $(kib "$hostile_stack") |"

@@ -7,8 +7,12 @@
 //! swing detection → retarget (the int8 network, once per student and coach) → events → DTW →
 //! report. Every reply the device would send is encoded as on the serial link and compared
 //! with the host's (`posecoach replay --weights … --wire`, committed as
-//! `device_h36m_30hz.int8.device.bin`). Prints each report and the instructions each stage
-//! took over defmt; exits 0 only if every bit matched.
+//! `device_h36m_30hz.int8.device.bin`). Then, in a fresh session, the hostile recording
+//! `tests/logs/hostile_h36m_30hz.pclog` (the same session with bursts of what a broken or
+//! hostile phone sends, and IMU clocks that leap, restart and wrap), its replies compared the
+//! same way, and no message of either allowed more than [`MESSAGE_BUDGET`] instructions.
+//! Prints each report and the instructions each stage took over defmt; exits 0 only if every
+//! bit matched and every message kept to the budget.
 #![no_std]
 #![no_main]
 
@@ -22,9 +26,7 @@ use cortex_m_rt::entry;
 use count::Tally;
 use defmt_semihosting as _;
 use posecoach_adapters::log::LogReader;
-use posecoach_adapters::session::{
-    BufferLens, Buffers, Coach, Outcome, Session, DEFAULT_CONFIG,
-};
+use posecoach_adapters::session::{BufferLens, Buffers, Coach, Outcome, Session, DEFAULT_CONFIG};
 use posecoach_core::blob::Aligned;
 use posecoach_core::reference::Reference;
 use posecoach_core::resample;
@@ -37,6 +39,11 @@ static LOG: &Aligned<[u8]> = &Aligned(*include_bytes!(
     "../../../tests/logs/device_h36m_30hz.pclog"
 ));
 static EXPECTED: &[u8] = include_bytes!("../../../tests/logs/device_h36m_30hz.int8.device.bin");
+static HOSTILE: &Aligned<[u8]> = &Aligned(*include_bytes!(
+    "../../../tests/logs/hostile_h36m_30hz.pclog"
+));
+static HOSTILE_EXPECTED: &[u8] =
+    include_bytes!("../../../tests/logs/hostile_h36m_30hz.int8.device.bin");
 static COACHES: [&Aligned<[u8]>; 2] = [
     &Aligned(*include_bytes!("../../../coaches/driver.pcr")),
     &Aligned(*include_bytes!("../../../coaches/iron.pcr")),
@@ -50,6 +57,11 @@ const MODEL_RATE_HZ: u16 = 30;
 const COACH_FRAMES: usize = resample::frames(110, 60.0, MODEL_RATE_HZ as f32);
 /// Joints of the bundled coaches (the canonical 22).
 const COACH_JOINTS: usize = 22;
+/// Most instructions one message may take, whatever it holds: a quarter of a second of a
+/// 64 MHz Cortex-M4F (the nRF52840's clock) at an instruction a cycle, the longest a phone
+/// waits for a reply. The costliest message a phone can send is a set-up (a profile, coach
+/// selection or sensor layout: the coach retargeted by the network, about 8 M).
+const MESSAGE_BUDGET: u64 = 16_000_000;
 /// The embedded network's sizes (checked against its header at start).
 const NETWORK: Architecture = Architecture {
     features: 16,
@@ -83,8 +95,11 @@ struct Stages {
     frame: Tally,
     /// A pose frame that ended a swing: the above, the copy out, events, DTW, report.
     swing: Tally,
-    /// A profile or coach selection: the coach retargeted onto the student (the int8
-    /// network), its events.
+    /// An IMU sample: the adapter, and detection (or a swing's scoring) of the frames it
+    /// completes.
+    imu: Tally,
+    /// A profile, settings, coach selection or sensor layout: the coach retargeted onto the
+    /// student (the int8 network), its events; or a refusal.
     setup: Tally,
     /// Encoding a reply for the serial link.
     reply: Tally,
@@ -141,23 +156,98 @@ fn run() -> Result<(), &'static str> {
     let (ring, coach) = (RING.take(), VIRTUAL_COACH.take());
     let window = network::check_golden(&weights, ring, coach)?;
     defmt::println!("NETWORK window {=u64} instructions", window);
-    let buffers = Buffers {
-        ring,
-        coach,
-        floats: FLOATS.take(),
-        bytes: BYTES.take(),
-        unsure: UNSURE.take(),
-    };
+    let (floats, bytes, unsure) = (FLOATS.take(), BYTES.take(), UNSURE.take());
+    let clean = replay(
+        &coaches,
+        &weights,
+        Buffers {
+            ring: &mut *ring,
+            coach: &mut *coach,
+            floats: &mut *floats,
+            bytes: &mut *bytes,
+            unsure: &mut *unsure,
+        },
+        &LOG.0,
+        EXPECTED,
+    )?;
+    print("STAGE", &clean.stages);
+    let vec3 = core::mem::size_of::<Vec3>();
+    defmt::println!(
+        "RAM ring {=usize} coach {=usize} floats {=usize} bytes {=usize} unsure {=usize} stack {=usize}",
+        LENS.ring * vec3,
+        LENS.coach * vec3,
+        LENS.floats * core::mem::size_of::<f32>(),
+        LENS.bytes,
+        LENS.unsure * core::mem::size_of::<u64>(),
+        stack::high_water()
+    );
+    let hostile = replay(
+        &coaches,
+        &weights,
+        Buffers {
+            ring,
+            coach,
+            floats,
+            bytes,
+            unsure,
+        },
+        &HOSTILE.0,
+        HOSTILE_EXPECTED,
+    )?;
+    print("HOSTILE", &hostile.stages);
+    // How deep the hostile recording took the stack (the clean session's depth is above).
+    defmt::println!("STACK after the hostile recording {=usize}", stack::high_water());
+    defmt::println!(
+        "EMBEDDED log {=usize} transcript {=usize} golden {=usize} weights {=usize} hostile {=usize}",
+        LOG.0.len(),
+        EXPECTED.len(),
+        network::golden_bytes(),
+        network::WEIGHTS.0.len(),
+        HOSTILE.0.len() + HOSTILE_EXPECTED.len()
+    );
+    let costliest = clean.stages.costliest().max(hostile.stages.costliest());
+    defmt::println!(
+        "BUDGET costliest message {=u64} budget {=u64}",
+        costliest,
+        MESSAGE_BUDGET
+    );
+    if !clean.matched {
+        return Err("a reply differs from the host's");
+    }
+    if !hostile.matched {
+        return Err("a reply to the hostile recording differs from the host's");
+    }
+    if costliest > MESSAGE_BUDGET {
+        return Err("a message took more instructions than the budget");
+    }
+    Ok(())
+}
+
+/// What a replay measured, and whether every reply equalled the host's.
+struct Replayed {
+    stages: Stages,
+    matched: bool,
+}
+
+/// Replays `log` through a fresh session on `buffers`, comparing every reply with the host's
+/// frames in `expected`.
+#[inline(always)]
+fn replay(
+    coaches: &[Coach<'_>],
+    weights: &Weights<'_>,
+    buffers: Buffers<'_>,
+    log: &[u8],
+    mut expected: &[u8],
+) -> Result<Replayed, &'static str> {
     let own = Config {
         model_rate_hz: MODEL_RATE_HZ,
         ..DEFAULT_CONFIG
     };
-    let mut session = Session::with_config(&coaches, buffers, own)
+    let mut session = Session::with_config(coaches, buffers, own)
         .map_err(|_| "the device's own settings")?
-        .with_network(&weights);
-    let mut reader = LogReader::new(&LOG.0).map_err(|_| "the embedded log is not a log")?;
+        .with_network(weights);
+    let mut reader = LogReader::new(log).map_err(|_| "an embedded log is not a log")?;
     let mut stages = Stages::default();
-    let mut expected = EXPECTED;
     let mut mismatch = false;
     loop {
         let start = count::now();
@@ -191,44 +281,40 @@ fn run() -> Result<(), &'static str> {
         match message {
             Message::PoseFrame(_) if scored => stages.swing.add(spent),
             Message::PoseFrame(_) => stages.frame.add(spent),
-            Message::StudentProfile(_) | Message::CoachSelect { .. } => stages.setup.add(spent),
-            _ => {}
+            Message::ImuSample(_) => stages.imu.add(spent),
+            _ => stages.setup.add(spent),
         }
     }
-    print(&stages);
-    let vec3 = core::mem::size_of::<Vec3>();
-    defmt::println!(
-        "RAM ring {=usize} coach {=usize} floats {=usize} bytes {=usize} unsure {=usize} stack {=usize}",
-        LENS.ring * vec3,
-        LENS.coach * vec3,
-        LENS.floats * core::mem::size_of::<f32>(),
-        LENS.bytes,
-        LENS.unsure * core::mem::size_of::<u64>(),
-        stack::high_water()
-    );
-    defmt::println!(
-        "EMBEDDED log {=usize} transcript {=usize} golden {=usize} weights {=usize}",
-        LOG.0.len(),
-        EXPECTED.len(),
-        network::golden_bytes(),
-        network::WEIGHTS.0.len()
-    );
-    if mismatch || !expected.is_empty() {
-        return Err("a reply differs from the host's");
-    }
-    Ok(())
+    Ok(Replayed {
+        stages,
+        matched: !mismatch && expected.is_empty(),
+    })
 }
 
-fn print(stages: &Stages) {
+impl Stages {
+    /// Instructions of the costliest message handled (decoding excluded).
+    fn costliest(&self) -> u64 {
+        [&self.frame, &self.swing, &self.imu, &self.setup]
+            .iter()
+            .map(|t| t.max)
+            .max()
+            .unwrap_or(0)
+    }
+}
+
+/// One line per stage, each starting with `tag`.
+fn print(tag: &str, stages: &Stages) {
     for (name, tally) in [
         ("decode", &stages.decode),
         ("frame", &stages.frame),
         ("swing", &stages.swing),
+        ("imu", &stages.imu),
         ("setup", &stages.setup),
         ("reply", &stages.reply),
     ] {
         defmt::println!(
-            "STAGE {=str} calls {=u32} mean {=u64} max {=u64} total {=u64}",
+            "{=str} {=str} calls {=u32} mean {=u64} max {=u64} total {=u64}",
+            tag,
             name,
             tally.calls,
             tally.mean(),
