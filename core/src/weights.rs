@@ -817,10 +817,12 @@ mod tests {
         assert_eq!(open(&even), Err(WeightsError::Payload));
         let scale = with_header(&bytes, |h| h.scales.fused = f32::NAN);
         assert_eq!(open(&scale), Err(WeightsError::Scale));
-        let words = aligned(&bytes);
-        let unaligned = [&[0u8][..], bytemuck::cast_slice::<u32, u8>(&words)].concat();
+        // One byte past a word boundary (a Vec<u8> may start anywhere: Miri places it so).
+        let mut store = vec![0u32; bytes.len() / 4 + 2];
+        let unaligned = &mut bytemuck::cast_slice_mut::<u32, u8>(&mut store)[1..=bytes.len()];
+        unaligned.copy_from_slice(&bytes);
         assert_eq!(
-            Weights::from_bytes(&unaligned[1..=bytes.len()]).err(),
+            Weights::from_bytes(unaligned).err(),
             Some(WeightsError::Payload)
         );
     }
