@@ -901,7 +901,8 @@ mod tests {
     }
 
     proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        // One case under Miri, which interprets each in minutes.
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(if cfg!(miri) { 1 } else { 64 }))]
         #[test]
         fn arbitrary_motion_never_panics(
             values in proptest::collection::vec(-3.0f32..3.0, 17 * 3 * 60..17 * 3 * 120),

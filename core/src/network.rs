@@ -820,6 +820,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(miri, ignore = "a whole window of the network: minutes under Miri")]
     fn without_corrections_it_is_the_analytic_retargeter() {
         let bytes = blob(DISTILLED, 5, true);
         for (from, onto, frames) in [
@@ -849,6 +850,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(miri, ignore = "a whole window of the network: minutes under Miri")]
     fn corrections_keep_the_targets_bones_and_move_the_pose() {
         let bytes = blob(DISTILLED, 6, false);
         let (source, target) = (
@@ -880,6 +882,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(miri, ignore = "a whole window of the network: minutes under Miri")]
     fn bad_buffers_and_inputs_are_typed_errors() {
         let bytes = blob(DISTILLED, 7, false);
         let mut words = std::vec![0u32; bytes.len().div_ceil(4)];
