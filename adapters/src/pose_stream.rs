@@ -227,10 +227,12 @@ impl PoseStream {
         self.counters
     }
 
-    /// Time of grid frame `k` after a grid starting at `t0_us`.
-    fn grid_time(&self, t0_us: u64, k: u64) -> u64 {
+    /// Time of grid frame `k` after a grid starting at `t0_us`; none past the end of the clock
+    /// (a saturated time would equal a frame sent at `u64::MAX`, and the grid would never pass
+    /// it).
+    fn grid_time(&self, t0_us: u64, k: u64) -> Option<u64> {
         let rate = u64::from(self.config.rate_hz);
-        t0_us.saturating_add(k.saturating_mul(1_000_000).saturating_add(rate / 2) / rate)
+        t0_us.checked_add(k.checked_mul(1_000_000)?.checked_add(rate / 2)? / rate)
     }
 
     /// Takes the next received frame and calls `emit` for each grid frame (and break) it
@@ -329,11 +331,7 @@ impl PoseStream {
             (Some((t0, mut k)), Some(last)) if t_us > last.t_us => {
                 let span = (t_us - last.t_us) as f32;
                 let mut out = [Vec3::zeros(); MAX_JOINTS];
-                loop {
-                    let t = self.grid_time(t0, k);
-                    if t > t_us {
-                        break;
-                    }
+                while let Some(t) = self.grid_time(t0, k).filter(|&t| t <= t_us) {
                     let w = (t.saturating_sub(last.t_us)) as f32 / span;
                     resample::lerp(&self.previous, &current, w, &mut out);
                     self.counters.emitted += 1;
@@ -514,6 +512,27 @@ mod tests {
         // A sender whose clock starts again from zero is a break too, not a late frame.
         let got = run(&mut stream, &[frame(0, 0, 0), frame(1, 16_667, 17)]);
         assert_eq!(got, [None, Some(0.0), Some(0.017)]);
+    }
+
+    #[test]
+    fn a_clock_that_runs_to_its_end_and_wraps_is_followed() {
+        // A leap to 0.1 s before the end of the clock, a frame at u64::MAX itself (where a
+        // saturated grid time once equalled the frame's and the grid never passed it), then
+        // the clock wraps and the sequence number with it.
+        let end = u64::MAX;
+        let frames = [
+            frame(0, 0, 0),
+            frame(1, end - 100_000, 0),
+            frame(2, end, 100),
+            frame(u32::MAX, 1_000, 0),
+            frame(0, 17_667, 17),
+        ];
+        let mut stream = PoseStream::new(StreamConfig::new(60)).unwrap();
+        let got = run(&mut stream, &frames);
+        // The first frame; a break, the leap's frame and the grid's six up to the end; a break
+        // and the wrapped clock's two.
+        assert_eq!(got.len(), 1 + 1 + 1 + 6 + 1 + 2, "{got:?}");
+        assert_eq!(stream.counters().gaps, 2);
     }
 
     #[test]
