@@ -91,12 +91,15 @@ fn burst(last: &PoseFrame) -> Vec<Sent> {
     vec![
         // A gap just under the stream's break: the grid filled up to it in one message.
         taken(Message::PoseFrame(at(last.seq + 1, last.t_us + 240_000))),
-        // The clock leaps ahead, reaches the end of u64 and wraps round to a restart.
+        // The clock leaps ahead, leaps to 0.1 s before the end of u64, reaches it, and wraps
+        // round to a restart; the sequence number wraps too.
         taken(Message::PoseFrame(at(
             last.seq + 2,
             last.t_us + FAR_JUMP_US,
         ))),
-        taken(Message::PoseFrame(at(u32::MAX, u64::MAX - 1_000))),
+        taken(Message::PoseFrame(at(last.seq + 3, u64::MAX - 100_000))),
+        taken(Message::PoseFrame(at(last.seq + 4, u64::MAX))),
+        taken(Message::PoseFrame(at(u32::MAX, 1_000))),
         taken(Message::PoseFrame(at(0, 5_000))),
         // The same frame again, then one keypoint 30 m away.
         taken(Message::PoseFrame(at(0, 5_000))),
