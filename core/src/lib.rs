@@ -25,6 +25,7 @@
 //! - [`retarget`]: the analytic retargeter.
 //! - [`detector`]: which stretch of a live pose stream is a swing.
 //! - [`events`]: the eight swing events.
+//! - [`body`]: the angles and shifts coaches read a swing by (turn, bend, sway, X-factor).
 //! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
 //! - [`score`]: the score, tempo, spatial deviations and advice of one swing.
 //! - [`setup`]: a swing's set-up, and the coach whose set-up (so club) it is nearest.
@@ -42,6 +43,7 @@
 #![warn(missing_docs)]
 
 pub mod blob;
+pub mod body;
 pub mod config;
 pub mod detector;
 pub mod dtw;

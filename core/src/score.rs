@@ -23,14 +23,13 @@
 //!   (see [`compare`]), each joint with its uncertainty along its offset: the wander of its
 //!   offset over the swing per axis (a camera's depth axis is noisier), and along its path its
 //!   speed times the event's timing uncertainty.
-//! - **Stance frame**: origin between the feet at address, `toward_target` from the trail foot
-//!   to the lead foot (horizontal), `toward_ball` the horizontal direction the chest faces
-//!   (the side it leans out to, past the hips), `up` = +Y; each swing in its own frame, so a pelvis that moves toward
-//!   the ball is reported as the pelvis moving.
+//! - **Stance frame** ([`Stance`]): each swing in its own, so a pelvis that moves toward the
+//!   ball is reported as the pelvis moving.
 
+use crate::body::Stance;
 use crate::config::{DEVIATIONS_PER_EVENT, MAX_DEVIATIONS, MAX_SWING_FRAMES};
 use crate::dtw::{self, Band, DtwError, Sequence, Window};
-use crate::events::{self, Event, EventError, Side, SwingEvents};
+use crate::events::{self, Event, EventError, SwingEvents};
 use crate::joint::Joint;
 use crate::math::norm;
 use crate::skeleton::Skeleton;
@@ -450,63 +449,6 @@ pub const fn scratch_len(student: usize, coach: usize) -> ScratchLen {
     }
 }
 
-/// A golfer's stance frame at address (see the [module documentation](self)).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Stance {
-    origin: Vec3,
-    target: Vec3,
-    ball: Vec3,
-}
-
-impl Stance {
-    /// The stance of the address `frame` of a golfer whose lead side is `lead`. Joints the
-    /// skeleton lacks count as at the origin; feet together face +X.
-    pub fn new(skeleton: &Skeleton, frame: &[Vec3], lead: Side) -> Stance {
-        let at = |joints: &[Joint]| skeleton.find(joints).map_or(Vec3::zeros(), |k| frame[k]);
-        let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
-        let (left, right) = (
-            at(&[Joint::LeftAnkle, Joint::LeftToe]),
-            at(&[Joint::RightAnkle, Joint::RightToe]),
-        );
-        let (lead_foot, trail_foot) = match lead {
-            Side::Left => (left, right),
-            Side::Right => (right, left),
-        };
-        let target = flat(lead_foot - trail_foot)
-            .try_normalize(1e-6)
-            .unwrap_or(Vec3::x());
-        // The golfer bends over the ball: the chest leans out past the hips toward it. (The
-        // hands hang almost straight below the shoulders, too close to tell.)
-        let mut ball = Vec3::y().cross(&target);
-        let lean = at(&[Joint::Thorax, Joint::Neck]) - at(&[Joint::Pelvis]);
-        if ball.dot(&lean) < 0.0 {
-            ball = -ball;
-        }
-        let origin = (left + right) * 0.5;
-        Stance {
-            origin: Vec3::new(origin.x, 0.0, origin.z),
-            target,
-            ball,
-        }
-    }
-
-    /// The horizontal unit vector from the trail foot toward the lead foot.
-    pub fn toward_target(&self) -> Vec3 {
-        self.target
-    }
-
-    /// The horizontal unit vector toward the ball.
-    pub fn toward_ball(&self) -> Vec3 {
-        self.ball
-    }
-
-    /// `p` as (toward the target, toward the ball, up) from between the feet.
-    pub fn local(&self, p: Vec3) -> Vec3 {
-        let d = p - self.origin;
-        Vec3::new(d.dot(&self.target), d.dot(&self.ball), d.y)
-    }
-}
-
 /// Turns `coach` (frames × skeleton joints, with its `events`) about the vertical through its
 /// stance origin so that its target line runs along `toward_target` (a student's
 /// [`Stance::toward_target`]): the alignment compares root-relative poses, which a camera's or
@@ -528,7 +470,7 @@ pub fn face(skeleton: &Skeleton, coach: &mut [Vec3], events: &SwingEvents, towar
         return;
     }
     let (sin, cos) = (sin / norm, cos / norm);
-    let origin = stance.origin;
+    let origin = stance.origin();
     for p in coach.iter_mut() {
         let d = *p - origin;
         *p = origin + Vec3::new(cos * d.x + sin * d.z, d.y, -sin * d.x + cos * d.z);

@@ -16,9 +16,9 @@
 //! assert_eq!(nearest(&student, [Some(iron), Some(driver)]), Some(1));
 //! ```
 
+use crate::body::Stance;
 use crate::events::Side;
 use crate::joint::Joint;
-use crate::score::Stance;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
 

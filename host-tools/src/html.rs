@@ -9,9 +9,10 @@
 
 use base64::Engine;
 use posecoach_adapters::session::Compared;
+use posecoach_core::body::Stance;
 use posecoach_core::events::{Event, SwingEvents};
 use posecoach_core::joint::Joint;
-use posecoach_core::score::{Report, Stance};
+use posecoach_core::score::Report;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
 use std::fmt::Write;

@@ -5,9 +5,10 @@
 //! golfer is still before its first frame), with its events in seconds from there, found in
 //! the source swing with its club at the source's own rate.
 
+use posecoach_core::body::Stance;
 use posecoach_core::events::{Event, Side, SwingEvents};
 use posecoach_core::joint::Joint;
-use posecoach_core::score::{Direction, Phase, Stance, Verdict};
+use posecoach_core::score::{Direction, Phase, Verdict};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
 use posecoach_io::Motion;

@@ -1,0 +1,679 @@
+//! Body metrics: the angles and shifts golf coaches read a swing by, measured from joint
+//! positions in the golfer's [`Stance`] frame.
+//!
+//! Every golfer is measured as if right-handed: positions are taken in the stance frame, whose
+//! first axis points from the trail foot to the lead foot, so a left-handed golfer's metrics
+//! read like a right-handed golfer's mirror image, with the same signs.
+//!
+//! - **Stance frame** (fixed at address): origin between the feet, `target` from the trail foot
+//!   toward the lead foot (horizontal), `ball` the horizontal direction the chest faces, `up`.
+//! - **Segments**: the *pelvis* has its lateral axis from the trail hip to the lead hip; the
+//!   *thorax* from the trail shoulder to the lead shoulder. The thorax's long axis runs from the
+//!   spine joint (else the pelvis) to the thorax joint (else the neck, else between the
+//!   shoulders); the pelvis's from the pelvis to the same thorax point, the trunk: joint
+//!   centres carry no pelvic tilt, so the pelvis's bend is the trunk's. A segment's forward
+//!   axis is perpendicular to both of its axes, out of the chest; its long axis is made
+//!   perpendicular to the lateral one.
+//! - **Angles** of a segment, degrees, relative to the stance frame, in the order of the
+//!   segment-angle reports of golf motion capture (rotation, then bend, then side bend): *turn*
+//!   about the vertical, positive closed (facing away from the target, as at the top), negative
+//!   open; *bend* about the segment's own lateral axis, positive forward (toward the ball);
+//!   *side bend* about the segment's own forward axis, positive toward the trail side (the
+//!   trail hip or shoulder lower, as at address and impact). All zero when standing square to
+//!   the target line, upright. The three are Euler angles: every orientation has one set
+//!   while the bend is within ±90°.
+//! - **Shifts** from address, metres, in the stance frame: *sway* toward the target, *thrust*
+//!   toward the ball, *lift* up; of the pelvis (between the hips), the thorax (its joint,
+//!   else between the shoulders) and the head.
+//! - **X-factor**: thorax turn less pelvis turn, degrees.
+//! - **Spine angle**: the trunk (pelvis to thorax) from the vertical as seen down the target
+//!   line, degrees, positive leaning toward the ball.
+//! - **Lead arm across the chest**: the lead arm (shoulder to wrist) in the thorax's transverse
+//!   plane, from the thorax's lateral axis toward its forward axis, degrees: 0 along the
+//!   shoulder line toward the target, 90 straight out from the chest, past 90 across it.
+//!   Meaningful when the arm is raised (P3 to P5, P9); a hanging arm is near the plane's normal.
+//! - **Lead elbow**: its flexion, degrees, 0 straight.
+//! - Where a club is tracked: **shaft lean**, the shaft (head to grip) from the vertical as
+//!   seen face on, degrees, positive with the grip toward the target; **wrist hinge**, the angle
+//!   between the lead forearm and the shaft (grip to head), degrees, 0 in line.
+//!
+//! ```
+//! use posecoach_core::body::{Body, Stance};
+//! use posecoach_core::events::Side;
+//! use posecoach_core::format::Format;
+//! use posecoach_core::skeleton::Skeleton;
+//! use posecoach_core::Vec3;
+//!
+//! let skeleton = Skeleton::standard(Format::H36m17).unwrap();
+//! let mut pose = [Vec3::zeros(); 17];
+//! skeleton.rest_positions(&mut pose);
+//! let stance = Stance::new(&skeleton, &pose, Side::Left);
+//! let body = Body::new(&skeleton, Side::Left).unwrap();
+//! let metrics = body.measure(&stance, &pose, &pose);
+//! assert!(metrics.thorax.turn.abs() < 1.0 && metrics.x_factor.abs() < 1.0);
+//! assert_eq!(metrics.pelvis_shift.sway, 0.0);
+//! ```
+
+use crate::events::Side;
+use crate::joint::Joint;
+use crate::skeleton::Skeleton;
+use crate::Vec3;
+
+/// A golfer's stance frame at address (see the [module documentation](self)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stance {
+    origin: Vec3,
+    target: Vec3,
+    ball: Vec3,
+}
+
+impl Stance {
+    /// The stance of the address `frame` of a golfer whose lead side is `lead`. Joints the
+    /// skeleton lacks count as at the origin; feet together face +X.
+    pub fn new(skeleton: &Skeleton, frame: &[Vec3], lead: Side) -> Stance {
+        let at = |joints: &[Joint]| skeleton.find(joints).map_or(Vec3::zeros(), |k| frame[k]);
+        let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z);
+        let (left, right) = (
+            at(&[Joint::LeftAnkle, Joint::LeftToe]),
+            at(&[Joint::RightAnkle, Joint::RightToe]),
+        );
+        let (lead_foot, trail_foot) = match lead {
+            Side::Left => (left, right),
+            Side::Right => (right, left),
+        };
+        let target = flat(lead_foot - trail_foot)
+            .try_normalize(1e-6)
+            .unwrap_or(Vec3::x());
+        // The golfer bends over the ball: the chest leans out past the hips toward it. (The
+        // hands hang almost straight below the shoulders, too close to tell.)
+        let mut ball = Vec3::y().cross(&target);
+        let lean = at(&[Joint::Thorax, Joint::Neck]) - at(&[Joint::Pelvis]);
+        if ball.dot(&lean) < 0.0 {
+            ball = -ball;
+        }
+        let origin = (left + right) * 0.5;
+        Stance {
+            origin: Vec3::new(origin.x, 0.0, origin.z),
+            target,
+            ball,
+        }
+    }
+
+    /// The horizontal unit vector from the trail foot toward the lead foot.
+    pub fn toward_target(&self) -> Vec3 {
+        self.target
+    }
+
+    /// The horizontal unit vector toward the ball.
+    pub fn toward_ball(&self) -> Vec3 {
+        self.ball
+    }
+
+    /// The point between the feet at address, on the ground (`y` = 0).
+    pub fn origin(&self) -> Vec3 {
+        self.origin
+    }
+
+    /// `p` as (toward the target, toward the ball, up) from between the feet.
+    pub fn local(&self, p: Vec3) -> Vec3 {
+        self.direction(p - self.origin)
+    }
+
+    /// The direction or offset `d` as (toward the target, toward the ball, up).
+    pub fn direction(&self, d: Vec3) -> Vec3 {
+        Vec3::new(d.dot(&self.target), d.dot(&self.ball), d.y)
+    }
+}
+
+/// A segment's orientation in the stance frame, degrees (see the [module
+/// documentation](self) for axes and signs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Angles {
+    /// About the vertical: positive closed (away from the target), negative open.
+    pub turn: f32,
+    /// About the segment's lateral axis: positive forward, toward the ball.
+    pub bend: f32,
+    /// About the segment's forward axis: positive toward the trail side.
+    pub side_bend: f32,
+}
+
+/// How far a point has moved since address, metres, in the stance frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Shift {
+    /// Toward the target.
+    pub sway: f32,
+    /// Toward the ball.
+    pub thrust: f32,
+    /// Up.
+    pub lift: f32,
+}
+
+/// The body metrics of one frame (see the [module documentation](self)).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Metrics {
+    /// The pelvis's turn, bend and side bend.
+    pub pelvis: Angles,
+    /// The thorax's turn, bend and side bend.
+    pub thorax: Angles,
+    /// Thorax turn less pelvis turn, degrees.
+    pub x_factor: f32,
+    /// The trunk from the vertical seen down the target line, degrees.
+    pub spine: f32,
+    /// The pelvis (between the hips) since address.
+    pub pelvis_shift: Shift,
+    /// The thorax since address.
+    pub thorax_shift: Shift,
+    /// The head since address, where the skeleton has a head joint.
+    pub head_shift: Option<Shift>,
+    /// The lead arm across the chest, degrees.
+    pub lead_arm: f32,
+    /// The lead elbow's flexion, degrees.
+    pub lead_elbow: f32,
+    /// The shaft from the vertical seen face on, degrees, where a club is tracked.
+    pub shaft_lean: Option<f32>,
+    /// Lead forearm to shaft, degrees, where a club is tracked.
+    pub wrist_hinge: Option<f32>,
+}
+
+/// Why a skeleton's body metrics cannot be measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum BodyError {
+    /// The skeleton lacks a joint every metric needs.
+    MissingJoint(Joint),
+}
+
+impl core::fmt::Display for BodyError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            BodyError::MissingJoint(j) => {
+                write!(f, "body metrics need the {} joint", j.name())
+            }
+        }
+    }
+}
+
+impl core::error::Error for BodyError {}
+
+/// The joints a skeleton's body metrics are measured from, for one lead side.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Body {
+    /// Lead, trail.
+    hips: [usize; 2],
+    /// Lead, trail.
+    shoulders: [usize; 2],
+    pelvis: usize,
+    /// The spine joint, where the skeleton has one.
+    spine: Option<usize>,
+    /// The thorax joint (else the neck), where the skeleton has one.
+    thorax: Option<usize>,
+    head: Option<usize>,
+    /// Lead elbow, lead wrist.
+    lead_arm: [usize; 2],
+    /// Grip, club head.
+    club: Option<[usize; 2]>,
+}
+
+impl Body {
+    /// The joints of `skeleton` for a golfer whose lead side is `lead`.
+    ///
+    /// # Errors
+    /// [`BodyError::MissingJoint`] when the skeleton lacks a hip, a shoulder, the lead elbow or
+    /// wrist, or the pelvis.
+    pub fn new(skeleton: &Skeleton, lead: Side) -> Result<Body, BodyError> {
+        let need = |j: Joint| skeleton.index_of(j).ok_or(BodyError::MissingJoint(j));
+        let pair = |left: Joint, right: Joint| -> Result<[usize; 2], BodyError> {
+            let (l, r) = (need(left)?, need(right)?);
+            Ok(match lead {
+                Side::Left => [l, r],
+                Side::Right => [r, l],
+            })
+        };
+        let (elbow, wrist) = match lead {
+            Side::Left => (Joint::LeftElbow, Joint::LeftWrist),
+            Side::Right => (Joint::RightElbow, Joint::RightWrist),
+        };
+        let club = skeleton
+            .index_of(Joint::ClubGrip)
+            .zip(skeleton.index_of(Joint::ClubHead))
+            .map(|(g, h)| [g, h]);
+        Ok(Body {
+            hips: pair(Joint::LeftHip, Joint::RightHip)?,
+            shoulders: pair(Joint::LeftShoulder, Joint::RightShoulder)?,
+            pelvis: need(Joint::Pelvis)?,
+            spine: skeleton.index_of(Joint::Spine),
+            thorax: skeleton.find(&[Joint::Thorax, Joint::Neck]),
+            head: skeleton.find(&[Joint::Head, Joint::HeadTop, Joint::Neck]),
+            lead_arm: [need(elbow)?, need(wrist)?],
+            club,
+        })
+    }
+
+    /// The metrics of `frame`, its shifts counted from `address` (both frames of this
+    /// skeleton's joints, in the same world frame as `stance`).
+    pub fn measure(&self, stance: &Stance, address: &[Vec3], frame: &[Vec3]) -> Metrics {
+        let local = |p: Vec3| stance.local(p);
+        let shift = |k: &dyn Fn(&[Vec3]) -> Vec3| {
+            let d = local(k(frame)) - local(k(address));
+            Shift {
+                sway: d.x,
+                thrust: d.y,
+                lift: d.z,
+            }
+        };
+        let hips = |f: &[Vec3]| (f[self.hips[0]] + f[self.hips[1]]) * 0.5;
+        let thorax = |f: &[Vec3]| match self.thorax {
+            Some(k) => f[k],
+            None => (f[self.shoulders[0]] + f[self.shoulders[1]]) * 0.5,
+        };
+        let pelvis = angles(axes(
+            stance.direction(frame[self.hips[0]] - frame[self.hips[1]]),
+            stance.direction(thorax(frame) - frame[self.pelvis]),
+        ));
+        let chest = axes(
+            stance.direction(frame[self.shoulders[0]] - frame[self.shoulders[1]]),
+            stance.direction(thorax(frame) - self.spine.map_or(frame[self.pelvis], |k| frame[k])),
+        );
+        let trunk = stance.direction(thorax(frame) - hips(frame));
+        let [elbow, wrist] = self.lead_arm.map(|k| frame[k]);
+        let shoulder = frame[self.shoulders[0]];
+        let club = self.club.map(|[g, h]| (frame[g], frame[h]));
+        let thorax_angles = angles(chest);
+        Metrics {
+            pelvis,
+            thorax: thorax_angles,
+            x_factor: thorax_angles.turn - pelvis.turn,
+            spine: degrees(libm::atan2f(trunk.y, trunk.z)),
+            pelvis_shift: shift(&hips),
+            thorax_shift: shift(&thorax),
+            head_shift: self.head.map(|k| shift(&|f: &[Vec3]| f[k])),
+            lead_arm: across(chest, stance.direction(wrist - shoulder)),
+            lead_elbow: between(elbow - shoulder, wrist - elbow),
+            shaft_lean: club.map(|(grip, head)| {
+                let shaft = stance.direction(grip - head);
+                degrees(libm::atan2f(shaft.x, shaft.z))
+            }),
+            wrist_hinge: club.map(|(grip, head)| between(wrist - elbow, head - grip)),
+        }
+    }
+}
+
+/// A segment's axes in stance coordinates (toward the target, toward the ball, up): the unit
+/// lateral axis along `lateral` (trail to lead), the long axis `long` made perpendicular to it,
+/// and the forward axis `long × lateral`, out of the chest. Degenerate input gives the stance
+/// frame's own axes.
+fn axes(lateral: Vec3, long: Vec3) -> [Vec3; 3] {
+    let l = lateral.try_normalize(1e-9).unwrap_or(Vec3::x());
+    let u = (long - l * long.dot(&l))
+        .try_normalize(1e-9)
+        .unwrap_or(Vec3::z());
+    [l, u, u.cross(&l)]
+}
+
+/// The turn, bend and side bend of a segment with these [`axes`]: the forward axis leans down
+/// by the bend and faces away from the ball by the turn; the lateral axis rises against the
+/// long one by the side bend.
+fn angles([l, u, f]: [Vec3; 3]) -> Angles {
+    Angles {
+        turn: degrees(libm::atan2f(-f.x, f.y)),
+        bend: degrees(libm::atan2f(-f.z, libm::hypotf(f.x, f.y))),
+        side_bend: degrees(libm::atan2f(l.z, u.z)),
+    }
+}
+
+/// The direction of `v` in the transverse plane of a segment with these [`axes`], from its
+/// lateral axis toward its forward axis, degrees (0 to 180 in front of it, negative behind).
+fn across([l, _, f]: [Vec3; 3], v: Vec3) -> f32 {
+    degrees(libm::atan2f(v.dot(&f), v.dot(&l)))
+}
+
+/// The angle between `a` and `b`, degrees, 0 when they point the same way.
+fn between(a: Vec3, b: Vec3) -> f32 {
+    degrees(libm::atan2f(a.cross(&b).norm(), a.dot(&b)))
+}
+
+fn degrees(radians: f32) -> f32 {
+    radians.to_degrees()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::format::Format;
+    use crate::joint::JOINT_COUNT;
+    use nalgebra::{Rotation3, Vector3};
+    use proptest::strategy::Strategy;
+
+    /// A segment's rotation in stance coordinates from its turn, bend and side bend (degrees),
+    /// composed from axis-angle rotations, independently of [`angles`]: turn about up, then
+    /// bend about the turned lateral axis, then side bend about the forward axis.
+    fn rotation(a: Angles) -> Rotation3<f32> {
+        let about = |axis: Vector3<f32>, deg: f32| {
+            Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), deg.to_radians())
+        };
+        // Closing the turn takes the forward axis (+ball) toward −target: about +up. Bending
+        // forward takes it down: about −lateral. Side bending to the trail side lifts the lead
+        // side: about −forward.
+        about(Vector3::z(), a.turn)
+            * about(-Vector3::x(), a.bend)
+            * about(-Vector3::y(), a.side_bend)
+    }
+
+    /// What a golfer's pose is made of, in stance coordinates.
+    #[derive(Clone, Copy)]
+    struct Posed {
+        pelvis: Angles,
+        thorax: Angles,
+        /// Between the hips.
+        centre: Vec3,
+        /// Lead arm: across the chest and elbow flexion, degrees.
+        arm: (f32, f32),
+        /// The shaft about the lead forearm and its wrist hinge from it, degrees.
+        club: (f32, f32),
+    }
+
+    const UPPER_ARM: f32 = 0.3;
+    const FOREARM: f32 = 0.27;
+
+    /// The joints of `skeleton` for `posed`, in stance coordinates (lead side +target).
+    fn pose(skeleton: &Skeleton, lead: Side, posed: &Posed) -> [Vec3; 24] {
+        let (rp, rt) = (rotation(posed.pelvis), rotation(posed.thorax));
+        let pelvis = posed.centre;
+        // The pelvis's long axis is the trunk, the thorax's from the spine joint up.
+        let thorax = pelvis + rp * Vec3::new(0.0, 0.0, 0.45);
+        let spine = thorax - rt * Vec3::new(0.0, 0.0, 0.3);
+        let neck = thorax + rt * Vec3::new(0.0, 0.0, 0.1);
+        let head = neck + rt * Vec3::new(0.0, 0.05, 0.12);
+        let (lead_shoulder, trail_shoulder) = (
+            thorax + rt * Vec3::new(0.18, 0.0, 0.0),
+            thorax - rt * Vec3::new(0.18, 0.0, 0.0),
+        );
+        // The upper arm in the thorax's transverse plane at `across`; the forearm bent by the
+        // flexion within that plane, toward the front.
+        let (across, flexion) = posed.arm;
+        let upper =
+            rt * Rotation3::from_axis_angle(&Vector3::z_axis(), across.to_radians()) * Vec3::x();
+        let fore = rt
+            * Rotation3::from_axis_angle(&Vector3::z_axis(), (across + flexion).to_radians())
+            * Vec3::x();
+        let elbow = lead_shoulder + upper * UPPER_ARM;
+        let wrist = elbow + fore * FOREARM;
+        let (around, hinge) = posed.club;
+        let grip = wrist;
+        let club_head = grip + shaft(fore, around, hinge);
+        let mut out = [Vec3::zeros(); 24];
+        for (k, j) in skeleton.joints().iter().enumerate() {
+            let side = |left: bool| (left == (lead == Side::Left)) as i32 as f32 * 2.0 - 1.0;
+            let foot = |left: bool| Vec3::new(0.2 * side(left), 0.05, 0.08);
+            out[k] = match j {
+                Some(Joint::Pelvis) => pelvis,
+                Some(Joint::LeftHip) => pelvis + rp * Vec3::new(0.12 * side(true), 0.0, 0.0),
+                Some(Joint::RightHip) => pelvis + rp * Vec3::new(0.12 * side(false), 0.0, 0.0),
+                Some(Joint::LeftKnee) => (pelvis + foot(true)) * 0.5,
+                Some(Joint::RightKnee) => (pelvis + foot(false)) * 0.5,
+                Some(Joint::LeftAnkle) => foot(true),
+                Some(Joint::RightAnkle) => foot(false),
+                Some(Joint::LeftToe) => foot(true) + Vec3::new(0.0, 0.15, -0.05),
+                Some(Joint::RightToe) => foot(false) + Vec3::new(0.0, 0.15, -0.05),
+                Some(Joint::Spine) => spine,
+                Some(Joint::Thorax) => thorax,
+                Some(Joint::Neck) => neck,
+                Some(Joint::Head) => head,
+                Some(Joint::HeadTop) => head + rt * Vec3::new(0.0, 0.0, 0.1),
+                Some(j @ (Joint::LeftShoulder | Joint::RightShoulder)) => {
+                    if side(*j == Joint::LeftShoulder) > 0.0 {
+                        lead_shoulder
+                    } else {
+                        trail_shoulder
+                    }
+                }
+                Some(j @ (Joint::LeftElbow | Joint::RightElbow)) => {
+                    if side(*j == Joint::LeftElbow) > 0.0 {
+                        elbow
+                    } else {
+                        trail_shoulder + Vec3::new(0.0, 0.1, -0.3)
+                    }
+                }
+                Some(j @ (Joint::LeftWrist | Joint::RightWrist)) => {
+                    if side(*j == Joint::LeftWrist) > 0.0 {
+                        wrist
+                    } else {
+                        trail_shoulder + Vec3::new(0.05, 0.15, -0.55)
+                    }
+                }
+                Some(Joint::ClubGrip) => grip,
+                Some(Joint::ClubHead) => club_head,
+                _ => pelvis,
+            };
+        }
+        out
+    }
+
+    /// The unit shaft direction (grip to head) at `hinge` degrees from `fore`, at `around`
+    /// degrees about it.
+    fn shaft(fore: Vec3, around: f32, hinge: f32) -> Vec3 {
+        let f = fore.normalize();
+        let a = f.cross(&Vec3::z()).try_normalize(1e-6).unwrap_or(Vec3::x());
+        let b = f.cross(&a);
+        let (h, phi) = (hinge.to_radians(), around.to_radians());
+        f * libm::cosf(h) + (a * libm::cosf(phi) + b * libm::sinf(phi)) * libm::sinf(h)
+    }
+
+    /// Stance coordinates to a world frame: `up` is +Y, the target line turned `heading`
+    /// degrees about it, mirrored across the vertical plane of +Y and +Z when `mirror`, and
+    /// moved by `by`.
+    fn world(p: Vec3, heading: f32, mirror: bool, by: Vec3) -> Vec3 {
+        let v = Vec3::new(if mirror { -p.x } else { p.x }, p.z, p.y);
+        Rotation3::from_axis_angle(&Vector3::y_axis(), heading.to_radians()) * v + by
+    }
+
+    fn close(a: f32, b: f32, tolerance: f32) -> bool {
+        (a - b).abs() <= tolerance
+    }
+
+    const ADDRESS: Posed = Posed {
+        pelvis: Angles {
+            turn: -3.0,
+            bend: 20.0,
+            side_bend: 4.0,
+        },
+        thorax: Angles {
+            turn: 2.0,
+            bend: 40.0,
+            side_bend: 12.0,
+        },
+        centre: Vec3::new(0.0, -0.05, 0.95),
+        arm: (100.0, 5.0),
+        club: (200.0, 35.0),
+    };
+
+    const TOP: Posed = Posed {
+        pelvis: Angles {
+            turn: 48.0,
+            bend: 22.0,
+            side_bend: -8.0,
+        },
+        thorax: Angles {
+            turn: 92.0,
+            bend: 33.0,
+            side_bend: -25.0,
+        },
+        centre: Vec3::new(-0.04, 0.02, 0.97),
+        arm: (150.0, 20.0),
+        club: (40.0, 90.0),
+    };
+
+    /// Measures `posed` against `address` for `skeleton`, placed in the world by `heading`,
+    /// `mirror` and `by`.
+    fn measured(format: Format, lead: Side, heading: f32, mirror: bool, posed: &Posed) -> Metrics {
+        let skeleton = Skeleton::standard(format).unwrap();
+        let by = Vec3::new(1.5, 0.0, -2.0);
+        let place = |p: &Posed| pose(&skeleton, lead, p).map(|v| world(v, heading, mirror, by));
+        let (address, frame) = (place(&ADDRESS), place(posed));
+        let n = skeleton.len();
+        let stance = Stance::new(&skeleton, &address[..n], lead);
+        Body::new(&skeleton, lead)
+            .unwrap()
+            .measure(&stance, &address[..n], &frame[..n])
+    }
+
+    #[test]
+    fn posed_angles_are_measured_back() {
+        for (heading, mirror, lead) in [
+            (0.0, false, Side::Left),
+            (137.0, false, Side::Left),
+            (-61.0, true, Side::Right),
+            (200.0, true, Side::Left),
+        ] {
+            for posed in [ADDRESS, TOP] {
+                let m = measured(Format::GolfMarkers, lead, heading, mirror, &posed);
+                let angles = |a: Angles, b: Angles| {
+                    close(a.turn, b.turn, 0.01)
+                        && close(a.bend, b.bend, 0.01)
+                        && close(a.side_bend, b.side_bend, 0.01)
+                };
+                assert!(angles(m.pelvis, posed.pelvis), "{heading} {mirror}: {m:?}");
+                assert!(angles(m.thorax, posed.thorax), "{heading} {mirror}: {m:?}");
+                assert!(close(
+                    m.x_factor,
+                    posed.thorax.turn - posed.pelvis.turn,
+                    0.02
+                ));
+                let shift = posed.centre - ADDRESS.centre;
+                let s = m.pelvis_shift;
+                assert!(close(s.sway, shift.x, 1e-4) && close(s.thrust, shift.y, 1e-4));
+                assert!(close(s.lift, shift.z, 1e-4), "{m:?}");
+                let thorax = |p: &Posed| p.centre + rotation(p.pelvis) * Vec3::new(0.0, 0.0, 0.45);
+                let moved = thorax(&posed) - thorax(&ADDRESS);
+                let t = m.thorax_shift;
+                let got = Vec3::new(t.sway, t.thrust, t.lift);
+                assert!((got - moved).norm() < 1e-4, "{m:?}");
+                let (across, flexion) = posed.arm;
+                let (l1, l2, k) = (UPPER_ARM, FOREARM, flexion.to_radians());
+                let expected =
+                    across + degrees(libm::atan2f(l2 * libm::sinf(k), l1 + l2 * libm::cosf(k)));
+                assert!(close(m.lead_arm, expected, 0.02), "{m:?}");
+                assert!(close(m.lead_elbow, flexion, 0.05), "{m:?}");
+                let (around, hinge) = posed.club;
+                let skeleton = Skeleton::standard(Format::GolfMarkers).unwrap();
+                let at = pose(&skeleton, lead, &posed);
+                let joint = |left, right| {
+                    at[skeleton
+                        .index_of(if lead == Side::Left { left } else { right })
+                        .unwrap()]
+                };
+                let fore = joint(Joint::LeftWrist, Joint::RightWrist)
+                    - joint(Joint::LeftElbow, Joint::RightElbow);
+                let grip_up = -shaft(fore, around, hinge);
+                let lean = degrees(libm::atan2f(grip_up.x, grip_up.z));
+                assert!(close(m.shaft_lean.unwrap(), lean, 0.05), "{m:?}");
+                assert!(close(m.wrist_hinge.unwrap(), hinge, 0.05), "{m:?}");
+            }
+        }
+    }
+
+    fn segment() -> impl proptest::strategy::Strategy<Value = Angles> {
+        (-150.0f32..150.0, -70.0f32..70.0, -45.0f32..45.0).prop_map(|(turn, bend, side_bend)| {
+            Angles {
+                turn,
+                bend,
+                side_bend,
+            }
+        })
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(if cfg!(miri) { 1 } else { 256 }))]
+        #[test]
+        fn any_posed_segment_is_measured_back(
+            pelvis in segment(), thorax in segment(), heading in -180.0f32..180.0,
+            mirror in proptest::bool::ANY,
+        ) {
+            let posed = Posed { pelvis, thorax, ..TOP };
+            let m = measured(Format::GolfMarkers, Side::Left, heading, mirror, &posed);
+            for (got, want) in [(m.pelvis, pelvis), (m.thorax, thorax)] {
+                proptest::prop_assert!(close(got.turn, want.turn, 0.05), "{got:?} {want:?}");
+                proptest::prop_assert!(close(got.bend, want.bend, 0.05), "{got:?} {want:?}");
+                proptest::prop_assert!(close(got.side_bend, want.side_bend, 0.05), "{got:?} {want:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_spine_angle_is_the_trunks_lean_seen_down_the_line() {
+        let bent = Posed {
+            pelvis: Angles {
+                turn: 0.0,
+                bend: 35.0,
+                side_bend: 0.0,
+            },
+            thorax: Angles {
+                turn: 60.0,
+                bend: 10.0,
+                side_bend: -20.0,
+            },
+            ..ADDRESS
+        };
+        let m = measured(Format::GolfMarkers, Side::Left, 30.0, false, &bent);
+        assert!(close(m.spine, 35.0, 0.01), "{m:?}");
+        // Turned 60° away, the same lean is seen shorter down the line: tan⁻¹(tan 35° cos 60°).
+        let turned = Posed {
+            pelvis: Angles {
+                turn: 60.0,
+                bend: 35.0,
+                side_bend: 0.0,
+            },
+            ..bent
+        };
+        let m = measured(Format::GolfMarkers, Side::Left, 30.0, false, &turned);
+        let seen = degrees(libm::atanf(libm::tanf(35f32.to_radians()) * 0.5));
+        assert!(close(m.spine, seen, 0.01), "{m:?}");
+    }
+
+    #[test]
+    fn a_skeleton_without_a_spine_joint_turns_with_its_trunk() {
+        // COCO: the pelvis and thorax are midpoints, the thorax's long axis the whole trunk.
+        let turned = Posed {
+            pelvis: Angles {
+                turn: 40.0,
+                bend: 0.0,
+                side_bend: 0.0,
+            },
+            thorax: Angles {
+                turn: 85.0,
+                bend: 0.0,
+                side_bend: 0.0,
+            },
+            ..ADDRESS
+        };
+        let m = measured(Format::Coco17, Side::Left, 75.0, false, &turned);
+        assert!(
+            close(m.pelvis.turn, 40.0, 0.01) && close(m.thorax.turn, 85.0, 0.01),
+            "{m:?}"
+        );
+        assert!(close(m.x_factor, 45.0, 0.02) && m.shaft_lean.is_none());
+    }
+
+    #[test]
+    fn a_skeleton_without_hips_is_refused() {
+        let h36m = Skeleton::standard(Format::H36m17).unwrap();
+        assert!(Body::new(&h36m, Side::Right).is_ok());
+        // The canonical body without the right hip (its knee hangs from the pelvis).
+        let mut joints = [Joint::Pelvis; JOINT_COUNT];
+        let mut rest = [Vec3::zeros(); JOINT_COUNT];
+        let body = Joint::ALL
+            .into_iter()
+            .filter(|j| !j.is_club() && *j != Joint::RightHip);
+        let mut n = 0;
+        for (k, j) in body.enumerate() {
+            (joints[k], rest[k], n) = (j, crate::format::t_pose(j), k + 1);
+        }
+        let skeleton = Skeleton::canonical(&joints[..n], &rest[..n]).unwrap();
+        let refused = Err(BodyError::MissingJoint(Joint::RightHip));
+        assert_eq!(Body::new(&skeleton, Side::Left), refused);
+        assert_eq!(Body::new(&skeleton, Side::Right), refused);
+    }
+}
