@@ -16,15 +16,17 @@
 //! - **mid_backswing** / **mid_downswing**: the lead arm (shoulder → wrist) horizontal;
 //! - **impact**: after the top, the club head (else the hands) closest to where it was at
 //!   address;
-//! - **finish**: the hands' highest point after impact.
+//! - **finish**: the hands' highest point after impact;
+//! - the P-system's **P6**, the shaft falling through horizontal between mid-downswing and
+//!   impact (without a club, [`SHAFT_DOWN_SHARE`] of the way), and **P9**, the trail arm rising
+//!   through horizontal after impact; the other eight positions are the events above
+//!   ([`Position`]).
 //!
 //! A stroke whose hands rise less than [`PUTT_RISE_M`] is a putt: top, address and impact as
 //! above, and the finish where the forward stroke stops.
 //!
-//! On the two tour swings at 60 Hz every event lands within two frames of a hand label; without
-//! the club, address comes 5 frames (83 ms) later, when the hands rather than the club head
-//! leave the set-up, and the other events stay within two frames. Frames are indices into the
-//! motion given; nothing is allocated.
+//! On the two tour swings at 60 Hz every position lands within two frames of a hand label, with
+//! or without the club. Frames are indices into the motion given; nothing is allocated.
 //!
 //! ```
 //! use posecoach_core::events::{Event, SwingEvents};
@@ -52,6 +54,10 @@ pub const NOISE_MARGIN: f32 = 1.2;
 /// Lead-arm elevation at toe-up when no club is tracked (the shaft is horizontal there in the
 /// two tour swings of the test data: -54° and -50°).
 pub const TOE_UP_ARM_DEG: f32 = -52.0;
+/// Without a club, P6 (the shaft horizontal in the downswing) comes this share of the way from
+/// P5 to impact: 0.69 on both tour swings of the test data. (A lead-arm level, as for toe-up,
+/// would be fragile here: the lead arm is within 3° of its lowest, -71° and -69°.)
+pub const SHAFT_DOWN_SHARE: f32 = 0.69;
 /// Lead-arm elevation at mid-follow-through when no club is tracked (tour swings: -43°, -52°).
 pub const FOLLOW_ARM_DEG: f32 = -45.0;
 /// Impact comes within this long after the top (a slow amateur downswing takes half of it):
@@ -107,6 +113,108 @@ impl Event {
             Event::Finish => "finish",
         }
     }
+
+    /// The P-system position this event is.
+    pub const fn position(self) -> Position {
+        match self {
+            Event::Address => Position::P1,
+            Event::ToeUp => Position::P2,
+            Event::MidBackswing => Position::P3,
+            Event::Top => Position::P4,
+            Event::MidDownswing => Position::P5,
+            Event::Impact => Position::P7,
+            Event::MidFollowThrough => Position::P8,
+            Event::Finish => Position::P10,
+        }
+    }
+}
+
+/// One of the P-system's ten positions of a full swing, as coaches name them; eight are
+/// GolfDB's events ([`Position::event`]), P6 and P9 are not.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[derive(serde::Serialize, serde::Deserialize)]
+#[allow(missing_docs)]
+pub enum Position {
+    P1,
+    P2,
+    P3,
+    P4,
+    P5,
+    P6,
+    P7,
+    P8,
+    P9,
+    P10,
+}
+
+impl Position {
+    /// All positions in swing order.
+    pub const ALL: [Position; 10] = [
+        Position::P1,
+        Position::P2,
+        Position::P3,
+        Position::P4,
+        Position::P5,
+        Position::P6,
+        Position::P7,
+        Position::P8,
+        Position::P9,
+        Position::P10,
+    ];
+
+    /// Its name: "P1" to "P10".
+    pub const fn name(self) -> &'static str {
+        match self {
+            Position::P1 => "P1",
+            Position::P2 => "P2",
+            Position::P3 => "P3",
+            Position::P4 => "P4",
+            Position::P5 => "P5",
+            Position::P6 => "P6",
+            Position::P7 => "P7",
+            Position::P8 => "P8",
+            Position::P9 => "P9",
+            Position::P10 => "P10",
+        }
+    }
+
+    /// The moment it names, in a coach's words.
+    pub const fn moment(self) -> &'static str {
+        match self {
+            Position::P1 => "address",
+            Position::P2 => "shaft parallel in the backswing",
+            Position::P3 => "lead arm parallel in the backswing",
+            Position::P4 => "top",
+            Position::P5 => "lead arm parallel in the downswing",
+            Position::P6 => "shaft parallel in the downswing",
+            Position::P7 => "impact",
+            Position::P8 => "shaft parallel after impact",
+            Position::P9 => "trail arm parallel in the follow-through",
+            Position::P10 => "finish",
+        }
+    }
+
+    /// The GolfDB event at this position, if it is one.
+    pub const fn event(self) -> Option<Event> {
+        match self {
+            Position::P1 => Some(Event::Address),
+            Position::P2 => Some(Event::ToeUp),
+            Position::P3 => Some(Event::MidBackswing),
+            Position::P4 => Some(Event::Top),
+            Position::P5 => Some(Event::MidDownswing),
+            Position::P6 | Position::P9 => None,
+            Position::P7 => Some(Event::Impact),
+            Position::P8 => Some(Event::MidFollowThrough),
+            Position::P10 => Some(Event::Finish),
+        }
+    }
+}
+
+impl From<Event> for Position {
+    fn from(event: Event) -> Position {
+        event.position()
+    }
 }
 
 /// A side of the body.
@@ -130,8 +238,9 @@ pub enum SwingKind {
     Putt,
 }
 
-/// The events of one swing: all eight for a full swing; address, top, impact and finish for a
-/// putt.
+/// The events of one swing: all eight for a full swing, and the P-system's P6 and P9 where
+/// the swing shows them; address, top, impact and finish for a putt. Every accessor takes an
+/// [`Event`] or a [`Position`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -142,19 +251,19 @@ pub struct SwingEvents {
     pub lead: Side,
     /// Whether the club was used (else hands and arms only).
     pub club: bool,
-    /// Per event in [`Event::ALL`] order, `u16::MAX` where the kind has no such event.
-    frames: [u16; 8],
-    /// Per event, its time in frames (between frames: see [`SwingEvents::time`]); 0 where
-    /// the kind has no such event.
-    times: [f32; 8],
+    /// Per position in [`Position::ALL`] order, `u16::MAX` where the swing has none.
+    frames: [u16; 10],
+    /// Per position, its time in frames (between frames: see [`SwingEvents::time`]); 0 where
+    /// the swing has none.
+    times: [f32; 10],
 }
 
 const ABSENT: u16 = u16::MAX;
 
 impl SwingEvents {
-    /// Frame of `event`, if this kind of swing has it.
-    pub fn frame(&self, event: Event) -> Option<usize> {
-        match self.frames[event as usize] {
+    /// Frame of `at` (an event or a position), if this swing has it.
+    pub fn frame(&self, at: impl Into<Position>) -> Option<usize> {
+        match self.frames[at.into() as usize] {
             ABSENT => None,
             f => Some(f as usize),
         }
@@ -163,19 +272,20 @@ impl SwingEvents {
     /// Time of `event` in frames from the first, between frames where the motion tells: the
     /// takeaway for [`Event::Address`] (whose frame is the last before it), the crossing or
     /// the turning point of the signal that defines the others (see the module documentation).
-    pub fn time(&self, event: Event) -> Option<f32> {
-        self.frame(event).map(|_| self.times[event as usize])
+    pub fn time(&self, at: impl Into<Position>) -> Option<f32> {
+        let at = at.into();
+        self.frame(at).map(|_| self.times[at as usize])
     }
 
     /// These events with the takeaway at `time` (frames, within the backswing): a takeaway
     /// timed against a coach's ([`takeaway_against`]).
     pub fn with_takeaway(&self, time: f32) -> SwingEvents {
         let mut events = *self;
-        let a = Event::Address as usize;
+        let a = Position::P1 as usize;
         if events.frames[a] != ABSENT && time.is_finite() {
             let time = time.clamp(
                 0.0,
-                (f32::from(events.frames[Event::Top as usize]) - 1.0).max(0.0),
+                (f32::from(events.frames[Position::P4 as usize]) - 1.0).max(0.0),
             );
             events.times[a] = time;
             events.frames[a] = time as u16;
@@ -199,22 +309,22 @@ impl SwingEvents {
 
     /// Frame of the address (every swing has one).
     pub fn address(&self) -> usize {
-        self.frames[Event::Address as usize] as usize
+        self.frames[Position::P1 as usize] as usize
     }
 
     /// Frame of the top (of the backswing or backstroke).
     pub fn top(&self) -> usize {
-        self.frames[Event::Top as usize] as usize
+        self.frames[Position::P4 as usize] as usize
     }
 
     /// Frame of impact.
     pub fn impact(&self) -> usize {
-        self.frames[Event::Impact as usize] as usize
+        self.frames[Position::P7 as usize] as usize
     }
 
     /// Frame of the finish.
     pub fn finish(&self) -> usize {
-        self.frames[Event::Finish as usize] as usize
+        self.frames[Position::P10 as usize] as usize
     }
 
     /// The events this swing has, with their frames, in swing order.
@@ -222,6 +332,13 @@ impl SwingEvents {
         Event::ALL
             .into_iter()
             .filter_map(|e| self.frame(e).map(|f| (e, f)))
+    }
+
+    /// The positions this swing has, with their frames, in swing order.
+    pub fn positions(&self) -> impl Iterator<Item = (Position, usize)> + '_ {
+        Position::ALL
+            .into_iter()
+            .filter_map(|p| self.frame(p).map(|f| (p, f)))
     }
 }
 
@@ -733,6 +850,11 @@ pub fn detect(
         Side::Right => (shoulders[1], wrists[1]),
     };
     let arm = |t: usize| elevation(track.at(lead_wrist, t) - track.at(lead_shoulder, t));
+    let (trail_shoulder, trail_wrist) = match lead {
+        Side::Left => (shoulders[1], wrists[1]),
+        Side::Right => (shoulders[0], wrists[0]),
+    };
+    let trail_arm = |t: usize| elevation(track.at(trail_wrist, t) - track.at(trail_shoulder, t));
 
     // Impact: after the top, where the club head (or the hands) comes closest to where it was
     // at address.
@@ -777,8 +899,8 @@ pub fn detect(
         if finish <= impact {
             return Err(EventError::NoSwing);
         }
-        let mut frames = [ABSENT; 8];
-        let mut times = [0.0; 8];
+        let mut frames = [ABSENT; 10];
+        let mut times = [0.0; 10];
         for (event, frame, time) in [
             (Event::Address, address, taken),
             (Event::Top, top, top_time),
@@ -789,8 +911,8 @@ pub fn detect(
                 between(hand_speed, stopped, finish.saturating_sub(1), finish),
             ),
         ] {
-            frames[event as usize] = frame as u16;
-            times[event as usize] = time;
+            frames[event.position() as usize] = frame as u16;
+            times[event.position() as usize] = time;
         }
         return Ok(SwingEvents {
             kind: SwingKind::Putt,
@@ -843,6 +965,21 @@ pub fn detect(
     }
     let height = |t: usize| hands(t).y;
 
+    // P6, where the shaft falls through horizontal (without a club, SHAFT_DOWN_SHARE of the way
+    // from P5 to impact); P9, where the trail arm rises through horizontal after impact.
+    let shaft_down = match club {
+        Some(_) => {
+            crossing(mid_downswing..impact, shaft, 0.0, false).map(|t| (t, crossed(&shaft, 0.0, t)))
+        }
+        None => {
+            let p5 = crossed(&arm, 0.0, mid_downswing);
+            let time = p5 + SHAFT_DOWN_SHARE * (impact_time - p5);
+            Some((libm::roundf(time) as usize, time))
+        }
+    };
+    let trail_up =
+        crossing(impact..finish, trail_arm, 0.0, true).map(|t| (t, crossed(&trail_arm, 0.0, t)));
+
     let times = [
         taken,
         crossed(lift, lift_level.0, toe_up),
@@ -873,13 +1010,29 @@ pub fn detect(
     frames[i] = (libm::roundf(times[i]) as u16)
         .clamp(frames[i - 1] + 1, frames[i + 1] - 1)
         .max(frames[i]);
-    Ok(SwingEvents {
+    let mut events = SwingEvents {
         kind: SwingKind::Full,
         lead,
         club: club.is_some(),
-        frames,
-        times,
-    })
+        frames: [ABSENT; 10],
+        times: [0.0; 10],
+    };
+    for (k, event) in Event::ALL.into_iter().enumerate() {
+        events.frames[event.position() as usize] = frames[k];
+        events.times[event.position() as usize] = times[k];
+    }
+    // P6 and P9 where they fall strictly between their neighbours.
+    for (position, found) in [(Position::P6, shaft_down), (Position::P9, trail_up)] {
+        let i = position as usize;
+        if let Some((frame, time)) = found {
+            let frame = frame as u16;
+            if events.frames[i - 1] < frame && frame < events.frames[i + 1] {
+                events.frames[i] = frame;
+                events.times[i] = time;
+            }
+        }
+    }
+    Ok(events)
 }
 
 #[cfg(test)]
@@ -898,6 +1051,17 @@ mod tests {
             .take(frames * skeleton.len())
             .copied()
             .collect()
+    }
+
+    #[test]
+    fn the_eight_events_are_eight_of_the_ten_positions() {
+        for event in Event::ALL {
+            assert_eq!(event.position().event(), Some(event));
+        }
+        let named: std::vec::Vec<_> = Position::ALL.iter().filter_map(|p| p.event()).collect();
+        assert_eq!(named, Event::ALL);
+        assert_eq!(Position::P6.event(), None);
+        assert_eq!(Position::P9.event(), None);
     }
 
     proptest::proptest! {

@@ -1,13 +1,16 @@
-//! Swing events on the two real tour swings against frames labelled by hand.
+//! Swing events and P-positions on the two real tour swings against frames labelled by hand.
 //!
-//! The labels in `fixtures/golf_events_60hz.csv` were read off per-frame values of the 60 Hz
-//! joint centres with GolfDB's definitions, the address as the takeaway: the first motion of the
-//! club and hands (both recordings begin as it starts: the club head has moved 0.8 mm after
-//! 25 ms); toe-up = shaft horizontal in the backswing; mid-backswing and mid-downswing = lead
-//! arm horizontal; top = club and hands reverse; impact = club head back at the ball;
-//! mid-follow-through = shaft horizontal after impact; finish = hands highest after impact.
+//! The labels in `fixtures/golf_positions_60hz.csv` were read off per-frame values of the 60 Hz
+//! joint centres, P1 to P10 (GolfDB's eight events and P6, P9), the address as the takeaway:
+//! the first motion of the club and hands (both recordings begin as it starts: the club head
+//! has moved 0.8 mm after 25 ms); P2 (toe-up) = shaft horizontal in the backswing; P3
+//! (mid-backswing) and P5 (mid-downswing) = lead arm horizontal; P4 (top) = club and hands
+//! reverse; P6 = shaft horizontal in the downswing; P7 (impact) = club head back at the ball;
+//! P8 (mid-follow-through) = shaft horizontal after impact; P9 = trail arm horizontal after
+//! impact; P10 (finish) = hands highest after impact. Each label is the frame nearest the
+//! crossing or turning point.
 
-use posecoach_core::events::{detect, Event, Side};
+use posecoach_core::events::{detect, Event, Position, Side};
 use posecoach_io as io;
 use posecoach_tests::{fixture, jitter, Warp};
 
@@ -15,7 +18,7 @@ use posecoach_tests::{fixture, jitter, Warp};
 const TOLERANCE_FRAMES: i32 = 2;
 
 fn labels() -> Vec<(String, Vec<i32>)> {
-    let text = std::fs::read_to_string(fixture("golf_events_60hz.csv")).unwrap();
+    let text = std::fs::read_to_string(fixture("golf_positions_60hz.csv")).unwrap();
     text.lines()
         .skip(1)
         .map(|line| {
@@ -27,18 +30,18 @@ fn labels() -> Vec<(String, Vec<i32>)> {
 }
 
 #[test]
-fn events_on_both_tour_swings_are_within_two_frames_of_the_hand_labels() {
+fn positions_on_both_tour_swings_are_within_two_frames_of_the_hand_labels() {
     for (name, expected) in labels() {
         let swing = io::load(&fixture(&name)).unwrap();
         let events = detect(&swing.skeleton, &swing.positions, swing.rate_hz).unwrap();
         assert_eq!(events.lead, Side::Left, "{name}: a right-handed golfer");
         assert!(events.club);
-        for (event, &label) in Event::ALL.iter().zip(&expected) {
-            let found = events.frame(*event).unwrap() as i32;
+        for (position, &label) in Position::ALL.iter().zip(&expected) {
+            let found = events.frame(*position).unwrap() as i32;
             assert!(
                 (found - label).abs() <= TOLERANCE_FRAMES,
                 "{name}: {} at frame {found}, labelled {label}",
-                event.name()
+                position.name()
             );
         }
     }
@@ -59,12 +62,12 @@ fn detected(swing: &io::Motion) -> posecoach_core::events::SwingEvents {
 }
 
 fn assert_near(events: &posecoach_core::events::SwingEvents, expected: &[f32], what: &str) {
-    for (event, &label) in Event::ALL.iter().zip(expected) {
-        let found = events.frame(*event).unwrap() as f32;
+    for (position, &label) in Position::ALL.iter().zip(expected) {
+        let found = events.frame(*position).unwrap() as f32;
         assert!(
             (found - label).abs() <= TOLERANCE_FRAMES as f32 + 0.5,
             "{what}: {} at frame {found}, expected {label:.1}",
-            event.name()
+            position.name()
         );
     }
 }
@@ -83,17 +86,17 @@ fn events_follow_an_amateur_tempo() {
     let (swing, labels) = driver();
     // Backswing (address to top) 2.5x slower and downswing 1.5x slower: takeaway to impact
     // goes from 1.2 s to 2.9 s.
-    let (address, top, impact) = (labels[0] as f32, labels[3] as f32, labels[5] as f32);
+    let (address, top, impact) = (labels[0] as f32, labels[3] as f32, labels[6] as f32);
     let warp = Warp(vec![(address, top, 2.5), (top, impact, 1.5)]);
     let slow = warp.apply(&swing);
     // Compared in the original timeline, where two frames are the same share of the swing.
     let events = detected(&slow);
-    for (event, &label) in Event::ALL.iter().zip(&labels) {
-        let found = warp.backward(events.frame(*event).unwrap() as f32);
+    for (position, &label) in Position::ALL.iter().zip(&labels) {
+        let found = warp.backward(events.frame(*position).unwrap() as f32);
         assert!(
             (found - label as f32).abs() <= TOLERANCE_FRAMES as f32 + 0.5,
             "slow driver: {} at original frame {found:.1}, labelled {label}",
-            event.name()
+            position.name()
         );
     }
 }
@@ -172,7 +175,7 @@ fn a_left_handed_golfer_leads_with_the_right_side() {
 }
 
 #[test]
-fn without_a_club_the_hands_and_lead_arm_give_the_events() {
+fn without_a_club_the_hands_and_lead_arm_give_the_positions() {
     // The tour swings retargeted onto an H36M-17 student: no club, no hands, no toes.
     let student = io::load(&fixture("h36m17_tpose.csv")).unwrap();
     for (name, expected) in labels() {
@@ -183,12 +186,12 @@ fn without_a_club_the_hands_and_lead_arm_give_the_events() {
         let events = detected(&swing);
         assert!(!events.club);
         assert_eq!(events.lead, Side::Left);
-        for (event, &label) in Event::ALL.iter().zip(&expected) {
-            let found = events.frame(*event).unwrap() as i32;
+        for (position, &label) in Position::ALL.iter().zip(&expected) {
+            let found = events.frame(*position).unwrap() as i32;
             assert!(
                 (found - label).abs() <= TOLERANCE_FRAMES,
                 "{name} without a club: {} at frame {found}, labelled {label}",
-                event.name()
+                position.name()
             );
         }
     }
@@ -218,10 +221,12 @@ fn a_putt_has_address_top_impact_and_finish() {
         );
     }
     for event in [
-        Event::ToeUp,
-        Event::MidBackswing,
-        Event::MidDownswing,
-        Event::MidFollowThrough,
+        Position::P2,
+        Position::P3,
+        Position::P5,
+        Position::P6,
+        Position::P8,
+        Position::P9,
     ] {
         assert_eq!(events.frame(event), None);
     }
