@@ -49,12 +49,14 @@
 //! skeleton.rest_positions(&mut pose);
 //! let stance = Stance::new(&skeleton, &pose, Side::Left);
 //! let body = Body::new(&skeleton, Side::Left).unwrap();
-//! let metrics = body.measure(&stance, &pose, &pose);
+//! let metrics = body.measure(&stance, &pose, &pose).unwrap();
+//! assert_eq!(body.measure(&stance, &pose, &pose[..3]), None);
 //! assert!(metrics.thorax.turn.abs() < 1.0 && metrics.x_factor.abs() < 1.0);
 //! assert_eq!(metrics.pelvis_shift.sway, 0.0);
 //! ```
 
-use crate::events::Side;
+use crate::config::MAX_JOINTS;
+use crate::events::{Position, Side, SwingEvents};
 use crate::joint::Joint;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
@@ -201,6 +203,8 @@ impl core::error::Error for BodyError {}
 /// The joints a skeleton's body metrics are measured from, for one lead side.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Body {
+    /// The skeleton's joint count: the least a frame holds.
+    joints: usize,
     /// Lead, trail.
     hips: [usize; 2],
     /// Lead, trail.
@@ -241,6 +245,7 @@ impl Body {
             .zip(skeleton.index_of(Joint::ClubHead))
             .map(|(g, h)| [g, h]);
         Ok(Body {
+            joints: skeleton.len(),
             hips: pair(Joint::LeftHip, Joint::RightHip)?,
             shoulders: pair(Joint::LeftShoulder, Joint::RightShoulder)?,
             pelvis: need(Joint::Pelvis)?,
@@ -253,8 +258,12 @@ impl Body {
     }
 
     /// The metrics of `frame`, its shifts counted from `address` (both frames of this
-    /// skeleton's joints, in the same world frame as `stance`).
-    pub fn measure(&self, stance: &Stance, address: &[Vec3], frame: &[Vec3]) -> Metrics {
+    /// skeleton's joints, in the same world frame as `stance`); `None` when either frame is
+    /// shorter than the skeleton.
+    pub fn measure(&self, stance: &Stance, address: &[Vec3], frame: &[Vec3]) -> Option<Metrics> {
+        if address.len() < self.joints || frame.len() < self.joints {
+            return None;
+        }
         let local = |p: Vec3| stance.local(p);
         let shift = |k: &dyn Fn(&[Vec3]) -> Vec3| {
             let d = local(k(frame)) - local(k(address));
@@ -282,7 +291,7 @@ impl Body {
         let shoulder = frame[self.shoulders[0]];
         let club = self.club.map(|[g, h]| (frame[g], frame[h]));
         let thorax_angles = angles(chest);
-        Metrics {
+        Some(Metrics {
             pelvis,
             thorax: thorax_angles,
             x_factor: thorax_angles.turn - pelvis.turn,
@@ -297,8 +306,56 @@ impl Body {
                 degrees(libm::atan2f(shaft.x, shaft.z))
             }),
             wrist_hinge: club.map(|(grip, head)| between(wrist - elbow, head - grip)),
+        })
+    }
+}
+
+/// A swing's metrics at each P-position it has, in [`Position::ALL`] order (`None` where it has
+/// none): `swing` is frames × `skeleton` joints, `events` its events. Each pose is taken at its
+/// position's time, between frames (a club head moves 30 cm in a frame at 120 Hz through
+/// impact); the stance frame and the shifts are P1's.
+///
+/// # Errors
+/// [`BodyError::MissingJoint`] as [`Body::new`].
+pub fn at_positions(
+    skeleton: &Skeleton,
+    swing: &[Vec3],
+    events: &SwingEvents,
+) -> Result<[Option<Metrics>; Position::ALL.len()], BodyError> {
+    let body = Body::new(skeleton, events.lead)?;
+    let joints = skeleton.len().min(MAX_JOINTS);
+    let frames = swing.len() / joints.max(1);
+    // The pose at `time` (frames), linear between the frames around it.
+    let pose = |time: f32, out: &mut [Vec3; MAX_JOINTS]| -> Option<()> {
+        let last = frames.checked_sub(1)?;
+        let time = time.clamp(0.0, last as f32);
+        let (f, w) = (time as usize, time - libm::floorf(time));
+        let (a, b) = (
+            swing.get(f * joints..(f + 1) * joints)?,
+            swing.get((f + 1).min(last) * joints..((f + 1).min(last) + 1) * joints)?,
+        );
+        for ((o, p), q) in out.iter_mut().zip(a).zip(b) {
+            *o = p * (1.0 - w) + q * w;
+        }
+        Some(())
+    };
+    let mut table = [None; Position::ALL.len()];
+    let mut address = [Vec3::zeros(); MAX_JOINTS];
+    let Some(()) = events
+        .time(Position::P1)
+        .and_then(|t| pose(t, &mut address))
+    else {
+        return Ok(table);
+    };
+    let address = &address[..joints];
+    let stance = Stance::new(skeleton, address, events.lead);
+    let mut at = [Vec3::zeros(); MAX_JOINTS];
+    for position in Position::ALL {
+        if let Some(()) = events.time(position).and_then(|t| pose(t, &mut at)) {
+            table[position as usize] = body.measure(&stance, address, &at[..joints]);
         }
     }
+    Ok(table)
 }
 
 /// A segment's axes in stance coordinates (toward the target, toward the ball, up): the unit
@@ -518,6 +575,7 @@ mod tests {
         Body::new(&skeleton, lead)
             .unwrap()
             .measure(&stance, &address[..n], &frame[..n])
+            .unwrap()
     }
 
     #[test]

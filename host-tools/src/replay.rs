@@ -123,28 +123,25 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
                 swing.number, swing.frames
             );
             let _ = write!(text, "{heading}:");
-            pages.push(html::Swing {
-                heading,
-                outcome: match &result {
-                    Ok((report, compared)) => Ok(html::Scored::new(report, compared)),
-                    Err(error) => Err(error.to_string()),
-                },
-            });
+            let outcome = result
+                .map(|(report, compared)| html::Scored::new(report, &compared))
+                .map_err(|error| error.to_string());
             let mut entry = json!({
                 "swing": swing.number, "start_s": start_s, "frames": swing.frames, "rate_hz": rate_hz,
                 "coach": coach,
             });
-            match result {
-                Ok((report, _)) => {
+            match &outcome {
+                Ok(scored) => {
                     text.push('\n');
-                    text.push_str(&score::to_text(report));
-                    entry["report"] = score::to_json(report);
+                    text.push_str(&score::to_text(scored));
+                    entry["report"] = score::to_json(scored);
                 }
                 Err(error) => {
                     let _ = writeln!(text, " not scored: {error}");
-                    entry["error"] = json!(error.to_string());
+                    entry["error"] = json!(error);
                 }
             }
+            pages.push(html::Swing { heading, outcome });
             swings.push(entry);
         });
     }

@@ -2,9 +2,11 @@
 
 use crate::{html, teacher};
 use anyhow::{anyhow, bail, Context, Result};
+use posecoach_core::body::{self, Angles, Metrics, Shift};
 use posecoach_core::dtw::Band;
-use posecoach_core::events::{Event, SwingEvents};
+use posecoach_core::events::{Event, Position, SwingEvents};
 use posecoach_core::score::{self, Advice, Report};
+use posecoach_core::Vec3;
 use posecoach_io::{self as io, Motion};
 use serde_json::{json, Map, Value};
 use std::fmt::Write;
@@ -79,7 +81,15 @@ pub fn run(args: &Args) -> Result<String> {
         anchored: !args.global_band,
     };
     let report = score_swings(&student, &virtual_coach, band)?;
-    let json = to_json(&report);
+    let scored = html::Scored {
+        report,
+        skeleton: student.skeleton.clone(),
+        student: student.positions.clone(),
+        student_hz: student.rate_hz,
+        coach: virtual_coach.positions.clone(),
+        coach_hz: virtual_coach.rate_hz,
+    };
+    let json = to_json(&scored);
     if let Some(path) = &args.report {
         let retargeter = match &args.weights {
             Some(w) => format!("learned retargeter {}", w.display()),
@@ -92,14 +102,7 @@ pub fn run(args: &Args) -> Result<String> {
         ];
         let swing = html::Swing {
             heading: format!("Swing of {}", args.student.display()),
-            outcome: Ok(html::Scored {
-                report: report.clone(),
-                skeleton: student.skeleton.clone(),
-                student: student.positions.clone(),
-                student_hz: student.rate_hz,
-                coach: virtual_coach.positions.clone(),
-                coach_hz: virtual_coach.rate_hz,
-            }),
+            outcome: Ok(scored.clone()),
         };
         write_report(path, &json, || {
             html::page("posecoach swing report", &notes, &[swing])
@@ -108,7 +111,7 @@ pub fn run(args: &Args) -> Result<String> {
     Ok(if args.json {
         format!("{json}\n")
     } else {
-        to_text(&report)
+        to_text(&scored)
     })
 }
 
@@ -163,9 +166,42 @@ fn times(e: &SwingEvents) -> Value {
     )
 }
 
+/// Both swings' body metrics at each P-position either has: (position, student's, coach's).
+fn body_table(s: &html::Scored) -> Vec<(Position, Option<Metrics>, Option<Metrics>)> {
+    let table = |swing: &[Vec3], events: &SwingEvents| {
+        body::at_positions(&s.skeleton, swing, events).unwrap_or([None; Position::ALL.len()])
+    };
+    let (student, coach) = (
+        table(&s.student, &s.report.student_events),
+        table(&s.coach, &s.report.coach_events),
+    );
+    Position::ALL
+        .into_iter()
+        .zip(student.into_iter().zip(coach))
+        .filter(|(_, (a, b))| a.is_some() || b.is_some())
+        .map(|(p, (a, b))| (p, a, b))
+        .collect()
+}
+
+/// One swing's metrics at one position: degrees and centimetres to a tenth.
+fn metrics_json(m: &Metrics) -> Value {
+    let tenth = |v: f32| (f64::from(v) * 10.0).round() / 10.0;
+    let angles = |a: &Angles| json!({"turn": tenth(a.turn), "bend": tenth(a.bend), "side_bend": tenth(a.side_bend)});
+    let cm = |s: &Shift| json!({"sway": tenth(s.sway * 100.0), "thrust": tenth(s.thrust * 100.0), "lift": tenth(s.lift * 100.0)});
+    json!({
+        "pelvis": angles(&m.pelvis), "thorax": angles(&m.thorax),
+        "x_factor": tenth(m.x_factor), "spine": tenth(m.spine),
+        "pelvis_shift_cm": cm(&m.pelvis_shift), "thorax_shift_cm": cm(&m.thorax_shift),
+        "head_shift_cm": m.head_shift.as_ref().map(cm),
+        "lead_arm": tenth(m.lead_arm), "lead_elbow": tenth(m.lead_elbow),
+        "shaft_lean": m.shaft_lean.map(tenth), "wrist_hinge": m.wrist_hinge.map(tenth),
+    })
+}
+
 /// The report in the documented JSON shape.
-pub fn to_json(r: &Report) -> Value {
-    let cm = |m: f32| (m * 1000.0).round() / 10.0;
+pub fn to_json(s: &html::Scored) -> Value {
+    let r = &s.report;
+    let cm = |m: f32| (f64::from(m) * 1000.0).round() / 10.0;
     json!({
         "score": r.score,
         "dtw": {"distance": r.distance, "normalized": r.normalized, "path": r.path.iter().map(|&(i, j)| [i, j]).collect::<Vec<_>>()},
@@ -187,11 +223,19 @@ pub fn to_json(r: &Report) -> Value {
             "direction": d.direction.name(),
             "offset_cm": {"toward_target": cm(d.offset_m[0]), "toward_ball": cm(d.offset_m[1]), "up": cm(d.offset_m[2])}})).collect::<Vec<_>>(),
         "advice": r.advice.iter().map(Advice::to_string).collect::<Vec<_>>(),
+        "positions": body_table(s).iter().map(|(p, a, b)| json!({
+            "position": p.name(), "moment": p.moment(),
+            "student_frame": r.student_events.frame(*p), "coach_frame": r.coach_events.frame(*p),
+            "student": a.as_ref().map(metrics_json), "coach": b.as_ref().map(metrics_json)})).collect::<Vec<_>>(),
     })
 }
 
+/// A column of the text's body table: its heading and its value.
+type Column = (&'static str, fn(&Metrics) -> f32);
+
 /// The report as readable lines.
-pub fn to_text(r: &Report) -> String {
+pub fn to_text(s: &html::Scored) -> String {
+    let r = &s.report;
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -223,6 +267,38 @@ pub fn to_text(r: &Report) -> String {
             .frame(e)
             .map_or(String::from("-"), |c| c.to_string());
         let _ = writeln!(out, "  {:<19} {f:>4} / {coach}", e.name());
+    }
+    let _ = writeln!(
+        out,
+        "body at each position, you (coach): degrees; shifts since address in cm"
+    );
+    let columns: [Column; 9] = [
+        ("pelvis turn", |m| m.pelvis.turn),
+        ("thorax turn", |m| m.thorax.turn),
+        ("X-factor", |m| m.x_factor),
+        ("spine", |m| m.spine),
+        ("thorax bend", |m| m.thorax.bend),
+        ("pelvis sway", |m| m.pelvis_shift.sway * 100.0),
+        ("pelvis thrust", |m| m.pelvis_shift.thrust * 100.0),
+        ("pelvis lift", |m| m.pelvis_shift.lift * 100.0),
+        ("lead elbow", |m| m.lead_elbow),
+    ];
+    let _ = write!(out, "  {:<4}", "");
+    for (name, _) in &columns {
+        let _ = write!(out, " {name:>13}");
+    }
+    out.push('\n');
+    for (p, a, b) in body_table(s) {
+        let _ = write!(out, "  {:<4}", p.name());
+        for (_, value) in &columns {
+            let cell = |m: Option<Metrics>| {
+                m.map_or("-".to_string(), |m| {
+                    format!("{:.0}", value(&m).round() + 0.0)
+                })
+            };
+            let _ = write!(out, " {:>13}", format!("{} ({})", cell(a), cell(b)));
+        }
+        out.push('\n');
     }
     if r.advice.is_empty() {
         let _ = writeln!(out, "advice: nothing to fix: you match the coach.");
