@@ -56,7 +56,7 @@
 //! ```
 
 use crate::config::MAX_JOINTS;
-use crate::events::{Position, Side, SwingEvents};
+use crate::events::{Position, Side, SwingEvents, SMOOTHING_S};
 use crate::joint::Joint;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
@@ -274,18 +274,9 @@ impl Body {
             }
         };
         let hips = |f: &[Vec3]| (f[self.hips[0]] + f[self.hips[1]]) * 0.5;
-        let thorax = |f: &[Vec3]| match self.thorax {
-            Some(k) => f[k],
-            None => (f[self.shoulders[0]] + f[self.shoulders[1]]) * 0.5,
-        };
-        let pelvis = angles(axes(
-            stance.direction(frame[self.hips[0]] - frame[self.hips[1]]),
-            stance.direction(thorax(frame) - frame[self.pelvis]),
-        ));
-        let chest = axes(
-            stance.direction(frame[self.shoulders[0]] - frame[self.shoulders[1]]),
-            stance.direction(thorax(frame) - self.spine.map_or(frame[self.pelvis], |k| frame[k])),
-        );
+        let thorax = |f: &[Vec3]| self.chest(f);
+        let pelvis = angles(self.pelvis_axes(stance, frame));
+        let chest = self.thorax_axes(stance, frame);
         let trunk = stance.direction(thorax(frame) - hips(frame));
         let [elbow, wrist] = self.lead_arm.map(|k| frame[k]);
         let shoulder = frame[self.shoulders[0]];
@@ -307,6 +298,226 @@ impl Body {
             }),
             wrist_hinge: club.map(|(grip, head)| between(wrist - elbow, head - grip)),
         })
+    }
+
+    /// The thorax's point: its joint, else between the shoulders (`frame` long enough).
+    fn chest(&self, frame: &[Vec3]) -> Vec3 {
+        match self.thorax {
+            Some(k) => frame[k],
+            None => (frame[self.shoulders[0]] + frame[self.shoulders[1]]) * 0.5,
+        }
+    }
+
+    /// The pelvis's [`axes`] in `frame` (long enough).
+    fn pelvis_axes(&self, stance: &Stance, frame: &[Vec3]) -> [Vec3; 3] {
+        axes(
+            stance.direction(frame[self.hips[0]] - frame[self.hips[1]]),
+            stance.direction(self.chest(frame) - frame[self.pelvis]),
+        )
+    }
+
+    /// The thorax's [`axes`] in `frame` (long enough).
+    fn thorax_axes(&self, stance: &Stance, frame: &[Vec3]) -> [Vec3; 3] {
+        let lower = self.spine.map_or(frame[self.pelvis], |k| frame[k]);
+        axes(
+            stance.direction(frame[self.shoulders[0]] - frame[self.shoulders[1]]),
+            stance.direction(self.chest(frame) - lower),
+        )
+    }
+
+    /// How far `link` turns from frame `a` to frame `b` (both long enough), degrees: the
+    /// angle of the rotation between the pelvis's or the thorax's [`axes`] in the two, the
+    /// angle between the lead arm's (shoulder to wrist) or the shaft's (grip to head)
+    /// directions; `None` for a club that is not tracked.
+    fn turned(&self, link: Link, a: &[Vec3], b: &[Vec3]) -> Option<f32> {
+        // Any fixed rotation of the world will do: only the change between the two matters.
+        let stance = Stance {
+            origin: Vec3::zeros(),
+            target: Vec3::x(),
+            ball: -Vec3::z(),
+        };
+        let rotation = |[la, ua, fa]: [Vec3; 3], [lb, ub, fb]: [Vec3; 3]| {
+            // The rotation taking one orthonormal frame to the other: its sine from the
+            // cross products, its cosine from the trace, so small angles stay exact.
+            let sin = (la.cross(&lb) + ua.cross(&ub) + fa.cross(&fb)).norm() * 0.5;
+            let cos = (la.dot(&lb) + ua.dot(&ub) + fa.dot(&fb) - 1.0) * 0.5;
+            degrees(libm::atan2f(sin, cos))
+        };
+        match link {
+            Link::Pelvis => Some(rotation(
+                self.pelvis_axes(&stance, a),
+                self.pelvis_axes(&stance, b),
+            )),
+            Link::Thorax => Some(rotation(
+                self.thorax_axes(&stance, a),
+                self.thorax_axes(&stance, b),
+            )),
+            Link::LeadArm => {
+                let arm = |f: &[Vec3]| f[self.lead_arm[1]] - f[self.shoulders[0]];
+                Some(between(arm(a), arm(b)))
+            }
+            Link::Club => self.club.map(|[g, h]| between(a[h] - a[g], b[h] - b[g])),
+        }
+    }
+}
+
+/// A link of the kinematic sequence, in the order an efficient downswing peaks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[allow(missing_docs)]
+pub enum Link {
+    Pelvis,
+    Thorax,
+    LeadArm,
+    Club,
+}
+
+impl Link {
+    /// Every link, in the order an efficient downswing peaks.
+    pub const ALL: [Link; 4] = [Link::Pelvis, Link::Thorax, Link::LeadArm, Link::Club];
+
+    /// The snake_case name used in reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Link::Pelvis => "pelvis",
+            Link::Thorax => "thorax",
+            Link::LeadArm => "lead_arm",
+            Link::Club => "club",
+        }
+    }
+}
+
+/// A link's fastest rotation in the downswing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Peak {
+    /// Degrees per second.
+    pub speed: f32,
+    /// When, in frames of the swing (between frames).
+    pub time: f32,
+}
+
+/// The kinematic sequence of one downswing: each link's peak rotational speed, per
+/// [`Link::ALL`] (`None` for a club that is not tracked). See [`kinematic_sequence`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct KinematicSequence {
+    /// Per link in [`Link::ALL`] order.
+    pub peaks: [Option<Peak>; 4],
+}
+
+impl KinematicSequence {
+    /// The peak of `link`, if measured.
+    pub fn peak(&self, link: Link) -> Option<Peak> {
+        self.peaks[link as usize]
+    }
+
+    /// The links in the order they peak (ties keep [`Link::ALL`]'s order).
+    pub fn order(&self) -> heapless::Vec<Link, 4> {
+        let mut order: heapless::Vec<Link, 4> = Link::ALL
+            .into_iter()
+            .filter(|&l| self.peak(l).is_some())
+            .collect();
+        let time = |l: &Link| self.peak(*l).map_or(f32::INFINITY, |p| p.time);
+        order.sort_unstable_by(|a, b| {
+            time(a)
+                .total_cmp(&time(b))
+                .then((*a as u8).cmp(&(*b as u8)))
+        });
+        order
+    }
+
+    /// Whether the links peak in the efficient order: pelvis, thorax, lead arm, club.
+    pub fn in_order(&self) -> bool {
+        self.order().iter().zip(Link::ALL).all(|(&a, b)| a == b)
+    }
+}
+
+/// How long after impact a link's peak is still looked for, seconds: the club's comes at or
+/// just before it.
+pub const PEAK_AFTER_IMPACT_S: f32 = 0.05;
+
+/// The kinematic sequence of a full swing: each link's fastest rotation between the top (P4)
+/// and [`PEAK_AFTER_IMPACT_S`] after impact (P7). A link's rotational speed is how fast it
+/// turns, in degrees per second, over ±[`SMOOTHING_S`] / 2: the pelvis and the thorax as
+/// rigid segments (the whole angle of their rotation, whatever its axis), the lead arm
+/// (shoulder to wrist) and the shaft (grip to head) as directions. A peak lies between
+/// frames (a parabola through the fastest frame and its neighbours). `swing` is frames ×
+/// `skeleton` joints at `hz`, `events` its events; `None` for a putt or a swing without a
+/// top and an impact.
+///
+/// # Errors
+/// [`BodyError::MissingJoint`] as [`Body::new`].
+pub fn kinematic_sequence(
+    skeleton: &Skeleton,
+    swing: &[Vec3],
+    hz: f32,
+    events: &SwingEvents,
+) -> Result<Option<KinematicSequence>, BodyError> {
+    let body = Body::new(skeleton, events.lead)?;
+    let (Some(top), Some(impact)) = (events.frame(Position::P4), events.frame(Position::P7)) else {
+        return Ok(None);
+    };
+    if events.kind != crate::events::SwingKind::Full || !(hz.is_finite() && hz > 0.0) {
+        return Ok(None);
+    }
+    let after = libm::roundf(PEAK_AFTER_IMPACT_S * hz) as usize;
+    Ok(Some(body.peaks(
+        swing,
+        hz,
+        top,
+        impact.saturating_add(after),
+    )))
+}
+
+impl Body {
+    /// Each link's fastest rotation (see [`kinematic_sequence`]) between frames `from` and
+    /// `to` of `swing` (frames × the skeleton's joints at `hz`, a positive rate).
+    fn peaks(&self, swing: &[Vec3], hz: f32, from: usize, to: usize) -> KinematicSequence {
+        let joints = self.joints.max(1);
+        let frames = swing.len() / joints;
+        let frame = |f: usize| swing.get(f * joints..(f + 1) * joints);
+        let half = (libm::roundf(0.5 * SMOOTHING_S * hz) as usize).max(1);
+        let to = to.min(frames.saturating_sub(half + 1));
+        let mut sequence = KinematicSequence::default();
+        for link in Link::ALL {
+            // The speed at frame `t`: the angle it turns from t - half to t + half.
+            let speed = |t: usize| -> Option<f32> {
+                let turned = self.turned(link, frame(t.checked_sub(half)?)?, frame(t + half)?)?;
+                Some(turned * hz / (2 * half) as f32)
+            };
+            let mut best: Option<(usize, f32)> = None;
+            for t in from.max(half)..=to {
+                if let Some(v) = speed(t) {
+                    if best.is_none_or(|(_, b)| v > b) {
+                        best = Some((t, v));
+                    }
+                }
+            }
+            sequence.peaks[link as usize] = best.map(|(t, v)| {
+                let (shift, top) = match (t.checked_sub(1).and_then(&speed), speed(t + 1)) {
+                    (Some(before), Some(after)) => vertex(before, v, after),
+                    _ => (0.0, v),
+                };
+                Peak {
+                    speed: top,
+                    time: t as f32 + shift,
+                }
+            });
+        }
+        sequence
+    }
+}
+
+/// Where the parabola through `(-1, a)`, `(0, b)`, `(1, c)` turns (within ±0.5) and its value
+/// there; `(0, b)` for three points on a line.
+fn vertex(a: f32, b: f32, c: f32) -> (f32, f32) {
+    let curve = a - 2.0 * b + c;
+    if curve.abs() > f32::EPSILON * (a.abs() + b.abs() + c.abs()) {
+        let x = (0.5 * (a - c) / curve).clamp(-0.5, 0.5);
+        (x, b + 0.25 * (c - a) * x)
+    } else {
+        (0.0, b)
     }
 }
 
@@ -713,6 +924,95 @@ mod tests {
             "{m:?}"
         );
         assert!(close(m.x_factor, 45.0, 0.02) && m.shaft_lean.is_none());
+    }
+
+    /// The normal distribution's share below `x` standard deviations.
+    fn phi(x: f32) -> f32 {
+        0.5 * (1.0 + libm::erff(x / core::f32::consts::SQRT_2))
+    }
+
+    /// A downswing at `hz` in which each of `links` (link, peak time s, degrees turned) turns
+    /// about the vertical in a bell of speed 30 ms wide (one standard deviation), measured.
+    fn downswing(hz: f32, links: [(Link, f32, f32); 3]) -> KinematicSequence {
+        let sigma = 0.03;
+        let turned = |k: usize, t: f32| links[k].2 * phi((t - links[k].1) / sigma);
+        let skeleton = Skeleton::standard(Format::H36m17).unwrap();
+        let n = skeleton.len();
+        let frames = (0.4 * hz) as usize;
+        let mut swing = std::vec::Vec::new();
+        for f in 0..frames {
+            let t = f as f32 / hz;
+            let (pelvis, thorax) = (40.0 - turned(0, t), 90.0 - turned(1, t));
+            // The arm's own heading, whatever the thorax does: across the chest from it.
+            let arm = 150.0 - turned(2, t);
+            let posed = Posed {
+                pelvis: Angles {
+                    turn: pelvis,
+                    ..Angles::default()
+                },
+                thorax: Angles {
+                    turn: thorax,
+                    ..Angles::default()
+                },
+                arm: (arm - thorax, 0.0),
+                ..ADDRESS
+            };
+            let at = pose(&skeleton, Side::Left, &posed);
+            swing.extend(
+                at[..n]
+                    .iter()
+                    .map(|&v| world(v, 30.0, false, Vec3::zeros())),
+            );
+        }
+        Body::new(&skeleton, Side::Left)
+            .unwrap()
+            .peaks(&swing, hz, 0, frames - 1)
+    }
+
+    #[test]
+    fn each_links_peak_is_timed_and_measured() {
+        let links = [
+            (Link::Pelvis, 0.10, 80.0),
+            (Link::Thorax, 0.13, 100.0),
+            (Link::LeadArm, 0.16, 160.0),
+        ];
+        for hz in [60.0, 240.0] {
+            let sequence = downswing(hz, links);
+            for (link, at, total) in links {
+                let peak = sequence.peak(link).unwrap();
+                // Peak speed of the bell: degrees turned / (σ √(2π)); the window of ±17 ms
+                // averages a little off the top.
+                let fastest = total / (0.03 * libm::sqrtf(core::f32::consts::TAU));
+                assert!(
+                    (peak.time / hz - at).abs() < 0.1 / hz + 0.001,
+                    "{hz} Hz {link:?}: {peak:?}"
+                );
+                assert!(
+                    (peak.speed / fastest - 1.0).abs() < 0.06,
+                    "{hz} Hz {link:?}: {peak:?} against {fastest}"
+                );
+            }
+            assert_eq!(sequence.peak(Link::Club), None);
+            assert_eq!(
+                sequence.order(),
+                [Link::Pelvis, Link::Thorax, Link::LeadArm]
+            );
+            assert!(sequence.in_order());
+        }
+        // The chest first, then the hips: out of order.
+        let early_chest = downswing(
+            240.0,
+            [
+                (Link::Pelvis, 0.13, 80.0),
+                (Link::Thorax, 0.10, 100.0),
+                (Link::LeadArm, 0.16, 160.0),
+            ],
+        );
+        assert_eq!(
+            early_chest.order(),
+            [Link::Thorax, Link::Pelvis, Link::LeadArm]
+        );
+        assert!(!early_chest.in_order());
     }
 
     #[test]

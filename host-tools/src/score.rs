@@ -2,7 +2,7 @@
 
 use crate::{html, teacher};
 use anyhow::{anyhow, bail, Context, Result};
-use posecoach_core::body::{self, Angles, Metrics, Shift};
+use posecoach_core::body::{self, Angles, KinematicSequence, Link, Metrics, Shift};
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{Event, Position, SwingEvents};
 use posecoach_core::score::{self, Advice, Report};
@@ -183,6 +183,36 @@ fn body_table(s: &html::Scored) -> Vec<(Position, Option<Metrics>, Option<Metric
         .collect()
 }
 
+/// Both swings' kinematic sequences (`None` for a putt), with each one's time of the top in
+/// frames and its rate.
+fn sequences(s: &html::Scored) -> [Option<(KinematicSequence, f32, f32)>; 2] {
+    let of = |swing: &[Vec3], hz: f32, events: &SwingEvents| {
+        let top = events.time(Position::P4)?;
+        let sequence = body::kinematic_sequence(&s.skeleton, swing, hz, events).ok()??;
+        Some((sequence, top, hz))
+    };
+    [
+        of(&s.student, s.student_hz, &s.report.student_events),
+        of(&s.coach, s.coach_hz, &s.report.coach_events),
+    ]
+}
+
+/// One swing's kinematic sequence: each link's peak speed (degrees per second) and its time
+/// after the top (ms), the order they peak in and whether it is pelvis, thorax, arm, club.
+fn sequence_json(sequence: &Option<(KinematicSequence, f32, f32)>) -> Value {
+    let Some((k, top, hz)) = sequence else {
+        return Value::Null;
+    };
+    let round = |v: f32| f64::from(v).round();
+    json!({
+        "peaks": Link::ALL.iter().filter_map(|&l| k.peak(l).map(|p| json!({
+            "link": l.name(), "speed_deg_s": round(p.speed),
+            "ms_after_top": round((p.time - top) / hz * 1000.0)}))).collect::<Vec<_>>(),
+        "order": k.order().iter().map(|l| l.name()).collect::<Vec<_>>(),
+        "in_order": k.in_order(),
+    })
+}
+
 /// One swing's metrics at one position: degrees and centimetres to a tenth.
 fn metrics_json(m: &Metrics) -> Value {
     let tenth = |v: f32| (f64::from(v) * 10.0).round() / 10.0;
@@ -223,6 +253,8 @@ pub fn to_json(s: &html::Scored) -> Value {
             "direction": d.direction.name(),
             "offset_cm": {"toward_target": cm(d.offset_m[0]), "toward_ball": cm(d.offset_m[1]), "up": cm(d.offset_m[2])}})).collect::<Vec<_>>(),
         "advice": r.advice.iter().map(Advice::to_string).collect::<Vec<_>>(),
+        "kinematic_sequence": {
+            "student": sequence_json(&sequences(s)[0]), "coach": sequence_json(&sequences(s)[1])},
         "positions": body_table(s).iter().map(|(p, a, b)| json!({
             "position": p.name(), "moment": p.moment(),
             "student_frame": r.student_events.frame(*p), "coach_frame": r.coach_events.frame(*p),
@@ -299,6 +331,27 @@ pub fn to_text(s: &html::Scored) -> String {
             let _ = write!(out, " {:>13}", format!("{} ({})", cell(a), cell(b)));
         }
         out.push('\n');
+    }
+    let [you, coach] = sequences(s);
+    if you.is_some() || coach.is_some() {
+        let _ = writeln!(
+            out,
+            "kinematic sequence (peak speed in degrees/s at ms after the top):"
+        );
+        for (who, sequence) in [("you", you), ("coach", coach)] {
+            let Some((k, top, hz)) = sequence else {
+                continue;
+            };
+            let _ = write!(out, "  {who:<6}");
+            for l in Link::ALL {
+                if let Some(p) = k.peak(l) {
+                    let ms = (p.time - top) / hz * 1000.0;
+                    let _ = write!(out, " {} {:.0} at {ms:.0},", l.name(), p.speed);
+                }
+            }
+            let order: Vec<_> = k.order().iter().map(|l| l.name()).collect();
+            let _ = writeln!(out, " peaking {}", order.join(" > "));
+        }
     }
     if r.advice.is_empty() {
         let _ = writeln!(out, "advice: nothing to fix: you match the coach.");

@@ -102,3 +102,36 @@ fn a_left_handed_golfer_reads_like_the_right_handed_one() {
         }
     }
 }
+
+#[test]
+fn tour_swings_speed_up_from_the_hips_to_the_club() {
+    use posecoach_core::body::{kinematic_sequence, Link};
+    for name in SWINGS {
+        let swing = io::load(&fixture(name)).unwrap();
+        let events = detect(&swing.skeleton, &swing.positions, swing.rate_hz).unwrap();
+        let sequence =
+            kinematic_sequence(&swing.skeleton, &swing.positions, swing.rate_hz, &events)
+                .unwrap()
+                .unwrap();
+        let peak = |l| sequence.peak(l).unwrap();
+        // Tour players' peaks, degrees per second (about 500, 700, 1000 and 2300 in published
+        // K-Vest norms): each link faster than the one before.
+        let speeds = Link::ALL.map(|l| peak(l).speed);
+        assert!((400.0..800.0).contains(&speeds[0]), "{name}: {speeds:?}");
+        assert!(speeds.windows(2).all(|w| w[1] > w[0]), "{name}: {speeds:?}");
+        assert!((1800.0..3200.0).contains(&speeds[3]), "{name}: {speeds:?}");
+        // The hips peak first and the club last, within the downswing and just after impact.
+        let order = sequence.order();
+        assert_eq!((order[0], order[3]), (Link::Pelvis, Link::Club), "{name}");
+        let (top, impact) = (
+            events.time(Position::P4).unwrap(),
+            events.time(Position::P7).unwrap(),
+        );
+        for l in Link::ALL {
+            assert!(
+                peak(l).time > top && peak(l).time < impact + 0.05 * swing.rate_hz,
+                "{name}"
+            );
+        }
+    }
+}
