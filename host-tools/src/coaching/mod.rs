@@ -17,7 +17,11 @@
 //! - **recall at 1**: the report's first advice item states a planted flaw (see
 //!   [`flaws::Truth`]);
 //! - **false advice**: an unflawed swing given any advice; **false tempo**: given a tempo verdict;
-//! - **score** of unflawed swings, and its fall for a flaw of a given size.
+//! - **score** of unflawed swings, and its fall for a flaw of a given size;
+//! - **body metrics**: each of [`METRICS`] at every P-position of the swing the device scored,
+//!   against the same metric of the planted swing before filming (on the same body, at its own
+//!   P-positions): the error a golfer reading the report's body table sees, pose noise, event
+//!   timing and the device's skeleton together.
 
 pub mod bodies;
 pub mod flaws;
@@ -30,9 +34,9 @@ use crate::synth_imu::{self, ImuNoise};
 use anyhow::{bail, Context, Result};
 use flaws::{Body, Flaw, Planted, Times, Truth};
 use posecoach_adapters::session::Outcome;
-use posecoach_core::body::Stance;
+use posecoach_core::body::{self, Metrics, Stance};
 use posecoach_core::dtw::Band;
-use posecoach_core::events::{self, Event, Side};
+use posecoach_core::events::{self, Event, Position, Side};
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{Advice, Direction, Phase, Report, TEMPO_CONFIDENCE};
@@ -154,8 +158,30 @@ struct Outcome1 {
     any_advice: bool,
     tempo_verdict: bool,
     score: Option<f32>,
+    /// Per P-position both tables have, each of [`METRICS`] measured less true.
+    body_errors: Vec<[f32; METRICS.len()]>,
     error: Option<String>,
 }
+
+/// A swing's body metrics at each P-position, [`Position::ALL`] order.
+type Table = [Option<Metrics>; Position::ALL.len()];
+
+/// A body metric whose error the benchmark measures: its name, its unit and its value.
+pub type Measure = (&'static str, &'static str, fn(&Metrics) -> f32);
+
+/// The body metrics whose errors the benchmark measures.
+pub const METRICS: [Measure; 10] = [
+    ("pelvis_turn", "deg", |m| m.pelvis.turn),
+    ("thorax_turn", "deg", |m| m.thorax.turn),
+    ("x_factor", "deg", |m| m.x_factor),
+    ("thorax_bend", "deg", |m| m.thorax.bend),
+    ("thorax_side_bend", "deg", |m| m.thorax.side_bend),
+    ("spine", "deg", |m| m.spine),
+    ("pelvis_sway", "cm", |m| m.pelvis_shift.sway * 100.0),
+    ("pelvis_thrust", "cm", |m| m.pelvis_shift.thrust * 100.0),
+    ("pelvis_lift", "cm", |m| m.pelvis_shift.lift * 100.0),
+    ("lead_elbow", "deg", |m| m.lead_elbow),
+];
 
 pub fn run(args: &Args) -> Result<String> {
     let sources = if args.swings.is_empty() {
@@ -445,13 +471,25 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
         }
         return Ok(outcome);
     };
-    let report = match result {
+    let (report, table) = match result {
         Ok(r) => r,
         Err(e) => {
             outcome.error = Some(e);
             return Ok(outcome);
         }
     };
+    let truth_table = {
+        let swing = &planted.swing;
+        let found = events::detect(&swing.skeleton, &swing.positions, swing.rate_hz)
+            .context("events of the planted swing")?;
+        body::at_positions(&swing.skeleton, &swing.positions, &found)?
+    };
+    outcome.body_errors = table
+        .iter()
+        .zip(&truth_table)
+        .filter_map(|(m, t)| Some((m.as_ref()?, t.as_ref()?)))
+        .map(|(m, t)| METRICS.map(|(_, _, value)| value(m) - value(t)))
+        .collect();
     outcome.found = true;
     let measured = |e: Event| {
         report
@@ -598,7 +636,12 @@ fn imu_messages(
 }
 
 /// A swing found in a session, and how it went: start (s), frames, the coach, the report.
-type Scored = (f64, usize, u16, std::result::Result<Report, String>);
+type Scored = (
+    f64,
+    usize,
+    u16,
+    std::result::Result<(Report, Table), String>,
+);
 
 /// What the device's session makes of `messages`: the swings it found, and its refusals.
 fn run_session(messages: &[Message]) -> Result<(Vec<Scored>, Vec<String>)> {
@@ -607,9 +650,19 @@ fn run_session(messages: &[Message]) -> Result<(Vec<Scored>, Vec<String>)> {
     coaches::session(None, |session| {
         for m in messages {
             session.handle(m, |outcome| match outcome {
-                Outcome::Scored { swing, report, .. } => {
+                Outcome::Scored {
+                    swing,
+                    report,
+                    compared,
+                } => {
                     let at = swing.start_us as f64 * 1e-6;
-                    scored.push((at, swing.frames, swing.coach, Ok(report.clone())));
+                    let table = body::at_positions(
+                        compared.skeleton,
+                        compared.student,
+                        &report.student_events,
+                    )
+                    .unwrap_or([None; Position::ALL.len()]);
+                    scored.push((at, swing.frames, swing.coach, Ok((report.clone(), table))));
                 }
                 Outcome::Unscored { swing, error } => {
                     let at = swing.start_us as f64 * 1e-6;
@@ -734,6 +787,10 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
             "body": recall(&|c, _| family(&c.flaws) == "body"),
             "combined": recall(&|c, _| family(&c.flaws) == "combined"),
         },
+        "body_error": METRICS.iter().enumerate().map(|(i, (name, unit, _))| {
+            let errors: Vec<f32> = found.iter().flat_map(|(_, o)| o.body_errors.iter().map(move |e| e[i])).collect();
+            ((*name).to_string(), json!({"unit": unit, "error": quantiles(&errors)}))
+        }).collect::<serde_json::Map<_, _>>(),
         "score": {
             "unflawed": mean_score(&|c, _| c.flaws.is_empty()),
             "offset_5_10cm": mean_score(&offset_in(5.0, 10.0)),
@@ -803,6 +860,30 @@ fn table(doc: &Value) -> String {
             sc(&l["score"]["unflawed"]),
             sc(&l["score"]["offset_10_15cm"]),
             sc(&l["score"]["tempo_30_50pc"]),
+        );
+    }
+    let _ = writeln!(
+        out,
+        "body metric error at P1-P10, median / p95 ({}):",
+        METRICS
+            .map(|(name, unit, _)| format!("{name} {unit}"))
+            .join(", ")
+    );
+    for l in doc["levels"].as_array().into_iter().flatten() {
+        let cells: Vec<String> = METRICS
+            .iter()
+            .map(|(name, _, _)| {
+                let e = &l["body_error"][name]["error"];
+                e["median"].as_f64().map_or("-".into(), |m| {
+                    format!("{m:.1} / {:.1}", e["p95"].as_f64().unwrap_or(f64::NAN))
+                })
+            })
+            .collect();
+        let _ = writeln!(
+            out,
+            "{:>8} | {}",
+            l["input"].as_str().unwrap_or("-"),
+            cells.join(" | ")
         );
     }
     out
