@@ -4,13 +4,15 @@
 //! over the virtual coach (red) at each key event, face-on and down the line, each swing in its
 //! own stance frame (as the spatial advice measures it); the tempo of each phase; the DTW path
 //! over the frame-cost matrix with the events; and the deviation of the most-advised joints
-//! along the alignment. Element ids (`score-N`, `advice-N`, `poses-N`, `tempo-N`, `dtw-N`,
+//! along the alignment; the body metrics at P1 to P10 and the kinematic sequence. Element ids
+//! (`score-N`, `advice-N`, `poses-N`, `body-N`, `sequence-N`, `tempo-N`, `dtw-N`,
 //! `deviation-N` for swing `N` from 1) let tests and scripts find each part.
 
+use crate::score::KEY_METRICS;
 use base64::Engine;
 use posecoach_adapters::session::Compared;
-use posecoach_core::body::Stance;
-use posecoach_core::events::{Event, SwingEvents};
+use posecoach_core::body::{self, KinematicSequence, Link, Metrics, Stance};
+use posecoach_core::events::{Event, Position, SwingEvents};
 use posecoach_core::joint::Joint;
 use posecoach_core::score::Report;
 use posecoach_core::skeleton::Skeleton;
@@ -59,6 +61,38 @@ impl Scored {
             coach: compared.coach.to_vec(),
             coach_hz: compared.coach_hz,
         }
+    }
+
+    /// Both swings' body metrics at each P-position either has: (position, student's,
+    /// coach's).
+    pub fn body_table(&self) -> Vec<(Position, Option<Metrics>, Option<Metrics>)> {
+        let table = |swing: &[Vec3], events: &SwingEvents| {
+            body::at_positions(&self.skeleton, swing, events).unwrap_or([None; Position::ALL.len()])
+        };
+        let (student, coach) = (
+            table(&self.student, &self.report.student_events),
+            table(&self.coach, &self.report.coach_events),
+        );
+        Position::ALL
+            .into_iter()
+            .zip(student.into_iter().zip(coach))
+            .filter(|(_, (a, b))| a.is_some() || b.is_some())
+            .map(|(p, (a, b))| (p, a, b))
+            .collect()
+    }
+
+    /// Both swings' kinematic sequences (`None` for a putt), each with its time of the top in
+    /// frames and its rate.
+    pub fn sequences(&self) -> [Option<(KinematicSequence, f32, f32)>; 2] {
+        let of = |swing: &[Vec3], hz: f32, events: &SwingEvents| {
+            let top = events.time(Position::P4)?;
+            let sequence = body::kinematic_sequence(&self.skeleton, swing, hz, events).ok()??;
+            Some((sequence, top, hz))
+        };
+        [
+            of(&self.student, self.student_hz, &self.report.student_events),
+            of(&self.coach, self.coach_hz, &self.report.coach_events),
+        ]
     }
 
     fn frame<'a>(&self, swing: &'a [Vec3], f: usize) -> &'a [Vec3] {
@@ -145,7 +179,8 @@ const STYLE: &str = "body{font-family:sans-serif;margin:24px;color:#222;max-widt
 h2{border-bottom:1px solid #ccc}.note{color:#555;margin:2px 0}.score{font-size:44px;font-weight:bold}\
 .poses{display:flex;flex-wrap:wrap;gap:6px}.pose{text-align:center;font-size:12px;width:146px}\
 svg{background:#fafafa;border:1px solid #ddd}.error{color:#b00}li{margin:4px 0}\
-text{font-family:sans-serif}";
+text{font-family:sans-serif}.wide{overflow-x:auto}table{border-collapse:collapse;font-size:13px}\
+td,th{border-bottom:1px solid #ddd;padding:3px 6px;text-align:right;white-space:nowrap}";
 
 fn section(out: &mut String, n: usize, s: &Scored) {
     let r = &s.report;
@@ -167,9 +202,79 @@ fn section(out: &mut String, n: usize, s: &Scored) {
     }
     out.push_str("</ol>\n");
     poses(out, n, s);
+    body_table(out, n, s);
     tempo(out, n, r);
     dtw(out, n, s);
     deviation(out, n, s);
+}
+
+/// The body metrics at each P-position, yours with the coach's, and both kinematic sequences.
+fn body_table(out: &mut String, n: usize, s: &Scored) {
+    let _ = write!(
+        out,
+        "<h3>Body at each position</h3><p class=\"note\">Degrees; shifts since address in cm; \
+         <span style=\"color:{COACH}\">the coach's in brackets</span>.</p>\
+         <div class=\"wide\"><table id=\"body-{n}\"><thead><tr><th>position</th>"
+    );
+    for (name, unit, _) in &KEY_METRICS {
+        let _ = write!(out, "<th>{} ({unit})</th>", name.replace('_', " "));
+    }
+    out.push_str("</tr></thead><tbody>\n");
+    for (position, you, coach) in s.body_table() {
+        let _ = write!(
+            out,
+            "<tr><th>{} {}</th>",
+            position.name(),
+            escape(position.moment())
+        );
+        for (_, _, value) in &KEY_METRICS {
+            let cell = |m: Option<Metrics>| {
+                m.map_or("-".to_string(), |m| {
+                    format!("{:.0}", value(&m).round() + 0.0)
+                })
+            };
+            let _ = write!(
+                out,
+                "<td>{} <span style=\"color:{COACH}\">({})</span></td>",
+                cell(you),
+                cell(coach)
+            );
+        }
+        out.push_str("</tr>\n");
+    }
+    out.push_str("</tbody></table></div>\n");
+    let [you, coach] = s.sequences();
+    let _ = write!(out, "<h3>Kinematic sequence</h3><ul id=\"sequence-{n}\">");
+    for (who, sequence) in [("You", you), ("Coach", coach)] {
+        let Some((k, top, hz)) = sequence else {
+            continue;
+        };
+        let peaks: Vec<String> = Link::ALL
+            .iter()
+            .filter_map(|&l| {
+                k.peak(l).map(|p| {
+                    let ms = (p.time - top) / hz * 1000.0;
+                    format!(
+                        "{} {:.0}&#176;/s at {ms:.0} ms",
+                        l.name().replace('_', " "),
+                        p.speed
+                    )
+                })
+            })
+            .collect();
+        let order: Vec<String> = k
+            .order()
+            .iter()
+            .map(|l| l.name().replace('_', " "))
+            .collect();
+        let _ = write!(
+            out,
+            "<li>{who}: {} after the top; peaking {}</li>",
+            peaks.join(", "),
+            order.join(", ")
+        );
+    }
+    out.push_str("</ul>\n");
 }
 
 /// A view of the stance frame: screen x and y (down) from (toward target, toward ball, up).

@@ -2,11 +2,10 @@
 
 use crate::{html, teacher};
 use anyhow::{anyhow, bail, Context, Result};
-use posecoach_core::body::{self, Angles, KinematicSequence, Link, Metrics, Shift};
+use posecoach_core::body::{Angles, KinematicSequence, Link, Metrics, Shift};
 use posecoach_core::dtw::Band;
-use posecoach_core::events::{Event, Position, SwingEvents};
+use posecoach_core::events::{Event, SwingEvents};
 use posecoach_core::score::{self, Advice, Report};
-use posecoach_core::Vec3;
 use posecoach_io::{self as io, Motion};
 use serde_json::{json, Map, Value};
 use std::fmt::Write;
@@ -166,36 +165,23 @@ fn times(e: &SwingEvents) -> Value {
     )
 }
 
-/// Both swings' body metrics at each P-position either has: (position, student's, coach's).
-fn body_table(s: &html::Scored) -> Vec<(Position, Option<Metrics>, Option<Metrics>)> {
-    let table = |swing: &[Vec3], events: &SwingEvents| {
-        body::at_positions(&s.skeleton, swing, events).unwrap_or([None; Position::ALL.len()])
-    };
-    let (student, coach) = (
-        table(&s.student, &s.report.student_events),
-        table(&s.coach, &s.report.coach_events),
-    );
-    Position::ALL
-        .into_iter()
-        .zip(student.into_iter().zip(coach))
-        .filter(|(_, (a, b))| a.is_some() || b.is_some())
-        .map(|(p, (a, b))| (p, a, b))
-        .collect()
-}
+/// A body metric the reports and the coaching benchmark single out: its name, its unit and its
+/// value (shifts in cm).
+pub type KeyMetric = (&'static str, &'static str, fn(&Metrics) -> f32);
 
-/// Both swings' kinematic sequences (`None` for a putt), with each one's time of the top in
-/// frames and its rate.
-fn sequences(s: &html::Scored) -> [Option<(KinematicSequence, f32, f32)>; 2] {
-    let of = |swing: &[Vec3], hz: f32, events: &SwingEvents| {
-        let top = events.time(Position::P4)?;
-        let sequence = body::kinematic_sequence(&s.skeleton, swing, hz, events).ok()??;
-        Some((sequence, top, hz))
-    };
-    [
-        of(&s.student, s.student_hz, &s.report.student_events),
-        of(&s.coach, s.coach_hz, &s.report.coach_events),
-    ]
-}
+/// The body metrics the text report's table shows and the coaching benchmark measures.
+pub const KEY_METRICS: [KeyMetric; 10] = [
+    ("pelvis_turn", "deg", |m| m.pelvis.turn),
+    ("thorax_turn", "deg", |m| m.thorax.turn),
+    ("x_factor", "deg", |m| m.x_factor),
+    ("thorax_bend", "deg", |m| m.thorax.bend),
+    ("thorax_side_bend", "deg", |m| m.thorax.side_bend),
+    ("spine", "deg", |m| m.spine),
+    ("pelvis_sway", "cm", |m| m.pelvis_shift.sway * 100.0),
+    ("pelvis_thrust", "cm", |m| m.pelvis_shift.thrust * 100.0),
+    ("pelvis_lift", "cm", |m| m.pelvis_shift.lift * 100.0),
+    ("lead_elbow", "deg", |m| m.lead_elbow),
+];
 
 /// One swing's kinematic sequence: each link's peak speed (degrees per second) and its time
 /// after the top (ms), the order they peak in and whether it is pelvis, thorax, arm, club.
@@ -231,6 +217,7 @@ fn metrics_json(m: &Metrics) -> Value {
 /// The report in the documented JSON shape.
 pub fn to_json(s: &html::Scored) -> Value {
     let r = &s.report;
+    let [student, coach] = s.sequences();
     let cm = |m: f32| (f64::from(m) * 1000.0).round() / 10.0;
     json!({
         "score": r.score,
@@ -253,17 +240,13 @@ pub fn to_json(s: &html::Scored) -> Value {
             "direction": d.direction.name(),
             "offset_cm": {"toward_target": cm(d.offset_m[0]), "toward_ball": cm(d.offset_m[1]), "up": cm(d.offset_m[2])}})).collect::<Vec<_>>(),
         "advice": r.advice.iter().map(Advice::to_string).collect::<Vec<_>>(),
-        "kinematic_sequence": {
-            "student": sequence_json(&sequences(s)[0]), "coach": sequence_json(&sequences(s)[1])},
-        "positions": body_table(s).iter().map(|(p, a, b)| json!({
+        "kinematic_sequence": {"student": sequence_json(&student), "coach": sequence_json(&coach)},
+        "positions": s.body_table().iter().map(|(p, a, b)| json!({
             "position": p.name(), "moment": p.moment(),
             "student_frame": r.student_events.frame(*p), "coach_frame": r.coach_events.frame(*p),
             "student": a.as_ref().map(metrics_json), "coach": b.as_ref().map(metrics_json)})).collect::<Vec<_>>(),
     })
 }
-
-/// A column of the text's body table: its heading and its value.
-type Column = (&'static str, fn(&Metrics) -> f32);
 
 /// The report as readable lines.
 pub fn to_text(s: &html::Scored) -> String {
@@ -304,35 +287,24 @@ pub fn to_text(s: &html::Scored) -> String {
         out,
         "body at each position, you (coach): degrees; shifts since address in cm"
     );
-    let columns: [Column; 9] = [
-        ("pelvis turn", |m| m.pelvis.turn),
-        ("thorax turn", |m| m.thorax.turn),
-        ("X-factor", |m| m.x_factor),
-        ("spine", |m| m.spine),
-        ("thorax bend", |m| m.thorax.bend),
-        ("pelvis sway", |m| m.pelvis_shift.sway * 100.0),
-        ("pelvis thrust", |m| m.pelvis_shift.thrust * 100.0),
-        ("pelvis lift", |m| m.pelvis_shift.lift * 100.0),
-        ("lead elbow", |m| m.lead_elbow),
-    ];
     let _ = write!(out, "  {:<4}", "");
-    for (name, _) in &columns {
-        let _ = write!(out, " {name:>13}");
+    for (name, _, _) in &KEY_METRICS {
+        let _ = write!(out, " {:>16}", name.replace('_', " "));
     }
     out.push('\n');
-    for (p, a, b) in body_table(s) {
+    for (p, a, b) in s.body_table() {
         let _ = write!(out, "  {:<4}", p.name());
-        for (_, value) in &columns {
+        for (_, _, value) in &KEY_METRICS {
             let cell = |m: Option<Metrics>| {
                 m.map_or("-".to_string(), |m| {
                     format!("{:.0}", value(&m).round() + 0.0)
                 })
             };
-            let _ = write!(out, " {:>13}", format!("{} ({})", cell(a), cell(b)));
+            let _ = write!(out, " {:>16}", format!("{} ({})", cell(a), cell(b)));
         }
         out.push('\n');
     }
-    let [you, coach] = sequences(s);
+    let [you, coach] = s.sequences();
     if you.is_some() || coach.is_some() {
         let _ = writeln!(
             out,

@@ -33,12 +33,36 @@ fn scored_page(dir: &Path) -> PathBuf {
 
 /// Every part of swing `n` is on `page`, with a pose drawing per event and view.
 fn check_parts(page: &str, n: usize, events: usize) {
-    for part in ["score", "advice", "poses", "tempo", "dtw", "deviation"] {
+    for part in [
+        "score",
+        "advice",
+        "poses",
+        "body",
+        "sequence",
+        "tempo",
+        "dtw",
+        "deviation",
+    ] {
         assert!(page.contains(&format!("id=\"{part}-{n}\"")), "{part}-{n}");
     }
     let section = &page[page.find(&format!("id=\"swing-{n}\"")).unwrap()..];
     let section = &section[..section.find("</section>").unwrap()];
     assert_eq!(section.matches("class=\"pose-svg\"").count(), 2 * events);
+    // A row per P-position: the events and, in a full swing, P6 and P9 where found.
+    let body = &section[section.find("id=\"body-").unwrap()..];
+    let rows = body[..body.find("</table>").unwrap()]
+        .matches("<tr><th>P")
+        .count();
+    assert!(
+        rows >= events && rows <= events + 2,
+        "{rows} rows for {events} events"
+    );
+    let sequence = &section[section.find("id=\"sequence-").unwrap()..];
+    let sequence = &sequence[..sequence.find("</ul>").unwrap()];
+    assert_eq!(
+        sequence.matches("<li>").count(),
+        if events == 8 { 2 } else { 0 }
+    );
     assert!(
         section.contains("data:image/png;base64,"),
         "the cost matrix"

@@ -18,7 +18,7 @@
 //!   [`flaws::Truth`]);
 //! - **false advice**: an unflawed swing given any advice; **false tempo**: given a tempo verdict;
 //! - **score** of unflawed swings, and its fall for a flaw of a given size;
-//! - **body metrics**: each of [`METRICS`] at every P-position of the swing the device scored,
+//! - **body metrics**: each of [`KEY_METRICS`] at every P-position of the swing the device scored,
 //!   against the same metric of the planted swing before filming (on the same body, at its own
 //!   P-positions): the error a golfer reading the report's body table sees, pose noise, event
 //!   timing and the device's skeleton together.
@@ -29,6 +29,7 @@ pub mod flaws;
 use crate::coaches;
 use crate::phone::{self, Camera, PhoneNoise};
 use crate::progress::Progress;
+use crate::score::KEY_METRICS;
 use crate::synth::{self, lay_out, Placed, Timeline};
 use crate::synth_imu::{self, ImuNoise};
 use anyhow::{bail, Context, Result};
@@ -158,30 +159,13 @@ struct Outcome1 {
     any_advice: bool,
     tempo_verdict: bool,
     score: Option<f32>,
-    /// Per P-position both tables have, each of [`METRICS`] measured less true.
-    body_errors: Vec<[f32; METRICS.len()]>,
+    /// Per P-position both tables have, each of [`KEY_METRICS`] measured less true.
+    body_errors: Vec<[f32; KEY_METRICS.len()]>,
     error: Option<String>,
 }
 
 /// A swing's body metrics at each P-position, [`Position::ALL`] order.
 type Table = [Option<Metrics>; Position::ALL.len()];
-
-/// A body metric whose error the benchmark measures: its name, its unit and its value.
-pub type Measure = (&'static str, &'static str, fn(&Metrics) -> f32);
-
-/// The body metrics whose errors the benchmark measures.
-pub const METRICS: [Measure; 10] = [
-    ("pelvis_turn", "deg", |m| m.pelvis.turn),
-    ("thorax_turn", "deg", |m| m.thorax.turn),
-    ("x_factor", "deg", |m| m.x_factor),
-    ("thorax_bend", "deg", |m| m.thorax.bend),
-    ("thorax_side_bend", "deg", |m| m.thorax.side_bend),
-    ("spine", "deg", |m| m.spine),
-    ("pelvis_sway", "cm", |m| m.pelvis_shift.sway * 100.0),
-    ("pelvis_thrust", "cm", |m| m.pelvis_shift.thrust * 100.0),
-    ("pelvis_lift", "cm", |m| m.pelvis_shift.lift * 100.0),
-    ("lead_elbow", "deg", |m| m.lead_elbow),
-];
 
 pub fn run(args: &Args) -> Result<String> {
     let sources = if args.swings.is_empty() {
@@ -488,7 +472,7 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
         .iter()
         .zip(&truth_table)
         .filter_map(|(m, t)| Some((m.as_ref()?, t.as_ref()?)))
-        .map(|(m, t)| METRICS.map(|(_, _, value)| value(m) - value(t)))
+        .map(|(m, t)| KEY_METRICS.map(|(_, _, value)| value(m) - value(t)))
         .collect();
     outcome.found = true;
     let measured = |e: Event| {
@@ -787,7 +771,7 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
             "body": recall(&|c, _| family(&c.flaws) == "body"),
             "combined": recall(&|c, _| family(&c.flaws) == "combined"),
         },
-        "body_error": METRICS.iter().enumerate().map(|(i, (name, unit, _))| {
+        "body_error": KEY_METRICS.iter().enumerate().map(|(i, (name, unit, _))| {
             let errors: Vec<f32> = found.iter().flat_map(|(_, o)| o.body_errors.iter().map(move |e| e[i])).collect();
             ((*name).to_string(), json!({"unit": unit, "error": quantiles(&errors)}))
         }).collect::<serde_json::Map<_, _>>(),
@@ -865,12 +849,12 @@ fn table(doc: &Value) -> String {
     let _ = writeln!(
         out,
         "body metric error at P1-P10, median / p95 ({}):",
-        METRICS
+        KEY_METRICS
             .map(|(name, unit, _)| format!("{name} {unit}"))
             .join(", ")
     );
     for l in doc["levels"].as_array().into_iter().flatten() {
-        let cells: Vec<String> = METRICS
+        let cells: Vec<String> = KEY_METRICS
             .iter()
             .map(|(name, _, _)| {
                 let e = &l["body_error"][name]["error"];
