@@ -433,12 +433,9 @@ impl KinematicSequence {
     }
 }
 
-/// How long after impact a link's peak is still looked for, seconds: the club's comes at or
-/// just before it.
-pub const PEAK_AFTER_IMPACT_S: f32 = 0.05;
-
-/// The kinematic sequence of a full swing: each link's fastest rotation between the top (P4)
-/// and [`PEAK_AFTER_IMPACT_S`] after impact (P7). A link's rotational speed is how fast it
+/// The kinematic sequence of a full swing: each link's fastest rotation in the downswing, from
+/// the top (P4) to impact (P7): the club's comes just before impact, and whatever the pose
+/// model makes of the fastest motion just after it is no part of the sequence. A link's rotational speed is how fast it
 /// turns, in degrees per second, over ±[`SMOOTHING_S`] / 2: the pelvis and the thorax as
 /// rigid segments (the whole angle of their rotation, whatever its axis), the lead arm
 /// (shoulder to wrist) and the shaft (grip to head) as directions. A peak lies between
@@ -461,13 +458,7 @@ pub fn kinematic_sequence(
     if events.kind != crate::events::SwingKind::Full || !(hz.is_finite() && hz > 0.0) {
         return Ok(None);
     }
-    let after = libm::roundf(PEAK_AFTER_IMPACT_S * hz) as usize;
-    Ok(Some(body.peaks(
-        swing,
-        hz,
-        top,
-        impact.saturating_add(after),
-    )))
+    Ok(Some(body.peaks(swing, hz, top, impact)))
 }
 
 impl Body {
