@@ -1,7 +1,7 @@
 //! The HTML swing report: one self-contained page (inline SVG, no scripts, no network).
 //!
-//! Per swing, in the order a coach reads it: the score and the advice; the student (green)
-//! over the virtual coach (red) at each key event, face-on and down the line, each swing in its
+//! Per swing, in the order a coach reads it: the score and the advice; the student (blue,
+//! solid) over the virtual coach (vermillion, dashed) at each key event, face-on and down the line, each swing in its
 //! own stance frame (as the spatial advice measures it); the tempo of each phase; the DTW path
 //! over the frame-cost matrix with the events; and the deviation of the most-advised joints
 //! along the alignment; the body metrics at P1 to P10 and the kinematic sequence. Element ids
@@ -19,10 +19,13 @@ use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
 use std::fmt::Write;
 
-/// The student's colour.
-const STUDENT: &str = "#1a9641";
-/// The virtual coach's colour.
-const COACH: &str = "#d7191c";
+/// The student's colour: blue, and solid lines.
+const STUDENT: &str = "#0072b2";
+/// The virtual coach's colour: vermillion, and dashed lines. The two (Okabe and Ito's palette)
+/// stay apart for the common colour-vision deficiencies, where green and red do not.
+const COACH: &str = "#d55e00";
+/// The virtual coach's dash pattern, the second cue beside its colour.
+const COACH_DASH: &str = "5 3";
 /// Most cells per side of the drawn cost matrix (larger matrices are sampled).
 const MATRIX_CELLS: usize = 300;
 /// Joints drawn in the deviation chart.
@@ -141,6 +144,7 @@ pub fn page(title: &str, notes: &[String], swings: &[Swing]) -> String {
     let _ = write!(
         out,
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
+         <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\
          <title>{}</title><style>{STYLE}</style></head><body>\n<h1>{}</h1>\n",
         escape(title),
         escape(title)
@@ -150,8 +154,11 @@ pub fn page(title: &str, notes: &[String], swings: &[Swing]) -> String {
     }
     let _ = writeln!(
         out,
-        "<p class=\"legend\"><span style=\"color:{STUDENT}\">&#9632; you</span> \
-         <span style=\"color:{COACH}\">&#9632; virtual coach (the coach's swing on your body)</span></p>"
+        "<p class=\"legend\"><svg class=\"key\" width=\"28\" height=\"10\"><line x1=\"2\" y1=\"5\" x2=\"26\" y2=\"5\" \
+         stroke=\"{STUDENT}\" stroke-width=\"2.5\"/></svg> <span style=\"color:{STUDENT}\">you</span> \
+         <svg class=\"key\" width=\"28\" height=\"10\"><line x1=\"2\" y1=\"5\" x2=\"26\" y2=\"5\" stroke=\"{COACH}\" \
+         stroke-width=\"2.5\" stroke-dasharray=\"{COACH_DASH}\"/></svg> <span style=\"color:{COACH}\">virtual \
+         coach (the coach's swing on your body)</span></p>"
     );
     if swings.is_empty() {
         out.push_str("<p id=\"no-swing\">No swing found.</p>\n");
@@ -176,11 +183,14 @@ pub fn page(title: &str, notes: &[String], swings: &[Swing]) -> String {
 }
 
 const STYLE: &str = "body{font-family:sans-serif;margin:24px;color:#222;max-width:1240px}\
+@media(max-width:600px){body{margin:8px}}svg{max-width:100%;height:auto}\
+h1,h2,p,li{overflow-wrap:anywhere}\
 h2{border-bottom:1px solid #ccc}.note{color:#555;margin:2px 0}.score{font-size:44px;font-weight:bold}\
 .poses{display:flex;flex-wrap:wrap;gap:6px}.pose{text-align:center;font-size:12px;width:146px}\
 svg{background:#fafafa;border:1px solid #ddd}.error{color:#b00}li{margin:4px 0}\
 text{font-family:sans-serif}.wide{overflow-x:auto}table{border-collapse:collapse;font-size:13px}\
-td,th{border-bottom:1px solid #ddd;padding:3px 6px;text-align:right;white-space:nowrap}";
+td,th{border-bottom:1px solid #ddd;padding:3px 6px;text-align:right;white-space:nowrap}\
+svg.key{border:none;background:none}tbody th{white-space:normal;text-align:left;min-width:9em}";
 
 fn section(out: &mut String, n: usize, s: &Scored) {
     let r = &s.report;
@@ -223,7 +233,7 @@ fn body_table(out: &mut String, n: usize, s: &Scored) {
     for (position, you, coach) in s.body_table() {
         let _ = write!(
             out,
-            "<tr><th>{} {}</th>",
+            "<tr><th>{} <small>{}</small></th>",
             position.name(),
             escape(position.moment())
         );
@@ -356,8 +366,11 @@ fn poses(out: &mut String, n: usize, s: &Scored) {
                 "<div class=\"pose\"><svg class=\"pose-svg\" width=\"{SIZE}\" height=\"{SIZE}\" \
                  viewBox=\"0 0 {SIZE} {SIZE}\">"
             );
-            for (points, colour, width) in [(coach, COACH, 2.6), (student, STUDENT, 1.8)] {
-                skeleton_lines(out, &s.skeleton, points, &to_px, colour, width);
+            for (points, colour, width, dash) in [
+                (coach, COACH, 2.6, Some(COACH_DASH)),
+                (student, STUDENT, 1.8, None),
+            ] {
+                skeleton_lines(out, &s.skeleton, points, &to_px, colour, width, dash);
             }
             let _ = writeln!(
                 out,
@@ -379,10 +392,12 @@ fn skeleton_lines(
     to_px: &impl Fn((f32, f32)) -> (f32, f32),
     colour: &str,
     width: f32,
+    dash: Option<&str>,
 ) {
+    let dashed = dash.map_or(String::new(), |d| format!(" stroke-dasharray=\"{d}\""));
     let _ = write!(
         out,
-        "<g stroke=\"{colour}\" stroke-width=\"{width}\" stroke-linecap=\"round\">"
+        "<g stroke=\"{colour}\" stroke-width=\"{width}\" stroke-linecap=\"round\"{dashed}>"
     );
     for k in 1..skeleton.len() {
         let Some(parent) = skeleton.parent(k) else {
@@ -416,7 +431,8 @@ fn tempo(out: &mut String, n: usize, r: &Report) {
     let scale = (WIDTH - LABEL - 170.0) / longest;
     let _ = writeln!(
         out,
-        "<h3>Tempo</h3><svg id=\"tempo-{n}\" width=\"{WIDTH}\" height=\"{height}\">"
+        "<h3>Tempo</h3><svg id=\"tempo-{n}\" width=\"{WIDTH}\" height=\"{height}\" \
+         viewBox=\"0 0 {WIDTH} {height}\">"
     );
     for (row, t) in r.tempo.iter().enumerate() {
         let y = 10.0 + row as f32 * ROW;
@@ -426,14 +442,15 @@ fn tempo(out: &mut String, n: usize, r: &Report) {
             y + 18.0,
             capitalized(&t.phase.name().replace('_', " "))
         );
-        for (k, (seconds, colour)) in [(t.student_s, STUDENT), (t.coach_s, COACH)]
-            .into_iter()
-            .enumerate()
+        for (k, (seconds, colour, who)) in
+            [(t.student_s, STUDENT, "you"), (t.coach_s, COACH, "coach")]
+                .into_iter()
+                .enumerate()
         {
             let _ = write!(
                 out,
                 "<rect class=\"bar\" x=\"{LABEL}\" y=\"{:.1}\" width=\"{:.1}\" height=\"13\" fill=\"{colour}\"/>\
-                 <text x=\"{:.1}\" y=\"{:.1}\" font-size=\"11\">{seconds:.2} s</text>",
+                 <text x=\"{:.1}\" y=\"{:.1}\" font-size=\"11\">{who} {seconds:.2} s</text>",
                 y + k as f32 * 15.0,
                 (seconds * scale).max(1.0),
                 LABEL + seconds * scale + 4.0,
@@ -497,9 +514,12 @@ fn dtw(out: &mut String, n: usize, s: &Scored) {
         out,
         "<h3>Alignment</h3><p>Frame-to-frame distance (darker: closer poses) and the warping \
          path; lines mark the events (you across, coach down).</p>\
-         <svg id=\"dtw-{n}\" width=\"{:.0}\" height=\"{:.0}\"><g transform=\"translate({MARGIN},10)\">\
+         <svg id=\"dtw-{n}\" width=\"{:.0}\" height=\"{:.0}\" viewBox=\"0 0 {:.0} {:.0}\">\
+         <g transform=\"translate({MARGIN},10)\">\
          <image class=\"costs\" width=\"{SIZE}\" height=\"{SIZE}\" preserveAspectRatio=\"none\" \
          style=\"image-rendering:pixelated\" href=\"data:image/png;base64,{}\"/>",
+        SIZE + MARGIN + 10.0,
+        SIZE + MARGIN + 10.0,
         SIZE + MARGIN + 10.0,
         SIZE + MARGIN + 10.0,
         png_base64(&pixels, cells_c, cells_r)
@@ -603,7 +623,8 @@ fn deviation(out: &mut String, n: usize, s: &Scored) {
         out,
         "<h3>Deviation over the swing</h3><p>How far your joints are from the virtual coach's \
          at the matched moment, in your stance frame (cm).</p>\
-         <svg id=\"deviation-{n}\" width=\"{WIDTH}\" height=\"{HEIGHT}\">"
+         <svg id=\"deviation-{n}\" width=\"{WIDTH}\" height=\"{HEIGHT}\" \
+         viewBox=\"0 0 {WIDTH} {HEIGHT}\">"
     );
     for tick in [0.0, top / 2.0, top / 1.1] {
         let _ = write!(

@@ -192,7 +192,7 @@ fn chromium_renders_the_report() {
         String::from_utf8_lossy(&dom.stderr)
     );
     check_parts(&String::from_utf8_lossy(&dom.stdout), 1, 8);
-    // The screenshot: a page with the student in green and the coach in red on it.
+    // The screenshot: a page with the student in blue and the coach in vermillion on it.
     let shot = dir.join("shot.png");
     let status = headless(&browser, &dir)
         .arg(format!("--screenshot={}", shot.display()))
@@ -219,11 +219,44 @@ fn chromium_renders_the_report() {
         white < total * 95 / 100,
         "blank: {white} of {total} pixels white"
     );
-    let (green, red) = (
-        count(&rgb, [26, 150, 65], 40),
-        count(&rgb, [215, 25, 28], 40),
+    let (blue, vermillion) = (
+        count(&rgb, [0, 114, 178], 40),
+        count(&rgb, [213, 94, 0], 40),
     );
-    eprintln!("screenshot {total} pixels: {green} student green, {red} coach red");
-    assert!(green > 500 && red > 500, "green {green}, red {red}");
+    eprintln!("screenshot {total} pixels: {blue} student blue, {vermillion} coach vermillion");
+    assert!(
+        blue > 500 && vermillion > 500,
+        "blue {blue}, vermillion {vermillion}"
+    );
+    // On a phone's 390 px and a desktop's 1280 px, nothing is wider than the screen. Headless
+    // Chromium's window is at least 500 px wide, so the page (which has no scripts of its
+    // own) goes into a frame of each width, and a script beside it writes the width the page
+    // laid out to into the DOM.
+    let html = std::fs::read_to_string(&page).unwrap();
+    let quoted = html
+        .replace('&', "&amp;")
+        .replace('"', "&quot;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;");
+    for width in [390, 1280] {
+        let probe = dir.join(format!("probe-{width}.html"));
+        let wrapper = format!(
+            "<!DOCTYPE html><html><body style=\"margin:0\"><iframe id=\"page\" \
+             style=\"width:{width}px;height:2400px;border:0\" srcdoc=\"{quoted}\"></iframe>\
+             <script>window.addEventListener('load', function () {{ document.body.setAttribute(\
+             'data-laid-out', document.getElementById('page').contentDocument\
+             .documentElement.scrollWidth); }});</script></body></html>"
+        );
+        std::fs::write(&probe, wrapper).unwrap();
+        let dom = headless(&browser, &dir)
+            .arg("--dump-dom")
+            .arg(format!("file://{}", probe.display()))
+            .output()
+            .unwrap();
+        let dom = String::from_utf8_lossy(&dom.stdout);
+        let at = dom.find("data-laid-out=\"").expect("the probe ran") + 15;
+        let laid: u32 = dom[at..at + dom[at..].find('"').unwrap()].parse().unwrap();
+        assert!(laid <= width, "{laid} px wide in a {width} px screen");
+    }
     std::fs::remove_dir_all(dir).unwrap();
 }
