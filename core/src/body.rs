@@ -325,6 +325,18 @@ impl Body {
         )
     }
 
+    /// How fast `link` turns at frame `t` of `swing` (frames × the skeleton's joints at `hz`, a
+    /// positive rate), degrees per second: the angle it turns from `SMOOTHING_S / 2` before to
+    /// as long after (see [`kinematic_sequence`]). `None` within that of either end of the swing
+    /// and for a club that is not tracked.
+    pub fn speed(&self, link: Link, swing: &[Vec3], hz: f32, t: usize) -> Option<f32> {
+        let joints = self.joints.max(1);
+        let frame = |f: usize| swing.get(f * joints..(f + 1) * joints);
+        let half = (libm::roundf(0.5 * SMOOTHING_S * hz) as usize).max(1);
+        let turned = self.turned(link, frame(t.checked_sub(half)?)?, frame(t + half)?)?;
+        Some(turned * hz / (2 * half) as f32)
+    }
+
     /// How far `link` turns from frame `a` to frame `b` (both long enough), degrees: the
     /// angle of the rotation between the pelvis's or the thorax's [`axes`] in the two, the
     /// angle between the lead arm's (shoulder to wrist) or the shaft's (grip to head)
@@ -465,20 +477,11 @@ impl Body {
     /// Each link's fastest rotation (see [`kinematic_sequence`]) between frames `from` and
     /// `to` of `swing` (frames × the skeleton's joints at `hz`, a positive rate).
     fn peaks(&self, swing: &[Vec3], hz: f32, from: usize, to: usize) -> KinematicSequence {
-        let joints = self.joints.max(1);
-        let frames = swing.len() / joints;
-        let frame = |f: usize| swing.get(f * joints..(f + 1) * joints);
-        let half = (libm::roundf(0.5 * SMOOTHING_S * hz) as usize).max(1);
-        let to = to.min(frames.saturating_sub(half + 1));
         let mut sequence = KinematicSequence::default();
         for link in Link::ALL {
-            // The speed at frame `t`: the angle it turns from t - half to t + half.
-            let speed = |t: usize| -> Option<f32> {
-                let turned = self.turned(link, frame(t.checked_sub(half)?)?, frame(t + half)?)?;
-                Some(turned * hz / (2 * half) as f32)
-            };
+            let speed = |t: usize| self.speed(link, swing, hz, t);
             let mut best: Option<(usize, f32)> = None;
-            for t in from.max(half)..=to {
+            for t in from..=to {
                 if let Some(v) = speed(t) {
                     if best.is_none_or(|(_, b)| v > b) {
                         best = Some((t, v));

@@ -4,9 +4,10 @@
 //! solid) over the virtual coach (vermillion, dashed) at each key event, face-on and down the line, each swing in its
 //! own stance frame (as the spatial advice measures it); the tempo of each phase; the DTW path
 //! over the frame-cost matrix with the events; and the deviation of the most-advised joints
-//! along the alignment; the body metrics at P1 to P10 and the kinematic sequence. Element ids
-//! (`score-N`, `advice-N`, `poses-N`, `body-N`, `sequence-N`, `tempo-N`, `dtw-N`,
-//! `deviation-N` for swing `N` from 1) let tests and scripts find each part.
+//! along the alignment; the body metrics at P1 to P10 and the kinematic sequence with its
+//! graph. Element ids (`score-N`, `advice-N`, `poses-N`, `body-N`, `sequence-N`,
+//! `sequence-chart-N`, `tempo-N`, `dtw-N`, `deviation-N` for swing `N` from 1) let tests and
+//! scripts find each part.
 
 use crate::score::KEY_METRICS;
 use base64::Engine;
@@ -14,7 +15,7 @@ use posecoach_adapters::session::Compared;
 use posecoach_core::body::{self, KinematicSequence, Link, Metrics, Stance};
 use posecoach_core::events::{Event, Position, SwingEvents};
 use posecoach_core::joint::Joint;
-use posecoach_core::score::Report;
+use posecoach_core::score::{Report, SPATIAL_THRESHOLD_M};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
 use std::fmt::Write;
@@ -285,6 +286,142 @@ fn body_table(out: &mut String, n: usize, s: &Scored) {
         );
     }
     out.push_str("</ul>\n");
+    sequence_chart(out, n, s);
+}
+
+/// The kinematic sequence's graph: each link's rotational speed from just before the top to
+/// impact, yours solid and the coach's dashed, each link in its colour, the peaks the sequence
+/// found marked; time from each swing's own top.
+fn sequence_chart(out: &mut String, n: usize, s: &Scored) {
+    const WIDTH: f32 = 560.0;
+    const HEIGHT: f32 = 240.0;
+    const LEFT: f32 = 52.0;
+    const BOTTOM: f32 = 34.0;
+    /// Drawn from this long before the top, seconds.
+    const BEFORE_S: f32 = 0.05;
+    // Per swing: its curves in Link order as (ms from its top, deg/s), its peaks, its dashes.
+    let mut drawn = Vec::new();
+    for (swing, hz, events, dash) in [
+        (&s.student, s.student_hz, &s.report.student_events, None),
+        (
+            &s.coach,
+            s.coach_hz,
+            &s.report.coach_events,
+            Some(COACH_DASH),
+        ),
+    ] {
+        let (Some(top), Some(last), Ok(body), Ok(Some(sequence))) = (
+            events.time(Position::P4),
+            events.frame(Position::P7),
+            body::Body::new(&s.skeleton, events.lead),
+            body::kinematic_sequence(&s.skeleton, swing, hz, events),
+        ) else {
+            continue;
+        };
+        let first = (top - BEFORE_S * hz).max(0.0) as usize;
+        let ms = |t: f32| (t - top) / hz * 1000.0;
+        let curves: Vec<Vec<(f32, f32)>> = Link::ALL
+            .iter()
+            .map(|&link| {
+                (first..=last)
+                    .filter_map(|t| {
+                        let v = body.speed(link, swing, hz, t)?;
+                        Some((ms(t as f32), v))
+                    })
+                    .collect()
+            })
+            .collect();
+        let peaks = Link::ALL.map(|l| sequence.peak(l).map(|p| (ms(p.time), p.speed)));
+        drawn.push((curves, peaks, dash));
+    }
+    let points = drawn.iter().flat_map(|(c, _, _)| c.iter().flatten());
+    let (mut t0, mut t1, mut fastest) = (0.0f32, 1.0f32, 100.0f32);
+    for &(t, v) in points {
+        (t0, t1, fastest) = (t0.min(t), t1.max(t), fastest.max(v));
+    }
+    let step = if fastest > 1500.0 { 500.0 } else { 250.0 };
+    let fastest = (fastest / step).ceil() * step;
+    let x_of = |t: f32| LEFT + (t - t0) / (t1 - t0) * (WIDTH - LEFT - 12.0);
+    let y_of = |v: f32| HEIGHT - BOTTOM - v / fastest * (HEIGHT - BOTTOM - 24.0);
+    let _ = write!(
+        out,
+        "<svg id=\"sequence-chart-{n}\" width=\"{WIDTH}\" height=\"{HEIGHT}\" \
+         viewBox=\"0 0 {WIDTH} {HEIGHT}\">"
+    );
+    let mut v = 0.0;
+    while v <= fastest {
+        let _ = write!(
+            out,
+            "<line x1=\"{LEFT}\" y1=\"{y:.1}\" x2=\"{:.1}\" y2=\"{y:.1}\" stroke=\"#ddd\"/>\
+             <text x=\"{:.1}\" y=\"{:.1}\" font-size=\"10\" text-anchor=\"end\">{v:.0}</text>",
+            WIDTH - 12.0,
+            LEFT - 4.0,
+            y_of(v) + 3.0,
+            y = y_of(v)
+        );
+        v += step;
+    }
+    let mut t = (t0 / 100.0).ceil() * 100.0 + 0.0;
+    while t <= t1 {
+        let x = x_of(t);
+        let _ = write!(
+            out,
+            "<line x1=\"{x:.1}\" y1=\"{:.1}\" x2=\"{x:.1}\" y2=\"{:.1}\" stroke=\"#999\"/>\
+             <text x=\"{x:.1}\" y=\"{:.1}\" font-size=\"10\" text-anchor=\"middle\">{t:.0}</text>",
+            HEIGHT - BOTTOM,
+            HEIGHT - BOTTOM + 4.0,
+            HEIGHT - BOTTOM + 15.0
+        );
+        t += 100.0;
+    }
+    let _ = write!(
+        out,
+        "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"11\" text-anchor=\"middle\">ms after the top \
+         (each swing its own)</text><text x=\"12\" y=\"{:.1}\" font-size=\"11\" \
+         transform=\"rotate(-90 12 {:.1})\" text-anchor=\"middle\">degrees per second</text>",
+        (LEFT + WIDTH) / 2.0,
+        HEIGHT - 4.0,
+        (HEIGHT - BOTTOM) / 2.0,
+        (HEIGHT - BOTTOM) / 2.0
+    );
+    for (curves, peaks, dash) in &drawn {
+        let dashed = dash.map_or(String::new(), |d| format!(" stroke-dasharray=\"{d}\""));
+        for (k, curve) in curves.iter().enumerate() {
+            let colour = PALETTE[k];
+            let line: Vec<String> = curve
+                .iter()
+                .map(|&(t, v)| format!("{:.1},{:.1}", x_of(t), y_of(v)))
+                .collect();
+            if line.is_empty() {
+                continue;
+            }
+            let _ = write!(
+                out,
+                "<polyline points=\"{}\" fill=\"none\" stroke=\"{colour}\" stroke-width=\"1.6\"{dashed}/>",
+                line.join(" ")
+            );
+            if let Some((t, v)) = peaks[k] {
+                let fill = if dash.is_some() { "white" } else { colour };
+                let _ = write!(
+                    out,
+                    "<circle class=\"peak\" cx=\"{:.1}\" cy=\"{:.1}\" r=\"3.5\" fill=\"{fill}\" \
+                     stroke=\"{colour}\"/>",
+                    x_of(t),
+                    y_of(v)
+                );
+            }
+        }
+    }
+    for (k, link) in Link::ALL.iter().enumerate() {
+        let _ = write!(
+            out,
+            "<text x=\"{:.1}\" y=\"14\" font-size=\"11\" fill=\"{}\">{}</text>",
+            LEFT + 8.0 + k as f32 * 90.0,
+            PALETTE[k],
+            link.name().replace('_', " ")
+        );
+    }
+    out.push_str("</svg>\n");
 }
 
 /// A view of the stance frame: screen x and y (down) from (toward target, toward ball, up).
@@ -428,7 +565,7 @@ fn tempo(out: &mut String, n: usize, r: &Report) {
         .map(|t| t.student_s.max(t.coach_s))
         .fold(1e-3, f32::max);
     let height = ROW * r.tempo.len() as f32 + 30.0;
-    let scale = (WIDTH - LABEL - 170.0) / longest;
+    let scale = (WIDTH - LABEL - 220.0) / longest;
     let _ = writeln!(
         out,
         "<h3>Tempo</h3><svg id=\"tempo-{n}\" width=\"{WIDTH}\" height=\"{height}\" \
@@ -637,6 +774,18 @@ fn deviation(out: &mut String, n: usize, s: &Scored) {
             y_of(tick)
         );
     }
+    // The tolerance: no joint is advised on within it (nor within 5 times its uncertainty).
+    let tolerance = SPATIAL_THRESHOLD_M * 100.0;
+    let _ = write!(
+        out,
+        "<line class=\"tolerance\" x1=\"{LEFT}\" y1=\"{y:.1}\" x2=\"{:.1}\" y2=\"{y:.1}\" \
+         stroke=\"#444\" stroke-dasharray=\"6 3\"/><text x=\"{:.1}\" y=\"{:.1}\" font-size=\"9\" \
+         text-anchor=\"end\">{tolerance:.0} cm: the least advised on</text>",
+        WIDTH - 10.0,
+        WIDTH - 12.0,
+        y_of(tolerance) - 3.0,
+        y = y_of(tolerance)
+    );
     // Each event's name goes on the highest of the label rows where it overlaps no other.
     let mut row_ends = [f32::MIN; LABEL_ROWS];
     for (event, i) in s.report.student_events.iter() {

@@ -63,6 +63,20 @@ fn check_parts(page: &str, n: usize, events: usize) {
         sequence.matches("<li>").count(),
         if events == 8 { 2 } else { 0 }
     );
+    // The sequence's graph, for a full swing: per swing a curve and a peak for each link
+    // (three without a club, four with one).
+    let chart = section.find(&format!("id=\"sequence-chart-{n}\""));
+    assert_eq!(chart.is_some(), events == 8);
+    if let Some(at) = chart {
+        let chart = &section[at..at + section[at..].find("</svg>").unwrap()];
+        let curves = chart.matches("<polyline").count();
+        assert!(curves == 6 || curves == 8, "{curves} curves");
+        assert_eq!(chart.matches("class=\"peak\"").count(), curves);
+    }
+    assert!(
+        section.contains("class=\"tolerance\""),
+        "the deviation chart's tolerance"
+    );
     assert!(
         section.contains("data:image/png;base64,"),
         "the cost matrix"
