@@ -503,11 +503,47 @@ fn poses(out: &mut String, n: usize, s: &Scored) {
                 "<div class=\"pose\"><svg class=\"pose-svg\" width=\"{SIZE}\" height=\"{SIZE}\" \
                  viewBox=\"0 0 {SIZE} {SIZE}\">"
             );
+            // The ground, which way the target (face on) or the ball (down the line) lies, and
+            // the ball where the club head rested at address.
+            let ground = to_px((0.0, 0.0)).1;
+            let (arrow, label) = match view {
+                View::FaceOn => ("&#8592;", "target"),
+                View::DownTheLine => ("&#8594;", "ball"),
+            };
+            let _ = write!(
+                out,
+                "<line class=\"ground\" x1=\"0\" y1=\"{ground:.1}\" x2=\"{SIZE}\" y2=\"{ground:.1}\" \
+                 stroke=\"#8c6d31\" stroke-width=\"1.5\"/><text x=\"4\" y=\"{:.1}\" font-size=\"9\" \
+                 fill=\"#555\">{arrow} {label}</text>",
+                (ground + 11.0).min(SIZE - 2.0)
+            );
+            if let Some(head) = s.skeleton.index_of(Joint::ClubHead) {
+                let at = s.report.student_events.address();
+                let p = student_stance.local(s.frame(&s.student, at)[head]);
+                let (x, y) = to_px(view.project(Vec3::new(p.x, p.y, 0.0)));
+                let _ = write!(
+                    out,
+                    "<circle class=\"ball\" cx=\"{x:.1}\" cy=\"{:.1}\" r=\"2.5\" fill=\"white\" \
+                     stroke=\"#333\"/>",
+                    y - 2.5
+                );
+            }
             for (points, colour, width, dash) in [
                 (coach, COACH, 2.6, Some(COACH_DASH)),
                 (student, STUDENT, 1.8, None),
             ] {
                 skeleton_lines(out, &s.skeleton, points, &to_px, colour, width, dash);
+            }
+            // The joints the advice names at this event, ringed on the student.
+            for d in s.report.spatial.iter().filter(|d| d.event == event) {
+                if let Some(k) = s.skeleton.index_of(d.joint) {
+                    let (x, y) = to_px(student[k]);
+                    let _ = write!(
+                        out,
+                        "<circle class=\"advised\" cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"5\" fill=\"none\" \
+                         stroke=\"#000\" stroke-width=\"1.2\"/>"
+                    );
+                }
             }
             let _ = writeln!(
                 out,

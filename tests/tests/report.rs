@@ -48,6 +48,8 @@ fn check_parts(page: &str, n: usize, events: usize) {
     let section = &page[page.find(&format!("id=\"swing-{n}\"")).unwrap()..];
     let section = &section[..section.find("</section>").unwrap()];
     assert_eq!(section.matches("class=\"pose-svg\"").count(), 2 * events);
+    // Each pose figure stands on its ground line.
+    assert_eq!(section.matches("class=\"ground\"").count(), 2 * events);
     // A row per P-position: the events and, in a full swing, P6 and P9 where found.
     let body = &section[section.find("id=\"body-").unwrap()..];
     let rows = body[..body.find("</table>").unwrap()]
@@ -89,6 +91,9 @@ fn score_writes_a_self_contained_page_with_every_part() {
     let dir = scratch("report-score");
     let page = std::fs::read_to_string(scored_page(&dir)).unwrap();
     check_parts(&page, 1, 8);
+    // The club is tracked here: the ball lies where its head rested, in every figure; the
+    // joints the advice names are ringed at their events, in both views.
+    assert_eq!(page.matches("class=\"ball\"").count(), 16);
     for external in ["http:", "https:", "<script", "src=\""] {
         assert!(!page.contains(external), "{external}");
     }
@@ -103,6 +108,9 @@ fn score_writes_a_self_contained_page_with_every_part() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert!(report["score"].as_f64().is_some());
+    let advised = report["spatial"].as_array().unwrap().len();
+    assert!(advised > 0);
+    assert_eq!(page.matches("class=\"advised\"").count(), 2 * advised);
     std::fs::remove_dir_all(dir).unwrap();
 }
 
