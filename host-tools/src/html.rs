@@ -663,6 +663,10 @@ fn frame_cost(a: &[Vec3], b: &[Vec3]) -> f32 {
 fn dtw(out: &mut String, n: usize, s: &Scored) {
     const SIZE: f32 = 360.0;
     const MARGIN: f32 = 40.0;
+    /// Room on the right for the colour scale.
+    const SCALE: f32 = 70.0;
+    /// Steps of the colour scale.
+    const STEPS: usize = 24;
     let (rows, cols) = (s.frames(&s.student), s.frames(&s.coach));
     let (cells_r, cells_c) = (rows.min(MATRIX_CELLS), cols.min(MATRIX_CELLS));
     let sample = |cell: usize, cells: usize, len: usize| (cell * len + len / 2) / cells.max(1);
@@ -676,12 +680,10 @@ fn dtw(out: &mut String, n: usize, s: &Scored) {
         })
         .collect();
     let top = costs.iter().copied().fold(1e-6, f32::max);
+    let shade = |cost: f32| (40.0 + 210.0 * (cost / top).max(0.0).sqrt()).min(250.0) as u8;
     let pixels: Vec<u8> = costs
         .iter()
-        .flat_map(|cost| {
-            let shade = (40.0 + 210.0 * (cost / top).sqrt()).min(250.0) as u8;
-            [shade, shade, 255]
-        })
+        .flat_map(|&cost| [shade(cost), shade(cost), 255])
         .collect();
     let _ = writeln!(
         out,
@@ -691,16 +693,58 @@ fn dtw(out: &mut String, n: usize, s: &Scored) {
          <g transform=\"translate({MARGIN},10)\">\
          <image class=\"costs\" width=\"{SIZE}\" height=\"{SIZE}\" preserveAspectRatio=\"none\" \
          style=\"image-rendering:pixelated\" href=\"data:image/png;base64,{}\"/>",
+        SIZE + MARGIN + SCALE,
         SIZE + MARGIN + 10.0,
-        SIZE + MARGIN + 10.0,
-        SIZE + MARGIN + 10.0,
+        SIZE + MARGIN + SCALE,
         SIZE + MARGIN + 10.0,
         png_base64(&pixels, cells_c, cells_r)
     );
+    // The colour scale: the mean joint distance each shade stands for, in cm.
+    let (x, height) = (SIZE + 14.0, SIZE / STEPS as f32);
+    for k in 0..STEPS {
+        let cost = top * k as f32 / (STEPS - 1) as f32;
+        let v = shade(cost);
+        let _ = write!(
+            out,
+            "<rect class=\"scale\" x=\"{x:.1}\" y=\"{:.1}\" width=\"12\" height=\"{:.2}\" \
+             fill=\"rgb({v},{v},255)\"/>",
+            k as f32 * height,
+            height + 0.5
+        );
+    }
+    for share in [0.0, 0.25, 0.5, 1.0] {
+        let _ = write!(
+            out,
+            "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"10\">{:.0} cm</text>",
+            x + 15.0,
+            (share * (SIZE - height) + height / 2.0 + 3.0),
+            top * share * 100.0
+        );
+    }
     let (x_of, y_of) = (
         |j: usize| (j as f32 + 0.5) * SIZE / cols as f32,
         |i: usize| (i as f32 + 0.5) * SIZE / rows as f32,
     );
+    // Ticks every half second of each swing.
+    for (frames, hz, across) in [(cols, s.coach_hz, true), (rows, s.student_hz, false)] {
+        let mut t = 0.0;
+        while t * hz < frames as f32 {
+            let at = t * hz;
+            let (x1, y1, x2, y2, tx, ty, anchor) = if across {
+                let x = x_of(at as usize);
+                (x, SIZE, x, SIZE + 4.0, x, SIZE + 14.0, "middle")
+            } else {
+                let y = y_of(at as usize);
+                (-4.0, y, 0.0, y, -6.0, y + 3.0, "end")
+            };
+            let _ = write!(
+                out,
+                "<line x1=\"{x1:.1}\" y1=\"{y1:.1}\" x2=\"{x2:.1}\" y2=\"{y2:.1}\" stroke=\"#555\"/>\
+                 <text x=\"{tx:.1}\" y=\"{ty:.1}\" font-size=\"9\" text-anchor=\"{anchor}\">{t:.1}</text>"
+            );
+            t += 0.5;
+        }
+    }
     event_lines(out, &s.report.student_events, |i| {
         (0.0, y_of(i), SIZE, y_of(i), STUDENT)
     });
@@ -716,9 +760,9 @@ fn dtw(out: &mut String, n: usize, s: &Scored) {
     let _ = writeln!(
         out,
         "<polyline class=\"path\" points=\"{}\" fill=\"none\" stroke=\"#ff9900\" stroke-width=\"2\"/>\
-         <text x=\"{:.0}\" y=\"{:.0}\" font-size=\"12\" text-anchor=\"middle\">coach frame ({cols})</text>\
+         <text x=\"{:.0}\" y=\"{:.0}\" font-size=\"12\" text-anchor=\"middle\">coach, seconds ({cols} frames)</text>\
          <text x=\"-30\" y=\"{:.0}\" font-size=\"12\" text-anchor=\"middle\" \
-         transform=\"rotate(-90 -30 {:.0})\">your frame ({rows})</text></g></svg>",
+         transform=\"rotate(-90 -30 {:.0})\">you, seconds ({rows} frames)</text></g></svg>",
         points.join(" "),
         SIZE / 2.0,
         SIZE + 28.0,

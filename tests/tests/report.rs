@@ -84,6 +84,11 @@ fn check_parts(page: &str, n: usize, events: usize) {
         "the cost matrix"
     );
     assert!(section.contains("class=\"path\""), "the warping path");
+    assert_eq!(
+        section.matches("class=\"scale\"").count(),
+        24,
+        "the cost matrix's colour scale"
+    );
 }
 
 #[test]
