@@ -18,6 +18,29 @@ pub fn jitter(positions: &mut [posecoach_core::Vec3], width: f32, seed: u64) {
     }
 }
 
+/// The mirror image of `swing` across the plane through the ball perpendicular to the target
+/// line (z -> -z), left and right joints swapped: a left-handed golfer.
+pub fn left_handed(swing: &posecoach_io::Motion) -> posecoach_io::Motion {
+    let s = &swing.skeleton;
+    let n = s.len();
+    let partner: Vec<usize> = (0..n)
+        .map(|k| s.joint(k).and_then(|j| s.index_of(j.mirror())).unwrap_or(k))
+        .collect();
+    let positions = swing
+        .positions
+        .chunks_exact(n)
+        .flat_map(|f| {
+            partner
+                .iter()
+                .map(move |&k| posecoach_core::Vec3::new(f[k].x, f[k].y, -f[k].z))
+        })
+        .collect();
+    posecoach_io::Motion {
+        positions,
+        ..swing.clone()
+    }
+}
+
 /// A committed fixture in `tests/fixtures`.
 pub fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

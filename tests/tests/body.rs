@@ -4,9 +4,8 @@
 
 use posecoach_core::body::{at_positions, Metrics};
 use posecoach_core::events::{detect, Position, Side};
-use posecoach_core::Vec3;
 use posecoach_io as io;
-use posecoach_tests::fixture;
+use posecoach_tests::{fixture, left_handed};
 
 fn table(swing: &io::Motion) -> [Option<Metrics>; 10] {
     let events = detect(&swing.skeleton, &swing.positions, swing.rate_hz).unwrap();
@@ -53,34 +52,11 @@ fn tour_swings_turn_at_the_top_and_open_through_impact() {
     }
 }
 
-/// The mirror image of `swing` across the plane through the ball perpendicular to the target
-/// line (z -> -z), left and right joints swapped: a left-handed golfer.
-fn mirrored(swing: &io::Motion) -> io::Motion {
-    let s = &swing.skeleton;
-    let n = s.len();
-    let partner: Vec<usize> = (0..n)
-        .map(|k| s.joint(k).and_then(|j| s.index_of(j.mirror())).unwrap_or(k))
-        .collect();
-    let positions = swing
-        .positions
-        .chunks_exact(n)
-        .flat_map(|f| {
-            partner
-                .iter()
-                .map(move |&k| Vec3::new(f[k].x, f[k].y, -f[k].z))
-        })
-        .collect();
-    io::Motion {
-        positions,
-        ..swing.clone()
-    }
-}
-
 #[test]
 fn a_left_handed_golfer_reads_like_the_right_handed_one() {
     for name in SWINGS {
         let swing = io::load(&fixture(name)).unwrap();
-        let lefty = mirrored(&swing);
+        let lefty = left_handed(&swing);
         let events = detect(&lefty.skeleton, &lefty.positions, lefty.rate_hz).unwrap();
         assert_eq!(events.lead, Side::Right);
         let (right, left) = (table(&swing), table(&lefty));

@@ -148,26 +148,7 @@ fn a_waggle_before_the_swing_is_not_the_takeaway() {
 #[test]
 fn a_left_handed_golfer_leads_with_the_right_side() {
     let (swing, labels) = driver();
-    // The mirror image across the plane through the ball perpendicular to the target line
-    // (z -> -z), with left and right joints swapped, is a left-handed golfer.
-    let s = &swing.skeleton;
-    let n = s.len();
-    let partner: Vec<usize> = (0..n)
-        .map(|k| s.joint(k).and_then(|j| s.index_of(j.mirror())).unwrap_or(k))
-        .collect();
-    let positions = swing
-        .positions
-        .chunks_exact(n)
-        .flat_map(|f| {
-            partner
-                .iter()
-                .map(move |&k| posecoach_core::Vec3::new(f[k].x, f[k].y, -f[k].z))
-        })
-        .collect();
-    let lefty = io::Motion {
-        positions,
-        ..swing.clone()
-    };
+    let lefty = posecoach_tests::left_handed(&swing);
     let events = detected(&lefty);
     assert_eq!(events.lead, Side::Right);
     let expected: Vec<f32> = labels.iter().map(|&l| l as f32).collect();
