@@ -264,9 +264,8 @@ impl Body {
         if address.len() < self.joints || frame.len() < self.joints {
             return None;
         }
-        let local = |p: Vec3| stance.local(p);
         let shift = |k: &dyn Fn(&[Vec3]) -> Vec3| {
-            let d = local(k(frame)) - local(k(address));
+            let d = stance.direction(k(frame) - k(address));
             Shift {
                 sway: d.x,
                 thrust: d.y,
@@ -274,10 +273,10 @@ impl Body {
             }
         };
         let hips = |f: &[Vec3]| (f[self.hips[0]] + f[self.hips[1]]) * 0.5;
-        let thorax = |f: &[Vec3]| self.chest(f);
-        let pelvis = angles(self.pelvis_axes(stance, frame));
-        let chest = self.thorax_axes(stance, frame);
-        let trunk = stance.direction(thorax(frame) - hips(frame));
+        let local = |d: Vec3| stance.direction(d);
+        let pelvis = angles(self.pelvis_axes(frame, local));
+        let chest = self.thorax_axes(frame, local);
+        let trunk = stance.direction(self.chest(frame) - hips(frame));
         let [elbow, wrist] = self.lead_arm.map(|k| frame[k]);
         let shoulder = frame[self.shoulders[0]];
         let club = self.club.map(|[g, h]| (frame[g], frame[h]));
@@ -288,7 +287,7 @@ impl Body {
             x_factor: thorax_angles.turn - pelvis.turn,
             spine: degrees(libm::atan2f(trunk.y, trunk.z)),
             pelvis_shift: shift(&hips),
-            thorax_shift: shift(&thorax),
+            thorax_shift: shift(&|f: &[Vec3]| self.chest(f)),
             head_shift: self.head.map(|k| shift(&|f: &[Vec3]| f[k])),
             lead_arm: across(chest, stance.direction(wrist - shoulder)),
             lead_elbow: between(elbow - shoulder, wrist - elbow),
@@ -308,20 +307,21 @@ impl Body {
         }
     }
 
-    /// The pelvis's [`axes`] in `frame` (long enough).
-    fn pelvis_axes(&self, stance: &Stance, frame: &[Vec3]) -> [Vec3; 3] {
+    /// The pelvis's [`axes`] in `frame` (long enough), its directions taken through `to`
+    /// (into stance coordinates, or left as they are).
+    fn pelvis_axes(&self, frame: &[Vec3], to: impl Fn(Vec3) -> Vec3) -> [Vec3; 3] {
         axes(
-            stance.direction(frame[self.hips[0]] - frame[self.hips[1]]),
-            stance.direction(self.chest(frame) - frame[self.pelvis]),
+            to(frame[self.hips[0]] - frame[self.hips[1]]),
+            to(self.chest(frame) - frame[self.pelvis]),
         )
     }
 
-    /// The thorax's [`axes`] in `frame` (long enough).
-    fn thorax_axes(&self, stance: &Stance, frame: &[Vec3]) -> [Vec3; 3] {
+    /// The thorax's [`axes`] in `frame` (long enough), its directions taken through `to`.
+    fn thorax_axes(&self, frame: &[Vec3], to: impl Fn(Vec3) -> Vec3) -> [Vec3; 3] {
         let lower = self.spine.map_or(frame[self.pelvis], |k| frame[k]);
         axes(
-            stance.direction(frame[self.shoulders[0]] - frame[self.shoulders[1]]),
-            stance.direction(self.chest(frame) - lower),
+            to(frame[self.shoulders[0]] - frame[self.shoulders[1]]),
+            to(self.chest(frame) - lower),
         )
     }
 
@@ -331,9 +331,13 @@ impl Body {
     /// and for a club that is not tracked.
     pub fn speed(&self, link: Link, swing: &[Vec3], hz: f32, t: usize) -> Option<f32> {
         let joints = self.joints.max(1);
-        let frame = |f: usize| swing.get(f * joints..(f + 1) * joints);
+        let frame = |f: usize| swing.get(f.checked_mul(joints)?..)?.get(..joints);
         let half = (libm::roundf(0.5 * SMOOTHING_S * hz) as usize).max(1);
-        let turned = self.turned(link, frame(t.checked_sub(half)?)?, frame(t + half)?)?;
+        let turned = self.turned(
+            link,
+            frame(t.checked_sub(half)?)?,
+            frame(t.checked_add(half)?)?,
+        )?;
         Some(turned * hz / (2 * half) as f32)
     }
 
@@ -342,12 +346,6 @@ impl Body {
     /// angle between the lead arm's (shoulder to wrist) or the shaft's (grip to head)
     /// directions; `None` for a club that is not tracked.
     fn turned(&self, link: Link, a: &[Vec3], b: &[Vec3]) -> Option<f32> {
-        // Any fixed rotation of the world will do: only the change between the two matters.
-        let stance = Stance {
-            origin: Vec3::zeros(),
-            target: Vec3::x(),
-            ball: -Vec3::z(),
-        };
         let rotation = |[la, ua, fa]: [Vec3; 3], [lb, ub, fb]: [Vec3; 3]| {
             // The rotation taking one orthonormal frame to the other: its sine from the
             // cross products, its cosine from the trace, so small angles stay exact.
@@ -356,13 +354,14 @@ impl Body {
             degrees(libm::atan2f(sin, cos))
         };
         match link {
+            // In the world's own coordinates: only the change between the two matters.
             Link::Pelvis => Some(rotation(
-                self.pelvis_axes(&stance, a),
-                self.pelvis_axes(&stance, b),
+                self.pelvis_axes(a, |d| d),
+                self.pelvis_axes(b, |d| d),
             )),
             Link::Thorax => Some(rotation(
-                self.thorax_axes(&stance, a),
-                self.thorax_axes(&stance, b),
+                self.thorax_axes(a, |d| d),
+                self.thorax_axes(b, |d| d),
             )),
             Link::LeadArm => {
                 let arm = |f: &[Vec3]| f[self.lead_arm[1]] - f[self.shoulders[0]];

@@ -967,12 +967,12 @@ pub fn detect(
 
     // P6, where the shaft falls through horizontal (without a club, SHAFT_DOWN_SHARE of the way
     // from P5 to impact); P9, where the trail arm rises through horizontal after impact.
+    let p5 = crossed(&arm, 0.0, mid_downswing);
     let shaft_down = match club {
         Some(_) => {
             crossing(mid_downswing..impact, shaft, 0.0, false).map(|t| (t, crossed(&shaft, 0.0, t)))
         }
         None => {
-            let p5 = crossed(&arm, 0.0, mid_downswing);
             let time = p5 + SHAFT_DOWN_SHARE * (impact_time - p5);
             Some((libm::roundf(time) as usize, time))
         }
@@ -985,7 +985,7 @@ pub fn detect(
         crossed(lift, lift_level.0, toe_up),
         crossed(&arm, 0.0, mid_backswing),
         top_time,
-        crossed(&arm, 0.0, mid_downswing),
+        p5,
         impact_time,
         crossed(lift, lift_level.1, follow),
         turning(&height, finish),

@@ -9,7 +9,7 @@
 //! `sequence-chart-N`, `tempo-N`, `dtw-N`, `deviation-N` for swing `N` from 1) let tests and
 //! scripts find each part.
 
-use crate::score::KEY_METRICS;
+use crate::score::{whole, KEY_METRICS};
 use base64::Engine;
 use posecoach_adapters::session::Compared;
 use posecoach_core::body::{self, KinematicSequence, Link, Metrics, Stance};
@@ -36,6 +36,9 @@ const PALETTE: [&str; DEVIATION_JOINTS] = ["#7b3294", "#e66101", "#0571b0", "#4d
 
 /// Points of a pose on the screen.
 type Points = Vec<(f32, f32)>;
+
+/// A swing's kinematic sequence with the time of its top (frames) and its rate, if it has one.
+pub type Sequenced = Option<(KinematicSequence, f32, f32)>;
 
 /// A scored swing and the motions it compares, owned.
 #[derive(Clone, Debug)]
@@ -87,7 +90,7 @@ impl Scored {
 
     /// Both swings' kinematic sequences (`None` for a putt), each with its time of the top in
     /// frames and its rate.
-    pub fn sequences(&self) -> [Option<(KinematicSequence, f32, f32)>; 2] {
+    pub fn sequences(&self) -> [Sequenced; 2] {
         let of = |swing: &[Vec3], hz: f32, events: &SwingEvents| {
             let top = events.time(Position::P4)?;
             let sequence = body::kinematic_sequence(&self.skeleton, swing, hz, events).ok()??;
@@ -238,25 +241,20 @@ fn body_table(out: &mut String, n: usize, s: &Scored) {
             position.name(),
             escape(position.moment())
         );
-        for (_, _, value) in &KEY_METRICS {
-            let cell = |m: Option<Metrics>| {
-                m.map_or("-".to_string(), |m| {
-                    format!("{:.0}", value(&m).round() + 0.0)
-                })
-            };
+        for &(_, _, value) in &KEY_METRICS {
             let _ = write!(
                 out,
                 "<td>{} <span style=\"color:{COACH}\">({})</span></td>",
-                cell(you),
-                cell(coach)
+                whole(you, value),
+                whole(coach, value)
             );
         }
         out.push_str("</tr>\n");
     }
     out.push_str("</tbody></table></div>\n");
-    let [you, coach] = s.sequences();
+    let sequences = s.sequences();
     let _ = write!(out, "<h3>Kinematic sequence</h3><ul id=\"sequence-{n}\">");
-    for (who, sequence) in [("You", you), ("Coach", coach)] {
+    for (who, sequence) in ["You", "Coach"].into_iter().zip(sequences) {
         let Some((k, top, hz)) = sequence else {
             continue;
         };
@@ -286,13 +284,14 @@ fn body_table(out: &mut String, n: usize, s: &Scored) {
         );
     }
     out.push_str("</ul>\n");
-    sequence_chart(out, n, s);
+    sequence_chart(out, n, s, sequences);
 }
 
 /// The kinematic sequence's graph: each link's rotational speed from just before the top to
 /// impact, yours solid and the coach's dashed, each link in its colour, the peaks the sequence
-/// found marked; time from each swing's own top.
-fn sequence_chart(out: &mut String, n: usize, s: &Scored) {
+/// found marked (`sequences`, as [`Scored::sequences`] gives them); time from each swing's
+/// own top.
+fn sequence_chart(out: &mut String, n: usize, s: &Scored, sequences: [Sequenced; 2]) {
     const WIDTH: f32 = 560.0;
     const HEIGHT: f32 = 240.0;
     const LEFT: f32 = 52.0;
@@ -301,20 +300,15 @@ fn sequence_chart(out: &mut String, n: usize, s: &Scored) {
     const BEFORE_S: f32 = 0.05;
     // Per swing: its curves in Link order as (ms from its top, deg/s), its peaks, its dashes.
     let mut drawn = Vec::new();
-    for (swing, hz, events, dash) in [
-        (&s.student, s.student_hz, &s.report.student_events, None),
-        (
-            &s.coach,
-            s.coach_hz,
-            &s.report.coach_events,
-            Some(COACH_DASH),
-        ),
-    ] {
-        let (Some(top), Some(last), Ok(body), Ok(Some(sequence))) = (
-            events.time(Position::P4),
+    let swings = [
+        (&s.student, &s.report.student_events, None),
+        (&s.coach, &s.report.coach_events, Some(COACH_DASH)),
+    ];
+    for ((swing, events, dash), sequence) in swings.into_iter().zip(sequences) {
+        let (Some((sequence, top, hz)), Some(last), Ok(body)) = (
+            sequence,
             events.frame(Position::P7),
             body::Body::new(&s.skeleton, events.lead),
-            body::kinematic_sequence(&s.skeleton, swing, hz, events),
         ) else {
             continue;
         };

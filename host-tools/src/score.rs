@@ -2,7 +2,7 @@
 
 use crate::{html, teacher};
 use anyhow::{anyhow, bail, Context, Result};
-use posecoach_core::body::{Angles, KinematicSequence, Link, Metrics, Shift};
+use posecoach_core::body::{Angles, Link, Metrics, Shift};
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{Event, SwingEvents};
 use posecoach_core::score::{self, Advice, Report};
@@ -183,9 +183,17 @@ pub const KEY_METRICS: [KeyMetric; 10] = [
     ("lead_elbow", "deg", |m| m.lead_elbow),
 ];
 
+/// `value` of a swing's metrics at a position, to the whole degree or centimetre; "-" where
+/// the swing has no such position.
+pub fn whole(metrics: Option<Metrics>, value: fn(&Metrics) -> f32) -> String {
+    metrics.map_or("-".to_string(), |m| {
+        format!("{:.0}", value(&m).round() + 0.0)
+    })
+}
+
 /// One swing's kinematic sequence: each link's peak speed (degrees per second) and its time
 /// after the top (ms), the order they peak in and whether it is pelvis, thorax, arm, club.
-fn sequence_json(sequence: &Option<(KinematicSequence, f32, f32)>) -> Value {
+fn sequence_json(sequence: &html::Sequenced) -> Value {
     let Some((k, top, hz)) = sequence else {
         return Value::Null;
     };
@@ -294,13 +302,12 @@ pub fn to_text(s: &html::Scored) -> String {
     out.push('\n');
     for (p, a, b) in s.body_table() {
         let _ = write!(out, "  {:<4}", p.name());
-        for (_, _, value) in &KEY_METRICS {
-            let cell = |m: Option<Metrics>| {
-                m.map_or("-".to_string(), |m| {
-                    format!("{:.0}", value(&m).round() + 0.0)
-                })
-            };
-            let _ = write!(out, " {:>16}", format!("{} ({})", cell(a), cell(b)));
+        for &(_, _, value) in &KEY_METRICS {
+            let _ = write!(
+                out,
+                " {:>16}",
+                format!("{} ({})", whole(a, value), whole(b, value))
+            );
         }
         out.push('\n');
     }

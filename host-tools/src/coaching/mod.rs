@@ -462,12 +462,13 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
             return Ok(outcome);
         }
     };
-    let truth_table = {
-        let swing = &planted.swing;
-        let found = events::detect(&swing.skeleton, &swing.positions, swing.rate_hz)
-            .context("events of the planted swing")?;
-        body::at_positions(&swing.skeleton, &swing.positions, &found)?
-    };
+    // The truth: the planted swing's own metrics (none, and no errors counted, should its
+    // events not be found: that says nothing of the device's).
+    let swing = &planted.swing;
+    let truth_table = events::detect(&swing.skeleton, &swing.positions, swing.rate_hz)
+        .ok()
+        .and_then(|found| body::at_positions(&swing.skeleton, &swing.positions, &found).ok())
+        .unwrap_or([None; Position::ALL.len()]);
     outcome.body_errors = table
         .iter()
         .zip(&truth_table)
