@@ -4,6 +4,7 @@
 //! with a signal, which must stop the bridge and print its counters.
 #![allow(clippy::unwrap_used, clippy::panic)] // test helpers fail the test by unwrapping
 
+use posecoach_cli::bridge::CLIENT_QUEUE;
 use posecoach_cli::device_sim::frame;
 use posecoach_core::wire::Message;
 use serde_json::Value;
@@ -12,7 +13,7 @@ use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -233,28 +234,42 @@ fn a_flooding_device_drops_the_client_that_never_reads_and_serves_the_others() {
         line.clear();
         reader.read_line(&mut line).unwrap();
     }
-    let reading = std::thread::spawn(move || {
-        let mut got = 0u64;
-        for line in reader.lines() {
-            got += u64::from(line.unwrap().contains("\"device\""));
-        }
-        got
-    });
+    // Frames the reading client has received: the flood waits for it, so that it is never
+    // dropped for being starved of CPU on a loaded machine, while the idle client falls behind.
+    let received = Arc::new(AtomicU64::new(0));
+    let reading = {
+        let received = received.clone();
+        std::thread::spawn(move || {
+            for line in reader.lines() {
+                if line.unwrap().contains("\"device\"") {
+                    received.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+            received.load(Ordering::Relaxed)
+        })
+    };
     let (idle, _) = client(bridge.addr);
     let before = bridge.usage();
     // Frames and garbage, 64 frames every 5 ms (eight times what a 115 200 baud link carries),
-    // until the idle client is dropped (its three descriptors closed).
-    let frames: Vec<u8> = (0..64u32)
+    // until the idle client is dropped (its three descriptors closed); never more than
+    // `AHEAD` frames ahead of the reading client.
+    const BURST: u64 = 64;
+    const AHEAD: u64 = CLIENT_QUEUE as u64 / 2;
+    let frames: Vec<u8> = (0..BURST as u32)
         .flat_map(|seq| frame(&Message::Ack { seq }).unwrap())
         .chain([0xFF; 64])
         .chain([0])
         .collect();
     let flooding = Arc::new(AtomicBool::new(true));
     let flood = {
-        let flooding = flooding.clone();
+        let (flooding, received) = (flooding.clone(), received.clone());
         std::thread::spawn(move || {
+            let mut sent = 0u64;
             while flooding.load(Ordering::Relaxed) {
-                master.write_all(&frames).unwrap();
+                if sent < received.load(Ordering::Relaxed) + AHEAD {
+                    master.write_all(&frames).unwrap();
+                    sent += BURST;
+                }
                 std::thread::sleep(FLOOD_PAUSE);
             }
             master
