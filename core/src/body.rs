@@ -299,6 +299,30 @@ impl Body {
         })
     }
 
+    /// The joints its metrics are measured from, the club's aside, each once.
+    pub fn joints(&self) -> heapless::Vec<usize, 10> {
+        let mut out = heapless::Vec::new();
+        let all = [
+            Some(self.hips[0]),
+            Some(self.hips[1]),
+            Some(self.shoulders[0]),
+        ]
+        .into_iter()
+        .chain([
+            Some(self.shoulders[1]),
+            Some(self.pelvis),
+            self.spine,
+            self.thorax,
+        ])
+        .chain([self.head, Some(self.lead_arm[0]), Some(self.lead_arm[1])]);
+        for k in all.flatten() {
+            if !out.contains(&k) {
+                let _ = out.push(k);
+            }
+        }
+        out
+    }
+
     /// The thorax's point: its joint, else between the shoulders (`frame` long enough).
     fn chest(&self, frame: &[Vec3]) -> Vec3 {
         match self.thorax {

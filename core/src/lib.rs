@@ -44,6 +44,7 @@
 
 pub mod blob;
 pub mod body;
+pub mod checks;
 pub mod config;
 pub mod detector;
 pub mod dtw;

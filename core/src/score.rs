@@ -26,10 +26,11 @@
 //! - **Stance frame** ([`Stance`]): each swing in its own, so a pelvis that moves toward the
 //!   ball is reported as the pelvis moving.
 
-use crate::body::Stance;
-use crate::config::{DEVIATIONS_PER_EVENT, MAX_DEVIATIONS, MAX_SWING_FRAMES};
+use crate::body::{Body, Stance};
+use crate::checks::{BodyDeviation, Measure, CHECKS};
+use crate::config::{DEVIATIONS_PER_EVENT, MAX_DEVIATIONS, MAX_JOINTS, MAX_SWING_FRAMES};
 use crate::dtw::{self, Band, DtwError, Sequence, Window};
-use crate::events::{self, Event, EventError, SwingEvents};
+use crate::events::{self, Event, EventError, Position, Side, SwingEvents};
 use crate::joint::Joint;
 use crate::math::norm;
 use crate::skeleton::Skeleton;
@@ -58,6 +59,8 @@ pub const MAX_EVENT_TIMING_S: f32 = 0.2;
 /// A tempo verdict needs the ratio past its tolerance by this many times its uncertainty
 /// (about 95 % one-sided confidence).
 pub const TEMPO_CONFIDENCE: f32 = 1.65;
+/// The least noise per axis a body check's uncertainty is measured with, metres.
+pub const LEAST_NOISE_M: f32 = 0.001;
 /// A joint's wander is measured at this many moments spread evenly over the cut swing.
 pub const WANDER_SAMPLES: usize = 32;
 /// Poses are compared averaged over ± this long, seconds (zero phase).
@@ -244,6 +247,8 @@ pub enum Advice {
     Tempo(PhaseTempo),
     /// A joint off at an event.
     Spatial(Deviation),
+    /// A body metric's change since address off the coach's at a position.
+    Body(BodyDeviation),
 }
 
 impl Advice {
@@ -254,6 +259,7 @@ impl Advice {
                 libm::fabsf(libm::logf(t.ratio)) / libm::logf(1.0 + TEMPO_TOLERANCE)
             }
             Advice::Spatial(d) => Advice::severity_of(d),
+            Advice::Body(b) => Advice::severity_of_check(b),
         }
     }
 
@@ -261,6 +267,17 @@ impl Advice {
     /// [`NOISE_FACTOR`] times its uncertainty it is, as a multiple of that.
     pub fn severity_of(d: &Deviation) -> f32 {
         d.distance_m / SPATIAL_THRESHOLD_M.max(NOISE_FACTOR * d.uncertainty_m)
+    }
+
+    /// A body check's severity: how far past the larger of its tolerance and [`NOISE_FACTOR`]
+    /// times its uncertainty the difference is, as a multiple of that: advice past 1.
+    pub fn severity_of_check(b: &BodyDeviation) -> f32 {
+        let threshold = b
+            .check
+            .measure
+            .tolerance()
+            .max(NOISE_FACTOR * b.uncertainty);
+        libm::fabsf(b.student - b.coach) / threshold
     }
 }
 
@@ -305,6 +322,7 @@ impl core::fmt::Display for Advice {
                     d.direction.comparative()
                 )
             }
+            Advice::Body(b) => b.fmt(f),
         }
     }
 }
@@ -333,6 +351,8 @@ pub struct Report {
     /// At each event, up to [`DEVIATIONS_PER_EVENT`] joints beyond [`SPATIAL_THRESHOLD_M`],
     /// largest first.
     pub spatial: HVec<Deviation, MAX_DEVIATIONS>,
+    /// The body checks ([`CHECKS`]) both swings could be measured at, in that order.
+    pub body: HVec<BodyDeviation, { CHECKS.len() }>,
     /// The most important advice first.
     pub advice: HVec<Advice, MAX_ADVICE>,
 }
@@ -524,11 +544,15 @@ fn coach_frame(x: f32, student: &SwingEvents, coach: &SwingEvents, ratio: f32) -
     before.1 + (x - before.0) * ratio
 }
 
-/// The median of `values` (reordered; the upper one of an even count), 0 for none: a
-/// quickselect written out, as the core library's selection brings 15 KiB of sorting code to a
-/// device's flash.
+/// The median of `values` (reordered; the upper one of an even count), 0 for none.
 fn median(values: &mut [f32]) -> f32 {
     let mid = values.len() / 2;
+    select(values, mid)
+}
+
+/// The `mid`-th smallest of `values` (reordered), 0 for none: a quickselect written out, as the
+/// core library's selection brings 15 KiB of sorting code to a device's flash.
+fn select(values: &mut [f32], mid: usize) -> f32 {
     let (mut lo, mut hi) = (0, values.len());
     while hi > lo + 1 {
         // Partition around the middle value of the range (Lomuto).
@@ -821,7 +845,10 @@ pub fn compare(
     // independent moments, so one joint's wander can come out far below its noise: no joint's
     // is taken below the median of all judged joints' (per axis; the pose noise is much the
     // same for all keypoints, the retargeting's mismatch is not).
-    let mut floor = Vec3::zeros();
+    // Per axis, the median of the joints' wander is the least any joint's is taken to be; its
+    // lower quartile is the input's noise the body checks are judged against (noise moves
+    // every joint, a fault a few, and one that lasts most of the swing widens their wander).
+    let (mut floor, mut noise) = (Vec3::zeros(), Vec3::zeros());
     let mut values = [0.0f32; crate::config::MAX_JOINTS];
     for axis in 0..3 {
         let mut count = 0;
@@ -832,6 +859,7 @@ pub fn compare(
             }
         }
         floor[axis] = median(&mut values[..count]);
+        noise[axis] = select(&mut values[..count], count / 4);
     }
     for w in wander.iter_mut().take(joints) {
         *w = w.sup(&floor);
@@ -1032,13 +1060,44 @@ pub fn compare(
     let score =
         100.0 * libm::expf(-(spatial_excess / SPATIAL_POINTS_M + tempo_excess / TEMPO_POINTS));
 
-    // Advice: tempo and spatial items by severity.
+    let body = body_checks(
+        skeleton,
+        &Swing {
+            positions: student,
+            events: &student_events,
+            stance: &stance_s,
+            half: half_s,
+        },
+        &Swing {
+            positions: coach,
+            events: &coach_events,
+            stance: &stance_c,
+            half: half_c,
+        },
+        &|x| coach_frame(x, &student_events, &coach_events, ratio),
+        &|k, x| unsure_near(k, x, half_s),
+        noise,
+        &timing.map(|t| t * coach_hz),
+    );
+
+    // Advice: tempo, body and joint items by severity; a joint item that states what a body
+    // item given at its event states is left out.
     let mut advice: HVec<Advice, MAX_ADVICE> = HVec::new();
     for t in tempo.iter().filter(|t| t.verdict != Verdict::Ok) {
         insert_sorted(&mut advice, Advice::Tempo(*t), Advice::severity);
     }
+    let given = || body.iter().filter(|b| Advice::severity_of_check(b) > 1.0);
+    for b in given() {
+        insert_sorted(&mut advice, Advice::Body(*b), Advice::severity);
+    }
     for d in &spatial {
-        insert_sorted(&mut advice, Advice::Spatial(*d), Advice::severity);
+        let stated = given().any(|b| {
+            b.check.position.event() == Some(d.event)
+                && states(b.check.measure, d, student_events.lead)
+        });
+        if !stated {
+            insert_sorted(&mut advice, Advice::Spatial(*d), Advice::severity);
+        }
     }
 
     Ok(Report {
@@ -1052,8 +1111,172 @@ pub fn compare(
         student_tempo_ratio: tempo_ratio(&student_events, student_hz),
         coach_tempo_ratio: tempo_ratio(&coach_events, coach_hz),
         spatial,
+        body,
         advice,
     })
+}
+
+/// One swing as the body checks read it: frames × skeleton joints, its events, its stance and
+/// the half-width of the average its poses are taken over, frames.
+struct Swing<'a> {
+    positions: &'a [Vec3],
+    events: &'a SwingEvents,
+    stance: &'a Stance,
+    half: usize,
+}
+
+impl Swing<'_> {
+    /// Every joint at frame `x`, averaged as the joint comparison does.
+    fn pose(&self, joints: usize, x: f32, out: &mut [Vec3; MAX_JOINTS]) {
+        for (k, p) in out.iter_mut().enumerate().take(joints) {
+            *p = smoothed(self.positions, joints, x, k, self.half);
+        }
+    }
+}
+
+/// The body checks ([`CHECKS`], see [`crate::checks`]) of `student` against `coach`: the
+/// coach's frame matching a student's frame is `coach_frame`'s, a joint the stream was unsure
+/// of near a frame is `unsure` there (no check is made at a position where one the metrics
+/// need is), the input's noise per stance axis is `noise`, each event's timing uncertainty in
+/// coach frames `timing`. None for a skeleton that lacks a joint the metrics need.
+fn body_checks(
+    skeleton: &Skeleton,
+    student: &Swing<'_>,
+    coach: &Swing<'_>,
+    coach_frame: &dyn Fn(f32) -> f32,
+    unsure: &dyn Fn(usize, f32) -> bool,
+    noise: Vec3,
+    timing: &[f32; 8],
+) -> HVec<BodyDeviation, { CHECKS.len() }> {
+    let mut out = HVec::new();
+    let joints = skeleton.len();
+    let (Ok(body_s), Ok(body_c)) = (
+        Body::new(skeleton, student.events.lead),
+        Body::new(skeleton, coach.events.lead),
+    ) else {
+        return out;
+    };
+    let (Some(from_s), Some(from_c)) = (
+        student.events.time(Event::Address),
+        coach.events.time(Event::Address),
+    ) else {
+        return out;
+    };
+    let [mut address_s, mut address_c, mut at_s, mut at_c] = [[Vec3::zeros(); MAX_JOINTS]; 4];
+    student.pose(joints, from_s, &mut address_s);
+    coach.pose(joints, from_c, &mut address_c);
+    let (address_s, address_c) = (&address_s[..joints], &address_c[..joints]);
+    let measure_s = |pose: &[Vec3]| body_s.measure(student.stance, address_s, pose);
+    let measure_c = |pose: &[Vec3]| body_c.measure(coach.stance, address_c, pose);
+    let (Some(zero_s), Some(zero_c)) = (measure_s(address_s), measure_c(address_c)) else {
+        return out;
+    };
+    let axes = [
+        student.stance.toward_target(),
+        student.stance.toward_ball(),
+        Vec3::y(),
+    ];
+    let needed = body_s.joints();
+    // The checks of each position together: they share its poses.
+    let mut rest = &CHECKS[..];
+    while let Some(first) = rest.first() {
+        let position: Position = first.position;
+        let run = rest.iter().take_while(|c| c.position == position).count();
+        let (checks, later) = rest.split_at(run);
+        rest = later;
+        let Some(event) = position.event() else {
+            continue;
+        };
+        let Some(x) = student.events.time(event) else {
+            continue;
+        };
+        let c = coach_frame(x);
+        student.pose(joints, x, &mut at_s);
+        coach.pose(joints, c, &mut at_c);
+        let (Some(here_s), Some(here_c)) = (measure_s(&at_s[..joints]), measure_c(&at_c[..joints]))
+        else {
+            continue;
+        };
+        // Each joint moved by the noise along each axis: how far each change moves. A check
+        // that moves with a joint the stream was unsure of is not made.
+        let mut variance = [0.0f32; CHECKS.len()];
+        let mut unmade = [false; CHECKS.len()];
+        for &k in &needed {
+            let doubt = unsure(k, x);
+            for (axis, direction) in axes.iter().enumerate() {
+                let sigma = noise[axis].max(LEAST_NOISE_M);
+                let kept = at_s[k];
+                at_s[k] = kept + direction * sigma;
+                let moved = measure_s(&at_s[..joints]);
+                at_s[k] = kept;
+                for ((check, v), unmade) in checks.iter().zip(&mut variance).zip(&mut unmade) {
+                    let (Some(a), Some(b)) = (
+                        check.change(&zero_s, &here_s),
+                        moved.and_then(|m| check.change(&zero_s, &m)),
+                    ) else {
+                        continue;
+                    };
+                    *v += (b - a) * (b - a);
+                    *unmade |= doubt && b != a;
+                }
+            }
+        }
+        // The coach's change within the event's timing uncertainty.
+        let h = timing[event as usize].max(0.5);
+        let mut around = [Vec3::zeros(); MAX_JOINTS];
+        coach.pose(joints, c + h, &mut around);
+        let later = measure_c(&around[..joints]);
+        coach.pose(joints, c - h, &mut around);
+        let earlier = measure_c(&around[..joints]);
+        for ((check, v), _) in checks
+            .iter()
+            .zip(variance)
+            .zip(unmade)
+            .filter(|(_, unmade)| !unmade)
+        {
+            let (Some(s), Some(k)) = (
+                check.change(&zero_s, &here_s),
+                check.change(&zero_c, &here_c),
+            ) else {
+                continue;
+            };
+            let along = match (later, earlier) {
+                (Some(l), Some(e)) => {
+                    0.5 * (check.change(&zero_c, &l).unwrap_or(k)
+                        - check.change(&zero_c, &e).unwrap_or(k))
+                }
+                _ => 0.0,
+            };
+            let _ = out.push(BodyDeviation {
+                check: *check,
+                student: s,
+                coach: k,
+                uncertainty: libm::sqrtf(2.0 * v + along * along),
+            });
+        }
+    }
+    out
+}
+
+/// Whether joint item `d` (of a golfer whose lead side is `lead`) states the fact a body item
+/// of `measure` states: then it is left out of the advice where the body item is in it.
+fn states(measure: Measure, d: &Deviation, lead: Side) -> bool {
+    use Direction::*;
+    let hips = matches!(d.joint, Joint::Pelvis | Joint::LeftHip | Joint::RightHip);
+    match measure {
+        Measure::ThoraxTurn => matches!(d.joint, Joint::LeftShoulder | Joint::RightShoulder),
+        Measure::PelvisTurn => matches!(d.joint, Joint::LeftHip | Joint::RightHip),
+        Measure::PelvisSway => hips && matches!(d.direction, TowardTarget | AwayFromTarget),
+        Measure::PelvisThrust => hips && matches!(d.direction, TowardBall | AwayFromBall),
+        Measure::HeadLift => {
+            matches!(d.joint, Joint::Neck | Joint::Head | Joint::HeadTop)
+                && matches!(d.direction, Up | Down)
+        }
+        Measure::LeadElbow => match lead {
+            Side::Left => matches!(d.joint, Joint::LeftElbow | Joint::LeftWrist),
+            Side::Right => matches!(d.joint, Joint::RightElbow | Joint::RightWrist),
+        },
+    }
 }
 
 /// The stance direction of `offset`'s largest component.
@@ -1086,7 +1309,27 @@ fn insert_sorted<T: Copy, const N: usize>(list: &mut HVec<T, N>, item: T, key: i
 
 #[cfg(test)]
 mod tests {
-    use super::{median, Unsure};
+    use super::{median, select, Advice, Unsure, SPATIAL_THRESHOLD_M};
+    use crate::checks::{BodyDeviation, CHECKS, SHIFT_TOLERANCE_M};
+
+    #[test]
+    fn a_body_check_is_advice_past_its_tolerance_or_its_noise_whichever_is_larger() {
+        let severity = |check: usize, student: f32, coach: f32, uncertainty: f32| {
+            Advice::severity_of_check(&BodyDeviation {
+                check: CHECKS[check],
+                student,
+                coach,
+                uncertainty,
+            })
+        };
+        // 17° short of the coach: past the 10° tolerance while the noise is small.
+        assert!((severity(0, 78.0, 95.0, 1.0) - 1.7).abs() < 1e-5);
+        // The same with 4° of uncertainty: 17 / 20.
+        assert!((severity(0, 78.0, 95.0, 4.0) - 0.85).abs() < 1e-5);
+        // A 6 cm thrust against the 5 cm tolerance, the joints' own threshold.
+        assert!((severity(5, 0.06, 0.0, 0.001) - 1.2).abs() < 1e-5);
+        assert_eq!(SHIFT_TOLERANCE_M, SPATIAL_THRESHOLD_M);
+    }
 
     #[test]
     fn unsure_masks_are_read_where_the_ring_still_holds_them() {
@@ -1110,6 +1353,18 @@ mod tests {
             let mut work = values.clone();
             let expected = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
             proptest::prop_assert_eq!(median(&mut work), expected);
+        }
+
+        #[test]
+        fn the_kth_smallest_is_the_kth_of_the_sorted_values(
+            values in proptest::collection::vec(-1e3f32..1e3, 1..64),
+            at in 0.0f64..1.0,
+        ) {
+            let mut sorted = values.clone();
+            sorted.sort_by(f32::total_cmp);
+            let k = ((values.len() - 1) as f64 * at) as usize;
+            let mut work = values.clone();
+            proptest::prop_assert_eq!(select(&mut work, k), sorted[k]);
         }
     }
 }

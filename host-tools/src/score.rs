@@ -3,6 +3,7 @@
 use crate::{html, teacher};
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_core::body::{Angles, Link, Metrics, Shift};
+use posecoach_core::checks::BodyDeviation;
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{Event, SwingEvents};
 use posecoach_core::score::{self, Advice, Report};
@@ -247,6 +248,16 @@ pub fn to_json(s: &html::Scored) -> Value {
             "uncertainty_cm": cm(d.uncertainty_m),
             "direction": d.direction.name(),
             "offset_cm": {"toward_target": cm(d.offset_m[0]), "toward_ball": cm(d.offset_m[1]), "up": cm(d.offset_m[2])}})).collect::<Vec<_>>(),
+        "body_checks": r.body.iter().map(|b| {
+            let (unit, scale) = unit(b);
+            let tenth = |v: f32| (f64::from(v * scale) * 10.0).round() / 10.0;
+            json!({
+                "position": b.check.position.name(), "measure": b.check.measure.name(), "unit": unit,
+                "student": tenth(b.student), "coach": tenth(b.coach),
+                "uncertainty": tenth(b.uncertainty), "tolerance": tenth(b.check.measure.tolerance()),
+                "severity": (f64::from(Advice::severity_of_check(b)) * 100.0).round() / 100.0,
+            })
+        }).collect::<Vec<_>>(),
         "advice": r.advice.iter().map(Advice::to_string).collect::<Vec<_>>(),
         "kinematic_sequence": {"student": sequence_json(&student), "coach": sequence_json(&coach)},
         "positions": s.body_table().iter().map(|(p, a, b)| json!({
@@ -254,6 +265,14 @@ pub fn to_json(s: &html::Scored) -> Value {
             "student_frame": r.student_events.frame(*p), "coach_frame": r.coach_events.frame(*p),
             "student": a.as_ref().map(metrics_json), "coach": b.as_ref().map(metrics_json)})).collect::<Vec<_>>(),
     })
+}
+
+/// A body check's unit in reports and the factor from its own (degrees or metres) to it.
+fn unit(b: &BodyDeviation) -> (&'static str, f32) {
+    match b.check.measure.in_degrees() {
+        true => ("deg", 1.0),
+        false => ("cm", 100.0),
+    }
 }
 
 /// The report as readable lines.
@@ -330,6 +349,30 @@ pub fn to_text(s: &html::Scored) -> String {
             }
             let order: Vec<_> = k.order().iter().map(|l| l.name()).collect();
             let _ = writeln!(out, " peaking {}", order.join(" > "));
+        }
+    }
+    if !r.body.is_empty() {
+        let _ = writeln!(
+            out,
+            "body checks, change since address: you ± uncertainty (coach), tolerance"
+        );
+        for b in &r.body {
+            let (unit, scale) = unit(b);
+            let _ = writeln!(
+                out,
+                "  {:<4} {:<14} {:>5.0} ± {:<3.0} ({:.0}) {unit}, {:.0}{}",
+                b.check.position.name(),
+                b.check.measure.name(),
+                b.student * scale + 0.0,
+                b.uncertainty * scale,
+                b.coach * scale + 0.0,
+                b.check.measure.tolerance() * scale,
+                if Advice::severity_of_check(b) > 1.0 {
+                    "  past it"
+                } else {
+                    ""
+                }
+            );
         }
     }
     if r.advice.is_empty() {
