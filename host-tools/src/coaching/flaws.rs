@@ -5,7 +5,8 @@
 //! golfer is still before its first frame), with its events in seconds from there, found in
 //! the source swing with its club at the source's own rate.
 
-use posecoach_core::body::Stance;
+use posecoach_core::body::{self, Metrics, Stance};
+use posecoach_core::checks::{Check, CHECKS};
 use posecoach_core::events::{Event, Side, SwingEvents};
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{Direction, Phase, Verdict};
@@ -89,7 +90,8 @@ impl Flaw {
     }
 }
 
-/// What a flawed swing should be told: a tempo verdict, or a joint off at an event.
+/// What a flawed swing should be told: a tempo verdict, a joint off at an event, or a body
+/// check off the coach's.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "kind")]
 pub enum Truth {
@@ -108,6 +110,13 @@ pub enum Truth {
         joint: Joint,
         /// Which way.
         direction: Direction,
+    },
+    /// This check's change since address is past its tolerance from the clean swing's.
+    Body {
+        /// Which.
+        check: Check,
+        /// More than the clean swing's (else less).
+        more: bool,
     },
 }
 
@@ -207,6 +216,7 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
             verdict: if slow { Verdict::Slow } else { Verdict::Fast },
         });
     }
+    truths.extend(body_truths(&swing, &warped, &warped_times, lead));
     let t = &warped_times;
     let (top, impact) = (Event::Top as usize, Event::Impact as usize);
     Planted {
@@ -216,6 +226,47 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
         truths,
         shown_m: largest,
     }
+}
+
+/// The body checks whose change since address `flawed` moves past its tolerance from `clean`'s
+/// (both at the same events, `times`), each in its own stance frame.
+fn body_truths(flawed: &Motion, clean: &Motion, times: &Times, lead: Side) -> Vec<Truth> {
+    let skeleton = &clean.skeleton;
+    let Ok(body) = body::Body::new(skeleton, lead) else {
+        return Vec::new();
+    };
+    let pose = |m: &Motion, t: f32| -> Vec<Vec3> {
+        let x = (t * m.rate_hz).clamp(0.0, (m.frames() - 1) as f32);
+        let (i, w) = (x.floor() as usize, x.fract());
+        let (a, b) = (m.frame(i), m.frame((i + 1).min(m.frames() - 1)));
+        a.iter().zip(b).map(|(a, b)| a + (b - a) * w).collect()
+    };
+    // The metrics at address and at `t`.
+    let metrics = |m: &Motion, t: f32| -> Option<(Metrics, Metrics)> {
+        let address = pose(m, 0.0);
+        let stance = Stance::new(skeleton, &address, lead);
+        Some((
+            body.measure(&stance, &address, &address)?,
+            body.measure(&stance, &address, &pose(m, t))?,
+        ))
+    };
+    let mut truths = Vec::new();
+    for check in CHECKS {
+        let Some(event) = check.position.event() else {
+            continue;
+        };
+        let t = times[event as usize];
+        let change = |m: &Motion| {
+            let (zero, at) = metrics(m, t)?;
+            check.change(&zero, &at)
+        };
+        if let (Some(f), Some(c)) = (change(flawed), change(clean)) {
+            if (f - c).abs() > check.measure.tolerance() {
+                truths.push(Truth::Body { check, more: f > c });
+            }
+        }
+    }
+    truths
 }
 
 /// The stance direction of `d`'s largest component, as the report names it.
@@ -677,6 +728,93 @@ mod tests {
         for body in [Body::ReducedTurn, Body::BentLeadArm, Body::HeadDown] {
             let size = if body == Body::HeadDown { 0.08 } else { 25.0 };
             assert!(!truths(body, size).is_empty(), "{body:?}");
+        }
+    }
+
+    #[test]
+    fn body_flaws_are_true_of_the_checks_that_name_them() {
+        use posecoach_core::checks::Measure;
+        use posecoach_core::events::Position;
+        let (swing, t, lead) = clean();
+        let body_truths = |body, size| -> Vec<(Position, Measure, bool)> {
+            plant(&swing, &t, lead, &[Flaw::Body { body, size }])
+                .truths
+                .into_iter()
+                .filter_map(|t| match t {
+                    Truth::Body { check, more } => Some((check.position, check.measure, more)),
+                    _ => None,
+                })
+                .collect()
+        };
+        for (body, size, named) in [
+            (
+                Body::EarlyExtension,
+                0.1,
+                (Position::P7, Measure::PelvisThrust, true),
+            ),
+            (Body::Sway, 0.1, (Position::P4, Measure::PelvisSway, false)),
+            (
+                Body::HeadDown,
+                0.08,
+                (Position::P4, Measure::HeadLift, false),
+            ),
+            (
+                Body::ReducedTurn,
+                25.0,
+                (Position::P4, Measure::ThoraxTurn, false),
+            ),
+            (
+                Body::BentLeadArm,
+                30.0,
+                (Position::P4, Measure::LeadElbow, true),
+            ),
+        ] {
+            let truths = body_truths(body, size);
+            assert!(truths.contains(&named), "{body:?}: {truths:?}");
+        }
+        // Within the tolerances, nothing.
+        assert_eq!(body_truths(Body::ReducedTurn, 5.0), vec![]);
+        assert_eq!(body_truths(Body::Sway, 0.03), vec![]);
+    }
+
+    /// Scored against the clean swing with no noise, each body flaw is named first by the body
+    /// check its truth names, in a coach's words; the clean swing itself gets no advice.
+    #[test]
+    fn a_scored_body_flaw_is_named_first_in_a_coachs_words() {
+        use posecoach_core::dtw::Band;
+        use posecoach_core::score::Advice;
+        let (swing, t, lead) = clean();
+        let at_60 = |m: &Motion| m.resampled(60.0).unwrap();
+        let coach = at_60(&swing);
+        let scored = |flaws: &[Flaw]| {
+            let planted = plant(&swing, &t, lead, flaws);
+            let report =
+                crate::score::score_swings(&at_60(&planted.swing), &coach, Band::DEFAULT).unwrap();
+            (planted, report)
+        };
+        let (_, report) = scored(&[]);
+        assert!(report.advice.is_empty(), "{:?}", report.advice);
+        for (body, size, fault) in [
+            (Body::EarlyExtension, 0.1, "early extension"),
+            (Body::Sway, 0.1, "a sway"),
+            (Body::HeadDown, 0.1, "a dipping head"),
+            (Body::ReducedTurn, 25.0, "a short turn"),
+            (Body::BentLeadArm, 35.0, "a bent lead arm"),
+        ] {
+            let (planted, report) = scored(&[Flaw::Body { body, size }]);
+            let first = report.advice.first().expect("advice");
+            let Advice::Body(b) = first else {
+                panic!("{body:?}: {first}");
+            };
+            let truth = Truth::Body {
+                check: b.check,
+                more: b.student > b.coach,
+            };
+            assert!(planted.truths.contains(&truth), "{body:?}: {first}");
+            assert!(
+                first.to_string().ends_with(&format!(": {fault}.")),
+                "{first}"
+            );
         }
     }
 }

@@ -17,6 +17,9 @@
 //! - **recall at 1**: the report's first advice item states a planted flaw (see
 //!   [`flaws::Truth`]);
 //! - **false advice**: an unflawed swing given any advice; **false tempo**: given a tempo verdict;
+//!   **false body**: given a body item;
+//! - **body named**: of the swings whose flaw moves a body check past its tolerance (see
+//!   [`flaws::Truth::Body`]), the share whose advice, at any rank, has a body item stating one;
 //! - **score** of unflawed swings, and its fall for a flaw of a given size;
 //! - **body metrics**: each of [`KEY_METRICS`] at every P-position of the swing the device scored,
 //!   against the same metric of the planted swing before filming (on the same body, at its own
@@ -36,6 +39,7 @@ use anyhow::{bail, Context, Result};
 use flaws::{Body, Flaw, Planted, Times, Truth};
 use posecoach_adapters::session::Outcome;
 use posecoach_core::body::{self, Metrics, Stance};
+use posecoach_core::checks::BodyDeviation;
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, Event, Position, Side};
 use posecoach_core::format::Format;
@@ -158,6 +162,16 @@ struct Outcome1 {
     right_coach: bool,
     any_advice: bool,
     tempo_verdict: bool,
+    /// The planted flaws move a body check past its tolerance.
+    body_truth: bool,
+    /// The advice has a body item stating one.
+    body_named: bool,
+    /// The advice has a body item.
+    body_advice: bool,
+    /// The report's body checks.
+    body: Vec<BodyDeviation>,
+    /// The planted truths.
+    truths: Vec<Truth>,
     score: Option<f32>,
     /// Per P-position both tables have, each of [`KEY_METRICS`] measured less true.
     body_errors: Vec<[f32; KEY_METRICS.len()]>,
@@ -496,6 +510,20 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     outcome.score = Some(report.score);
     outcome.any_advice = !report.advice.is_empty();
     outcome.tempo_verdict = report.advice.iter().any(|a| matches!(a, Advice::Tempo(_)));
+    outcome.body_truth = planted
+        .truths
+        .iter()
+        .any(|t| matches!(t, Truth::Body { .. }));
+    let body_items = || {
+        report
+            .advice
+            .iter()
+            .filter(|a| matches!(a, Advice::Body(_)))
+    };
+    outcome.body_advice = body_items().next().is_some();
+    outcome.body = report.body.to_vec();
+    outcome.truths = planted.truths.clone();
+    outcome.body_named = body_items().any(|a| states(a, &planted));
     if let Some(first) = report.advice.first() {
         outcome.first = Some(first.to_string());
         outcome.right_first = states(first, &planted);
@@ -674,6 +702,9 @@ fn states(advice: &Advice, planted: &Planted) -> bool {
             },
             Advice::Spatial(d),
         ) => d.event == *event && d.joint == *joint && d.direction == *direction,
+        (Truth::Body { check, more }, Advice::Body(b)) => {
+            b.check == *check && (b.student > b.coach) == *more
+        }
         _ => false,
     })
 }
@@ -720,6 +751,10 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
     };
     let unflawed: Vec<&&(&Case, &Outcome1)> =
         found.iter().filter(|(c, _)| c.flaws.is_empty()).collect();
+    let named = |f: &dyn Fn(&Case) -> bool| {
+        let of: Vec<_> = found.iter().filter(|(c, o)| o.body_truth && f(c)).collect();
+        share(of.iter().filter(|(_, o)| o.body_named).count(), of.len())
+    };
     let recall = |f: &dyn Fn(&Case, &Outcome1) -> bool| {
         let of: Vec<_> = found.iter().filter(|(c, o)| f(c, o)).collect();
         share(of.iter().filter(|(_, o)| o.right_first).count(), of.len())
@@ -765,6 +800,14 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
         ),
         "false_tempo": share(unflawed.iter().filter(|(_, o)| o.tempo_verdict).count(), unflawed.len()),
         "false_advice": share(unflawed.iter().filter(|(_, o)| o.any_advice).count(), unflawed.len()),
+        "false_body": share(unflawed.iter().filter(|(_, o)| o.body_advice).count(), unflawed.len()),
+        "body_named": {
+            "all": named(&|_| true),
+            "by_flaw": Body::ALL.iter().map(|&b| (
+                serde_json::to_value(b).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default(),
+                named(&|c: &Case| matches!(c.flaws[..], [Flaw::Body { body, .. }] if body == b)),
+            )).collect::<serde_json::Map<_, _>>(),
+        },
         "recall_at_1": {
             "tempo": recall(&|c, _| family(&c.flaws) == "tempo"),
             "offset": recall(&|c, _| family(&c.flaws) == "offset"),
@@ -797,7 +840,7 @@ fn case_json(clean: &Clean, case: &Case, o: &Outcome1) -> Value {
         },
         "shown_cm": o.shown_m * 100.0, "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
         "tempo_error": o.tempo_error, "backswing_z": o.backswing_z, "score": o.score, "first": o.first, "right_first": o.right_first, "right_coach": o.right_coach,
-        "any_advice": o.any_advice, "error": o.error,
+        "any_advice": o.any_advice, "body_truth": o.body_truth, "body_named": o.body_named, "truths": o.truths, "body": o.body, "error": o.error,
     })
 }
 
@@ -809,7 +852,7 @@ fn table(doc: &Value) -> String {
         "coaching benchmark: {} cases, {} bodies, sources {}",
         doc["cases"], doc["bodies"], doc["sources"]
     );
-    let _ = writeln!(out, "input | found | coach | false | takeaway ms | top ms | impact ms | tempo err | covered | false tempo | false advice | recall@1 offset>=8cm / tempo / body | score unflawed / 10-15cm / tempo 30-50%");
+    let _ = writeln!(out, "input | found | coach | false | takeaway ms | top ms | impact ms | tempo err | covered | false tempo / body / any | recall@1 offset>=8cm / tempo / body | body named | score unflawed / 10-15cm / tempo 30-50%");
     let pct = |v: &Value| {
         v["share"]
             .as_f64()
@@ -825,7 +868,7 @@ fn table(doc: &Value) -> String {
         let r = &l["recall_at_1"];
         let _ = writeln!(
             out,
-            "{:>8} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {}",
+            "{:>8} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} / {} | {} / {} / {} | {} | {} / {} / {}",
             l["input"].as_str().unwrap_or("-"),
             pct(&l["found"]),
             pct(&l["right_coach"]),
@@ -838,10 +881,12 @@ fn table(doc: &Value) -> String {
                 .map_or("-".into(), |m| format!("{:.1}%", m * 100.0)),
             pct(&l["backswing_covered"]),
             pct(&l["false_tempo"]),
+            pct(&l["false_body"]),
             pct(&l["false_advice"]),
             pct(&r["offset_8cm"]),
             pct(&r["tempo"]),
             pct(&r["body"]),
+            pct(&l["body_named"]["all"]),
             sc(&l["score"]["unflawed"]),
             sc(&l["score"]["offset_10_15cm"]),
             sc(&l["score"]["tempo_30_50pc"]),
