@@ -585,62 +585,59 @@ fn skeleton_lines(
     out.push_str("</g>");
 }
 
+/// The tempo chart: per phase its verdict, then both durations as bars. Narrow enough for a
+/// phone's width at its own scale, so its text keeps its size there.
 fn tempo(out: &mut String, n: usize, r: &Report) {
-    const WIDTH: f32 = 560.0;
-    const LABEL: f32 = 120.0;
-    const ROW: f32 = 40.0;
+    const WIDTH: f32 = 360.0;
+    const ROW: f32 = 54.0;
+    const LABEL: f32 = 84.0;
     let longest = r
         .tempo
         .iter()
         .map(|t| t.student_s.max(t.coach_s))
         .fold(1e-3, f32::max);
-    let height = ROW * r.tempo.len() as f32 + 30.0;
-    let scale = (WIDTH - LABEL - 220.0) / longest;
+    let height = ROW * r.tempo.len() as f32 + 40.0;
+    let scale = (WIDTH - LABEL - 8.0) / longest;
     let _ = writeln!(
         out,
         "<h3>Tempo</h3><svg id=\"tempo-{n}\" width=\"{WIDTH}\" height=\"{height}\" \
          viewBox=\"0 0 {WIDTH} {height}\">"
     );
     for (row, t) in r.tempo.iter().enumerate() {
-        let y = 10.0 + row as f32 * ROW;
+        let y = 4.0 + row as f32 * ROW;
         let _ = write!(
             out,
-            "<text x=\"4\" y=\"{:.1}\" font-size=\"13\">{}</text>",
-            y + 18.0,
-            capitalized(&t.phase.name().replace('_', " "))
+            "<text x=\"4\" y=\"{:.1}\" font-size=\"13\"><tspan font-weight=\"bold\">{}</tspan> \
+             {} (&#215;{:.2} &#177; {:.2})</text>",
+            y + 13.0,
+            capitalized(&t.phase.name().replace('_', " ")),
+            t.verdict.name(),
+            t.ratio,
+            t.ratio_uncertainty
         );
         for (k, (seconds, colour, who)) in
             [(t.student_s, STUDENT, "you"), (t.coach_s, COACH, "coach")]
                 .into_iter()
                 .enumerate()
         {
+            let top = y + 19.0 + k as f32 * 16.0;
             let _ = write!(
                 out,
-                "<rect class=\"bar\" x=\"{LABEL}\" y=\"{:.1}\" width=\"{:.1}\" height=\"13\" fill=\"{colour}\"/>\
-                 <text x=\"{:.1}\" y=\"{:.1}\" font-size=\"11\">{who} {seconds:.2} s</text>",
-                y + k as f32 * 15.0,
+                "<text x=\"4\" y=\"{:.1}\" font-size=\"12\">{who} {seconds:.2} s</text>\
+                 <rect class=\"bar\" x=\"{LABEL}\" y=\"{top:.1}\" width=\"{:.1}\" height=\"13\" fill=\"{colour}\"/>",
+                top + 11.0,
                 (seconds * scale).max(1.0),
-                LABEL + seconds * scale + 4.0,
-                y + k as f32 * 15.0 + 11.0
             );
         }
-        let _ = write!(
-            out,
-            "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"12\" font-weight=\"bold\">{} (&#215;{:.2} &#177; {:.2})</text>",
-            WIDTH - 130.0,
-            y + 18.0,
-            t.verdict.name(),
-            t.ratio,
-            t.ratio_uncertainty
-        );
     }
     let _ = writeln!(
         out,
-        "<text x=\"4\" y=\"{:.1}\" font-size=\"12\">backswing:downswing you {:.1}:1, coach {:.1}:1 \
-         (tour players about 3:1, putts about 2:1)</text></svg>",
-        height - 6.0,
+        "<text x=\"4\" y=\"{:.1}\" font-size=\"12\">backswing:downswing you {:.1}:1, coach {:.1}:1</text>\
+         <text x=\"4\" y=\"{:.1}\" font-size=\"12\">(tour players about 3:1, putts about 2:1)</text></svg>",
+        height - 22.0,
         r.student_tempo_ratio,
-        r.coach_tempo_ratio
+        r.coach_tempo_ratio,
+        height - 6.0,
     );
 }
 
