@@ -180,6 +180,72 @@ pub struct Metrics {
     pub wrist_hinge: Option<f32>,
 }
 
+/// One of the body metrics that can be measured alone ([`Body::value`]): the few advice
+/// speaks of (see [`crate::checks`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Measure {
+    /// The thorax's turn, degrees (the shoulders).
+    ThoraxTurn,
+    /// The pelvis's turn, degrees (the hips).
+    PelvisTurn,
+    /// The pelvis's sway toward the target, metres.
+    PelvisSway,
+    /// The pelvis's thrust toward the ball, metres.
+    PelvisThrust,
+    /// The head's lift, metres.
+    HeadLift,
+    /// The lead elbow's flexion, degrees.
+    LeadElbow,
+}
+
+impl Measure {
+    /// Every measure.
+    pub const ALL: [Measure; 6] = [
+        Measure::ThoraxTurn,
+        Measure::PelvisTurn,
+        Measure::PelvisSway,
+        Measure::PelvisThrust,
+        Measure::HeadLift,
+        Measure::LeadElbow,
+    ];
+
+    /// The snake_case name used in reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Measure::ThoraxTurn => "thorax_turn",
+            Measure::PelvisTurn => "pelvis_turn",
+            Measure::PelvisSway => "pelvis_sway",
+            Measure::PelvisThrust => "pelvis_thrust",
+            Measure::HeadLift => "head_lift",
+            Measure::LeadElbow => "lead_elbow",
+        }
+    }
+
+    /// Its value in `metrics`: degrees or metres ([`Measure::in_degrees`]); `None` for a head
+    /// the skeleton lacks.
+    pub fn of(self, metrics: &Metrics) -> Option<f32> {
+        Some(match self {
+            Measure::ThoraxTurn => metrics.thorax.turn,
+            Measure::PelvisTurn => metrics.pelvis.turn,
+            Measure::PelvisSway => metrics.pelvis_shift.sway,
+            Measure::PelvisThrust => metrics.pelvis_shift.thrust,
+            Measure::HeadLift => metrics.head_shift?.lift,
+            Measure::LeadElbow => metrics.lead_elbow,
+        })
+    }
+
+    /// Whether it is an angle (degrees) rather than a shift (metres).
+    pub const fn in_degrees(self) -> bool {
+        matches!(
+            self,
+            Measure::ThoraxTurn | Measure::PelvisTurn | Measure::LeadElbow
+        )
+    }
+}
+
 /// Why a skeleton's body metrics cannot be measured.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -272,7 +338,7 @@ impl Body {
                 lift: d.z,
             }
         };
-        let hips = |f: &[Vec3]| (f[self.hips[0]] + f[self.hips[1]]) * 0.5;
+        let hips = |f: &[Vec3]| self.between_hips(f);
         let local = |d: Vec3| stance.direction(d);
         let pelvis = angles(self.pelvis_axes(frame, local));
         let chest = self.thorax_axes(frame, local);
@@ -290,7 +356,7 @@ impl Body {
             thorax_shift: shift(&|f: &[Vec3]| self.chest(f)),
             head_shift: self.head.map(|k| shift(&|f: &[Vec3]| f[k])),
             lead_arm: across(chest, stance.direction(wrist - shoulder)),
-            lead_elbow: between(elbow - shoulder, wrist - elbow),
+            lead_elbow: self.lead_elbow(frame),
             shaft_lean: club.map(|(grip, head)| {
                 let shaft = stance.direction(grip - head);
                 degrees(libm::atan2f(shaft.x, shaft.z))
@@ -299,28 +365,77 @@ impl Body {
         })
     }
 
-    /// The joints its metrics are measured from, the club's aside, each once.
-    pub fn joints(&self) -> heapless::Vec<usize, 10> {
-        let mut out = heapless::Vec::new();
-        let all = [
-            Some(self.hips[0]),
-            Some(self.hips[1]),
-            Some(self.shoulders[0]),
-        ]
-        .into_iter()
-        .chain([
-            Some(self.shoulders[1]),
-            Some(self.pelvis),
-            self.spine,
-            self.thorax,
-        ])
-        .chain([self.head, Some(self.lead_arm[0]), Some(self.lead_arm[1])]);
-        for k in all.flatten() {
-            if !out.contains(&k) {
-                let _ = out.push(k);
-            }
+    /// `measure` of `frame` alone, shifts counted from `address`: what [`Body::measure`] gives
+    /// for it, to the bit, from only the joints [`Body::joints_of`] names; `None` where a
+    /// frame is shorter than the skeleton or a head is measured that the skeleton lacks.
+    pub fn value(
+        &self,
+        measure: Measure,
+        stance: &Stance,
+        address: &[Vec3],
+        frame: &[Vec3],
+    ) -> Option<f32> {
+        if address.len() < self.joints || frame.len() < self.joints {
+            return None;
         }
-        out
+        let local = |d: Vec3| stance.direction(d);
+        let hips = || local(self.between_hips(frame) - self.between_hips(address));
+        Some(match measure {
+            Measure::ThoraxTurn => turn(self.thorax_axes(frame, local)),
+            Measure::PelvisTurn => turn(self.pelvis_axes(frame, local)),
+            Measure::PelvisSway => hips().x,
+            Measure::PelvisThrust => hips().y,
+            Measure::HeadLift => self.head.map(|k| local(frame[k] - address[k]).z)?,
+            Measure::LeadElbow => self.lead_elbow(frame),
+        })
+    }
+
+    /// The joints `measure` is measured from: its value moves with these and no others.
+    pub fn joints_of(&self, measure: Measure) -> heapless::Vec<usize, 5> {
+        let [lead, trail] = self.shoulders;
+        let chest = match self.thorax {
+            Some(k) => [Some(k), None],
+            None => [Some(lead), Some(trail)],
+        };
+        let joints: [Option<usize>; 5] = match measure {
+            Measure::ThoraxTurn => [
+                Some(lead),
+                Some(trail),
+                self.thorax,
+                Some(self.spine.unwrap_or(self.pelvis)),
+                None,
+            ],
+            Measure::PelvisTurn => [
+                Some(self.hips[0]),
+                Some(self.hips[1]),
+                Some(self.pelvis),
+                chest[0],
+                chest[1],
+            ],
+            Measure::PelvisSway | Measure::PelvisThrust => {
+                [Some(self.hips[0]), Some(self.hips[1]), None, None, None]
+            }
+            Measure::HeadLift => [self.head, None, None, None, None],
+            Measure::LeadElbow => [
+                Some(lead),
+                Some(self.lead_arm[0]),
+                Some(self.lead_arm[1]),
+                None,
+                None,
+            ],
+        };
+        joints.into_iter().flatten().collect()
+    }
+
+    /// The point between the hips (`frame` long enough).
+    fn between_hips(&self, frame: &[Vec3]) -> Vec3 {
+        (frame[self.hips[0]] + frame[self.hips[1]]) * 0.5
+    }
+
+    /// The lead elbow's flexion (`frame` long enough), degrees.
+    fn lead_elbow(&self, frame: &[Vec3]) -> f32 {
+        let [elbow, wrist] = self.lead_arm.map(|k| frame[k]);
+        between(elbow - frame[self.shoulders[0]], wrist - elbow)
     }
 
     /// The thorax's point: its joint, else between the shoulders (`frame` long enough).
@@ -603,10 +718,15 @@ fn axes(lateral: Vec3, long: Vec3) -> [Vec3; 3] {
 /// long one by the side bend.
 fn angles([l, u, f]: [Vec3; 3]) -> Angles {
     Angles {
-        turn: degrees(libm::atan2f(-f.x, f.y)),
+        turn: turn([l, u, f]),
         bend: degrees(libm::atan2f(-f.z, libm::hypotf(f.x, f.y))),
         side_bend: degrees(libm::atan2f(l.z, u.z)),
     }
+}
+
+/// The turn of a segment with these [`axes`] (see [`angles`]).
+fn turn([_, _, f]: [Vec3; 3]) -> f32 {
+    degrees(libm::atan2f(-f.x, f.y))
 }
 
 /// The direction of `v` in the transverse plane of a segment with these [`axes`], from its
@@ -884,6 +1004,36 @@ mod tests {
                 proptest::prop_assert!(close(got.turn, want.turn, 0.05), "{got:?} {want:?}");
                 proptest::prop_assert!(close(got.bend, want.bend, 0.05), "{got:?} {want:?}");
                 proptest::prop_assert!(close(got.side_bend, want.side_bend, 0.05), "{got:?} {want:?}");
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(if cfg!(miri) { 1 } else { 256 }))]
+        /// A measure alone is the full measurement's, to the bit, and moves with the joints
+        /// it names and no others.
+        #[test]
+        fn a_measure_alone_is_the_metrics_own_from_its_own_joints(
+            pelvis in segment(), thorax in segment(), heading in -180.0f32..180.0,
+            lead_left in proptest::bool::ANY, joint in 0usize..24, step in 0.01f32..0.1,
+        ) {
+            let lead = if lead_left { Side::Left } else { Side::Right };
+            let skeleton = Skeleton::standard(Format::GolfMarkers).unwrap();
+            let n = skeleton.len();
+            let by = Vec3::new(1.5, 0.0, -2.0);
+            let place = |p: &Posed| pose(&skeleton, lead, p).map(|v| world(v, heading, false, by));
+            let (address, mut frame) = (place(&ADDRESS), place(&Posed { pelvis, thorax, ..TOP }));
+            let stance = Stance::new(&skeleton, &address[..n], lead);
+            let body = Body::new(&skeleton, lead).unwrap();
+            let metrics = body.measure(&stance, &address[..n], &frame[..n]).unwrap();
+            let k = joint % n;
+            let before = Measure::ALL.map(|m| body.value(m, &stance, &address[..n], &frame[..n]));
+            frame[k] += stance.toward_target() * step + stance.toward_ball() * (0.7 * step)
+                + Vec3::y() * (1.3 * step);
+            for (m, was) in Measure::ALL.into_iter().zip(before) {
+                proptest::prop_assert_eq!(was, m.of(&metrics), "{:?}", m);
+                let now = body.value(m, &stance, &address[..n], &frame[..n]);
+                proptest::prop_assert_eq!(now != was, body.joints_of(m).contains(&k), "{:?} {}", m, k);
             }
         }
     }

@@ -20,7 +20,7 @@
 //! position and at address (`√2`), and how much the coach's change moves within the event's
 //! timing uncertainty.
 
-use crate::body::Metrics;
+use crate::body::{Measure, Metrics};
 use crate::events::Position;
 
 /// Most a turn may differ from the coach's before it is advice, degrees.
@@ -30,60 +30,7 @@ pub const ELBOW_TOLERANCE_DEG: f32 = 15.0;
 /// Most a shift may differ from the coach's before it is advice, metres.
 pub const SHIFT_TOLERANCE_M: f32 = 0.05;
 
-/// A body metric advice can name (see [`crate::body`] for the definitions).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[derive(serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Measure {
-    /// The thorax's turn, degrees (the shoulders).
-    ThoraxTurn,
-    /// The pelvis's turn, degrees (the hips).
-    PelvisTurn,
-    /// The pelvis's sway toward the target, metres.
-    PelvisSway,
-    /// The pelvis's thrust toward the ball, metres.
-    PelvisThrust,
-    /// The head's lift, metres.
-    HeadLift,
-    /// The lead elbow's flexion, degrees.
-    LeadElbow,
-}
-
 impl Measure {
-    /// The snake_case name used in reports.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Measure::ThoraxTurn => "thorax_turn",
-            Measure::PelvisTurn => "pelvis_turn",
-            Measure::PelvisSway => "pelvis_sway",
-            Measure::PelvisThrust => "pelvis_thrust",
-            Measure::HeadLift => "head_lift",
-            Measure::LeadElbow => "lead_elbow",
-        }
-    }
-
-    /// Its value in `metrics`: degrees or metres ([`Measure::in_degrees`]); `None` for a head
-    /// the skeleton lacks.
-    pub fn of(self, metrics: &Metrics) -> Option<f32> {
-        Some(match self {
-            Measure::ThoraxTurn => metrics.thorax.turn,
-            Measure::PelvisTurn => metrics.pelvis.turn,
-            Measure::PelvisSway => metrics.pelvis_shift.sway,
-            Measure::PelvisThrust => metrics.pelvis_shift.thrust,
-            Measure::HeadLift => metrics.head_shift?.lift,
-            Measure::LeadElbow => metrics.lead_elbow,
-        })
-    }
-
-    /// Whether it is an angle (degrees) rather than a shift (metres).
-    pub const fn in_degrees(self) -> bool {
-        matches!(
-            self,
-            Measure::ThoraxTurn | Measure::PelvisTurn | Measure::LeadElbow
-        )
-    }
-
     /// How far the student's change may differ from the coach's before it is advice, in its
     /// unit.
     pub const fn tolerance(self) -> f32 {

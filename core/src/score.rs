@@ -26,8 +26,8 @@
 //! - **Stance frame** ([`Stance`]): each swing in its own, so a pelvis that moves toward the
 //!   ball is reported as the pelvis moving.
 
-use crate::body::{Body, Stance};
-use crate::checks::{BodyDeviation, Measure, CHECKS};
+use crate::body::{Body, Measure, Stance};
+use crate::checks::{BodyDeviation, CHECKS};
 use crate::config::{DEVIATIONS_PER_EVENT, MAX_DEVIATIONS, MAX_JOINTS, MAX_SWING_FRAMES};
 use crate::dtw::{self, Band, DtwError, Sequence, Window};
 use crate::events::{self, Event, EventError, Position, Side, SwingEvents};
@@ -1136,9 +1136,10 @@ impl Swing<'_> {
 
 /// The body checks ([`CHECKS`], see [`crate::checks`]) of `student` against `coach`: the
 /// coach's frame matching a student's frame is `coach_frame`'s, a joint the stream was unsure
-/// of near a frame is `unsure` there (no check is made at a position where one the metrics
-/// need is), the input's noise per stance axis is `noise`, each event's timing uncertainty in
-/// coach frames `timing`. None for a skeleton that lacks a joint the metrics need.
+/// of near a frame is `unsure` there (a check is not made at a position where a joint it is
+/// measured from is), the input's noise per stance axis is `noise`, each event's timing
+/// uncertainty in coach frames `timing`. None for a skeleton that lacks a joint the metrics
+/// need.
 fn body_checks(
     skeleton: &Skeleton,
     student: &Swing<'_>,
@@ -1162,98 +1163,73 @@ fn body_checks(
     ) else {
         return out;
     };
-    let [mut address_s, mut address_c, mut at_s, mut at_c] = [[Vec3::zeros(); MAX_JOINTS]; 4];
+    let [mut address_s, mut address_c, mut at_s, mut at_c, mut later, mut earlier] =
+        [[Vec3::zeros(); MAX_JOINTS]; 6];
     student.pose(joints, from_s, &mut address_s);
     coach.pose(joints, from_c, &mut address_c);
     let (address_s, address_c) = (&address_s[..joints], &address_c[..joints]);
-    let measure_s = |pose: &[Vec3]| body_s.measure(student.stance, address_s, pose);
-    let measure_c = |pose: &[Vec3]| body_c.measure(coach.stance, address_c, pose);
-    let (Some(zero_s), Some(zero_c)) = (measure_s(address_s), measure_c(address_c)) else {
-        return out;
-    };
     let axes = [
         student.stance.toward_target(),
         student.stance.toward_ball(),
         Vec3::y(),
     ];
-    let needed = body_s.joints();
-    // The checks of each position together: they share its poses.
-    let mut rest = &CHECKS[..];
-    while let Some(first) = rest.first() {
-        let position: Position = first.position;
-        let run = rest.iter().take_while(|c| c.position == position).count();
-        let (checks, later) = rest.split_at(run);
-        rest = later;
-        let Some(event) = position.event() else {
+    let mut at: Option<Position> = None;
+    for check in CHECKS {
+        let Some(event) = check.position.event() else {
             continue;
         };
         let Some(x) = student.events.time(event) else {
             continue;
         };
         let c = coach_frame(x);
-        student.pose(joints, x, &mut at_s);
-        coach.pose(joints, c, &mut at_c);
-        let (Some(here_s), Some(here_c)) = (measure_s(&at_s[..joints]), measure_c(&at_c[..joints]))
-        else {
+        // Each position's poses once: the student's, the coach's and the coach's within the
+        // event's timing uncertainty.
+        let h = timing[event as usize].max(0.5);
+        if at != Some(check.position) {
+            at = Some(check.position);
+            student.pose(joints, x, &mut at_s);
+            coach.pose(joints, c, &mut at_c);
+            coach.pose(joints, c + h, &mut later);
+            coach.pose(joints, c - h, &mut earlier);
+        }
+        let measure = check.measure;
+        let value_s = |pose: &[Vec3]| body_s.value(measure, student.stance, address_s, pose);
+        let value_c = |pose: &[Vec3]| body_c.value(measure, coach.stance, address_c, pose);
+        let (Some(zero_s), Some(here_s), Some(zero_c), Some(here_c)) = (
+            value_s(address_s),
+            value_s(&at_s[..joints]),
+            value_c(address_c),
+            value_c(&at_c[..joints]),
+        ) else {
             continue;
         };
-        // Each joint moved by the noise along each axis: how far each change moves. A check
-        // that moves with a joint the stream was unsure of is not made.
-        let mut variance = [0.0f32; CHECKS.len()];
-        let mut unmade = [false; CHECKS.len()];
-        for &k in &needed {
-            let doubt = unsure(k, x);
+        let moved_by = body_s.joints_of(measure);
+        if moved_by.iter().any(|&k| unsure(k, x)) {
+            continue;
+        }
+        // Each joint it is measured from moved by the noise along each axis.
+        let mut variance = 0.0f32;
+        for &k in &moved_by {
             for (axis, direction) in axes.iter().enumerate() {
-                let sigma = noise[axis].max(LEAST_NOISE_M);
                 let kept = at_s[k];
-                at_s[k] = kept + direction * sigma;
-                let moved = measure_s(&at_s[..joints]);
+                at_s[k] = kept + direction * noise[axis].max(LEAST_NOISE_M);
+                let moved = value_s(&at_s[..joints]);
                 at_s[k] = kept;
-                for ((check, v), unmade) in checks.iter().zip(&mut variance).zip(&mut unmade) {
-                    let (Some(a), Some(b)) = (
-                        check.change(&zero_s, &here_s),
-                        moved.and_then(|m| check.change(&zero_s, &m)),
-                    ) else {
-                        continue;
-                    };
-                    *v += (b - a) * (b - a);
-                    *unmade |= doubt && b != a;
-                }
+                let d = moved.map_or(0.0, |m| m - here_s);
+                variance += d * d;
             }
         }
         // The coach's change within the event's timing uncertainty.
-        let h = timing[event as usize].max(0.5);
-        let mut around = [Vec3::zeros(); MAX_JOINTS];
-        coach.pose(joints, c + h, &mut around);
-        let later = measure_c(&around[..joints]);
-        coach.pose(joints, c - h, &mut around);
-        let earlier = measure_c(&around[..joints]);
-        for ((check, v), _) in checks
-            .iter()
-            .zip(variance)
-            .zip(unmade)
-            .filter(|(_, unmade)| !unmade)
-        {
-            let (Some(s), Some(k)) = (
-                check.change(&zero_s, &here_s),
-                check.change(&zero_c, &here_c),
-            ) else {
-                continue;
-            };
-            let along = match (later, earlier) {
-                (Some(l), Some(e)) => {
-                    0.5 * (check.change(&zero_c, &l).unwrap_or(k)
-                        - check.change(&zero_c, &e).unwrap_or(k))
-                }
-                _ => 0.0,
-            };
-            let _ = out.push(BodyDeviation {
-                check: *check,
-                student: s,
-                coach: k,
-                uncertainty: libm::sqrtf(2.0 * v + along * along),
-            });
-        }
+        let along = match (value_c(&later[..joints]), value_c(&earlier[..joints])) {
+            (Some(l), Some(e)) => 0.5 * (l - e),
+            _ => 0.0,
+        };
+        let _ = out.push(BodyDeviation {
+            check,
+            student: here_s - zero_s,
+            coach: here_c - zero_c,
+            uncertainty: libm::sqrtf(2.0 * variance + along * along),
+        });
     }
     out
 }

@@ -733,7 +733,7 @@ mod tests {
 
     #[test]
     fn body_flaws_are_true_of_the_checks_that_name_them() {
-        use posecoach_core::checks::Measure;
+        use posecoach_core::body::Measure;
         use posecoach_core::events::Position;
         let (swing, t, lead) = clean();
         let body_truths = |body, size| -> Vec<(Position, Measure, bool)> {
