@@ -21,7 +21,7 @@
 //! - **body named**: of the swings whose flaw moves a body check past its tolerance (see
 //!   [`flaws::Truth::Body`]), the share whose advice, at any rank, has a body item stating one;
 //! - **score** of unflawed swings, and its fall for a flaw of a given size;
-//! - **body metrics**: each of [`KEY_METRICS`] at every P-position of the swing the device scored,
+//! - **body metrics**: each of [`KEY_METRICS`] and [`MORE_METRICS`] at every P-position of the swing the device scored,
 //!   against the same metric of the planted swing before filming (on the same body, at its own
 //!   P-positions): the error a golfer reading the report's body table sees, pose noise, event
 //!   timing and the device's skeleton together.
@@ -32,7 +32,7 @@ pub mod flaws;
 use crate::coaches;
 use crate::phone::{self, Camera, PhoneNoise};
 use crate::progress::Progress;
-use crate::score::KEY_METRICS;
+use crate::score::{KeyMetric, KEY_METRICS};
 use crate::synth::{self, lay_out, Placed, Timeline};
 use crate::synth_imu::{self, ImuNoise};
 use anyhow::{bail, Context, Result};
@@ -173,8 +173,9 @@ struct Outcome1 {
     /// The planted truths.
     truths: Vec<Truth>,
     score: Option<f32>,
-    /// Per P-position both tables have, each of [`KEY_METRICS`] measured less true.
-    body_errors: Vec<[f32; KEY_METRICS.len()]>,
+    /// Per P-position both tables have, each of [`measured_metrics`] measured less true (NaN
+    /// where a skeleton has no head).
+    body_errors: Vec<Vec<f32>>,
     error: Option<String>,
 }
 
@@ -487,7 +488,11 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
         .iter()
         .zip(&truth_table)
         .filter_map(|(m, t)| Some((m.as_ref()?, t.as_ref()?)))
-        .map(|(m, t)| KEY_METRICS.map(|(_, _, value)| value(m) - value(t)))
+        .map(|(m, t)| {
+            measured_metrics()
+                .map(|(_, _, value)| value(m) - value(t))
+                .collect()
+        })
         .collect();
     outcome.found = true;
     let measured = |e: Event| {
@@ -815,8 +820,8 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
             "body": recall(&|c, _| family(&c.flaws) == "body"),
             "combined": recall(&|c, _| family(&c.flaws) == "combined"),
         },
-        "body_error": KEY_METRICS.iter().enumerate().map(|(i, (name, unit, _))| {
-            let errors: Vec<f32> = found.iter().flat_map(|(_, o)| o.body_errors.iter().map(move |e| e[i])).collect();
+        "body_error": measured_metrics().enumerate().map(|(i, (name, unit, _))| {
+            let errors: Vec<f32> = found.iter().flat_map(|(_, o)| o.body_errors.iter().map(move |e| e[i])).filter(|e| e.is_finite()).collect();
             ((*name).to_string(), json!({"unit": unit, "error": quantiles(&errors)}))
         }).collect::<serde_json::Map<_, _>>(),
         "score": {
@@ -892,29 +897,59 @@ fn table(doc: &Value) -> String {
             sc(&l["score"]["tempo_30_50pc"]),
         );
     }
-    let _ = writeln!(
-        out,
-        "body metric error at P1-P10, median / p95 ({}):",
-        KEY_METRICS
-            .map(|(name, unit, _)| format!("{name} {unit}"))
-            .join(", ")
-    );
-    for l in doc["levels"].as_array().into_iter().flatten() {
-        let cells: Vec<String> = KEY_METRICS
-            .iter()
-            .map(|(name, _, _)| {
-                let e = &l["body_error"][name]["error"];
-                e["median"].as_f64().map_or("-".into(), |m| {
-                    format!("{m:.1} / {:.1}", e["p95"].as_f64().unwrap_or(f64::NAN))
-                })
-            })
-            .collect();
+    for metrics in [&KEY_METRICS[..], &MORE_METRICS[..]] {
         let _ = writeln!(
             out,
-            "{:>8} | {}",
-            l["input"].as_str().unwrap_or("-"),
-            cells.join(" | ")
+            "body metric error at P1-P10, median / p95 ({}):",
+            metrics
+                .iter()
+                .map(|(name, unit, _)| format!("{name} {unit}"))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
+        for l in doc["levels"].as_array().into_iter().flatten() {
+            let cells: Vec<String> = metrics
+                .iter()
+                .map(|(name, _, _)| {
+                    let e = &l["body_error"][name]["error"];
+                    e["median"].as_f64().map_or("-".into(), |m| {
+                        format!("{m:.1} / {:.1}", e["p95"].as_f64().unwrap_or(f64::NAN))
+                    })
+                })
+                .collect();
+            let _ = writeln!(
+                out,
+                "{:>8} | {}",
+                l["input"].as_str().unwrap_or("-"),
+                cells.join(" | ")
+            );
+        }
     }
     out
+}
+
+/// The body metrics the benchmark measures besides [`KEY_METRICS`]: every other one the device
+/// can measure (it tracks no club, so no shaft lean or wrist hinge). A head's shifts are NaN
+/// where the skeleton has no head.
+pub const MORE_METRICS: [KeyMetric; 9] = [
+    ("pelvis_bend", "deg", |m| m.pelvis.bend),
+    ("pelvis_side_bend", "deg", |m| m.pelvis.side_bend),
+    ("thorax_sway", "cm", |m| m.thorax_shift.sway * 100.0),
+    ("thorax_thrust", "cm", |m| m.thorax_shift.thrust * 100.0),
+    ("thorax_lift", "cm", |m| m.thorax_shift.lift * 100.0),
+    ("head_sway", "cm", |m| {
+        m.head_shift.map_or(f32::NAN, |s| s.sway * 100.0)
+    }),
+    ("head_thrust", "cm", |m| {
+        m.head_shift.map_or(f32::NAN, |s| s.thrust * 100.0)
+    }),
+    ("head_lift", "cm", |m| {
+        m.head_shift.map_or(f32::NAN, |s| s.lift * 100.0)
+    }),
+    ("lead_arm", "deg", |m| m.lead_arm),
+];
+
+/// Every body metric the benchmark measures the error of.
+fn measured_metrics() -> impl Iterator<Item = &'static KeyMetric> {
+    KEY_METRICS.iter().chain(&MORE_METRICS)
 }
