@@ -173,7 +173,7 @@ mod tests {
             Some(LogError::WireVersion(9))
         );
         assert_eq!(
-            LogReader::new(b"PCLOG\x01\x02\x80").err(),
+            LogReader::new(&[b'P', b'C', b'L', b'O', b'G', 1, wire::VERSION, 0x80]).err(),
             Some(LogError::Flags(0x80))
         );
     }

@@ -34,7 +34,7 @@ use crate::events::{self, Event, EventError, Position, Side, SwingEvents};
 use crate::joint::Joint;
 use crate::math::norm;
 use crate::skeleton::Skeleton;
-use crate::wire::{SwingReport, WireDeviation};
+use crate::wire::{SwingReport, WireCheck, WireDeviation};
 use crate::Vec3;
 use heapless::Vec as HVec;
 
@@ -360,10 +360,11 @@ pub struct Report {
 impl Report {
     /// The wire form of swing number `swing`'s report, scored against coach reference `coach`:
     /// durations in milliseconds saturate at 65.534 s, offsets at ±32.767 m (uncertainties at
-    /// 65.535 m), the score is rounded to hundredths.
+    /// 65.535 m), the score is rounded to hundredths, body checks go in tenths of a degree or
+    /// millimetres (saturating likewise).
     pub fn to_wire(&self, swing: u32, coach: u16) -> SwingReport {
         let frames = |events: &SwingEvents| {
-            Event::ALL.map(|e| events.frame(e).map_or(u16::MAX, |f| f as u16))
+            Position::ALL.map(|p| events.frame(p).map_or(u16::MAX, |f| f as u16))
         };
         let ms = |s: f32| libm::roundf(s * 1000.0).clamp(0.0, f32::from(u16::MAX - 1)) as u16;
         let mm = |m: f32| libm::roundf(m * 1000.0).clamp(-32767.0, 32767.0) as i16;
@@ -371,8 +372,8 @@ impl Report {
             swing,
             coach,
             score_centi: libm::roundf(self.score * 100.0).clamp(0.0, 10000.0) as u16,
-            student_events: frames(&self.student_events),
-            coach_events: frames(&self.coach_events),
+            student_positions: frames(&self.student_events),
+            coach_positions: frames(&self.coach_events),
             phases_ms: self.tempo.map(|t| [ms(t.student_s), ms(t.coach_s)]),
             verdicts: self.tempo.map(|t| t.verdict as u8),
             deviations: self
@@ -385,6 +386,26 @@ impl Report {
                     offset_mm: d.offset_m.map(mm),
                     uncertainty_mm: libm::roundf(d.uncertainty_m * 1000.0)
                         .clamp(0.0, f32::from(u16::MAX)) as u16,
+                })
+                .collect(),
+            checks: self
+                .body
+                .iter()
+                .filter_map(|b| {
+                    let scale = if b.check.measure.in_degrees() {
+                        10.0
+                    } else {
+                        1000.0
+                    };
+                    let wide = |v: f32| libm::roundf(v * scale).clamp(-32767.0, 32767.0) as i16;
+                    Some(WireCheck {
+                        check: CHECKS.iter().position(|c| *c == b.check)? as u8,
+                        student: wide(b.student),
+                        coach: wide(b.coach),
+                        uncertainty: libm::roundf(b.uncertainty * scale)
+                            .clamp(0.0, f32::from(u16::MAX))
+                            as u16,
+                    })
                 })
                 .collect(),
         }

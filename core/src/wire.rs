@@ -9,8 +9,9 @@
 //! The CRC is CRC-32/ISO-HDLC (the zlib/Ethernet CRC) over the version byte and the postcard
 //! bytes. A frame is at most [`MAX_FRAME`] bytes, delimiter included. [`Decoder`] takes bytes
 //! one at a time or in chunks into a fixed buffer, hands back each good message, and after any
-//! damage (bad COBS, bad CRC, unknown version, undecodable message, overlong frame) drops
-//! bytes up to the next `0x00` and counts what went wrong in [`Counters`]. Nothing panics and
+//! damage (bad COBS, bad CRC, another version, undecodable message, overlong frame) drops
+//! bytes up to the next `0x00` and counts what went wrong in [`Counters`]; a frame of another
+//! protocol version is owed a [`NackReason::Version`] ([`Decoder::reply`]). Nothing panics and
 //! nothing allocates.
 //!
 //! ```
@@ -29,6 +30,7 @@
 //! assert_eq!(decoder.counters().frames_ok, 1);
 //! ```
 
+use crate::checks::CHECKS;
 use crate::config::MAX_DEVIATIONS;
 use crate::dtw::Band;
 use crate::format::Format;
@@ -37,9 +39,9 @@ use heapless::Vec as HVec;
 use serde::{Deserialize, Serialize};
 
 /// Protocol version carried in every frame.
-pub const VERSION: u8 = 2;
+pub const VERSION: u8 = 3;
 /// Largest frame on the wire, delimiter included.
-pub const MAX_FRAME: usize = 512;
+pub const MAX_FRAME: usize = 640;
 /// Most joints a pose frame or profile carries (BlazePose's 33 landmarks fit).
 pub const MAX_WIRE_JOINTS: usize = 33;
 /// Most IMUs a [`SensorLayout`] places.
@@ -128,8 +130,10 @@ pub struct Counters {
     pub frames_ok: u32,
     /// Frames whose CRC did not match.
     pub crc_errors: u32,
-    /// Frames with bad COBS, an unknown version or an undecodable message.
+    /// Frames with bad COBS or an undecodable message.
     pub malformed: u32,
+    /// Frames of another protocol version (each answered with a `Nack`).
+    pub versions: u32,
     /// Frames longer than [`MAX_FRAME`], dropped.
     pub overflows: u32,
     /// Messages or samples dropped for lack of room downstream.
@@ -152,6 +156,22 @@ pub struct WireDeviation {
     pub uncertainty_mm: u16,
 }
 
+/// One body check ([`crate::checks::CHECKS`]) in a compact form: the student's and the
+/// coach's change since address and its uncertainty, in tenths of a degree for an angle and in
+/// millimetres for a shift.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WireCheck {
+    /// Its index in `CHECKS`.
+    pub check: u8,
+    /// The student's change.
+    pub student: i16,
+    /// The coach's change.
+    pub coach: i16,
+    /// The difference's uncertainty (one standard deviation).
+    pub uncertainty: u16,
+}
+
 /// A swing's report, small enough for one frame (the frame correspondence stays on the device).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -162,10 +182,11 @@ pub struct SwingReport {
     pub coach: u16,
     /// Score in hundredths (0..=10000).
     pub score_centi: u16,
-    /// Student's event frames at the model rate (`u16::MAX` where a putt has none).
-    pub student_events: [u16; 8],
-    /// Coach's event frames.
-    pub coach_events: [u16; 8],
+    /// Student's frames of P1 to P10 at the model rate (`u16::MAX` where a swing has none: a
+    /// putt has P1, P4, P7 and P10).
+    pub student_positions: [u16; 10],
+    /// Coach's frames of P1 to P10.
+    pub coach_positions: [u16; 10],
     /// Student and coach durations of backswing, downswing, follow-through, milliseconds.
     pub phases_ms: [[u16; 2]; 3],
     /// Each phase's tempo verdict: 0 ok, 1 slow, 2 fast (given only where the ratio is clear
@@ -173,6 +194,8 @@ pub struct SwingReport {
     pub verdicts: [u8; 3],
     /// The deviations, largest per event first.
     pub deviations: HVec<WireDeviation, MAX_DEVIATIONS>,
+    /// The body checks both swings could be measured at, in `CHECKS` order.
+    pub checks: HVec<WireCheck, { CHECKS.len() }>,
 }
 
 /// Why a message was refused.
@@ -185,6 +208,9 @@ pub enum NackReason {
     Invalid,
     /// No room to take it now.
     Busy,
+    /// The frame is of another protocol version than the device's ([`VERSION`], the first
+    /// byte of every frame it sends).
+    Version,
 }
 
 /// Every message of protocol version [`VERSION`].
@@ -265,6 +291,8 @@ pub struct Decoder {
     /// Skipping to the next delimiter after an overflow.
     skipping: bool,
     counters: Counters,
+    /// A frame of another version came since [`Decoder::reply`] was last asked.
+    owed: bool,
 }
 
 impl Default for Decoder {
@@ -280,10 +308,12 @@ impl Decoder {
             buffer: [0; MAX_FRAME],
             len: 0,
             skipping: false,
+            owed: false,
             counters: Counters {
                 frames_ok: 0,
                 crc_errors: 0,
                 malformed: 0,
+                versions: 0,
                 overflows: 0,
                 drops: 0,
             },
@@ -329,7 +359,22 @@ impl Decoder {
                 self.counters.malformed += 1;
                 None
             }
+            Err(FrameFault::Version) => {
+                self.counters.versions += 1;
+                self.owed = true;
+                None
+            }
         }
+    }
+
+    /// What a device owes its peer for the frames refused since it last asked: one `Nack` (seq
+    /// 0, [`NackReason::Version`]) however many frames of another protocol version came, so
+    /// that a phone speaking another version learns why nothing it sends is taken.
+    pub fn reply(&mut self) -> Option<Message> {
+        core::mem::take(&mut self.owed).then_some(Message::Nack {
+            seq: 0,
+            reason: NackReason::Version,
+        })
     }
 
     /// Takes a chunk of bytes and calls `on_message` for each good frame in it.
@@ -354,7 +399,7 @@ impl Decoder {
             return Err(FrameFault::Crc);
         }
         if body[0] != VERSION {
-            return Err(FrameFault::Malformed);
+            return Err(FrameFault::Version);
         }
         postcard::from_bytes(&body[1..]).map_err(|_| FrameFault::Malformed)
     }
@@ -363,6 +408,7 @@ impl Decoder {
 enum FrameFault {
     Crc,
     Malformed,
+    Version,
 }
 
 #[cfg(test)]
@@ -439,9 +485,13 @@ mod tests {
             ),
             (
                 (any::<u32>(), any::<u16>(), any::<u16>()),
-                any::<[u16; 8]>(),
-                any::<[u16; 8]>(),
+                any::<[u16; 10]>(),
+                any::<[u16; 10]>(),
                 (any::<[[u16; 2]; 3]>(), any::<[u8; 3]>()),
+                prop::collection::vec(
+                    (any::<u8>(), any::<i16>(), any::<i16>(), any::<u16>()),
+                    0..=CHECKS.len()
+                ),
                 prop::collection::vec(
                     (
                         any::<u8>(),
@@ -456,17 +506,27 @@ mod tests {
                 .prop_map(
                     |(
                         (swing, coach, score_centi),
-                        student_events,
-                        coach_events,
+                        student_positions,
+                        coach_positions,
                         (phases_ms, verdicts),
+                        checks,
                         d,
                     )| {
                         Message::SwingReport(SwingReport {
                             swing,
                             coach,
                             score_centi,
-                            student_events,
-                            coach_events,
+                            student_positions,
+                            coach_positions,
+                            checks: checks
+                                .into_iter()
+                                .map(|(check, student, coach, uncertainty)| WireCheck {
+                                    check,
+                                    student,
+                                    coach,
+                                    uncertainty,
+                                })
+                                .collect(),
                             phases_ms,
                             verdicts,
                             deviations: d
@@ -489,24 +549,29 @@ mod tests {
                 any::<u32>(),
                 any::<u32>(),
                 any::<u32>(),
+                any::<u32>(),
                 any::<u32>()
             )
-                .prop_map(|(frames_ok, crc_errors, malformed, overflows, drops)| {
-                    Message::Status(Counters {
-                        frames_ok,
-                        crc_errors,
-                        malformed,
-                        overflows,
-                        drops,
-                    })
-                }),
+                .prop_map(
+                    |(frames_ok, crc_errors, malformed, versions, overflows, drops)| {
+                        Message::Status(Counters {
+                            frames_ok,
+                            crc_errors,
+                            malformed,
+                            versions,
+                            overflows,
+                            drops,
+                        })
+                    }
+                ),
             any::<u32>().prop_map(|seq| Message::Ack { seq }),
             (
                 any::<u32>(),
                 prop::sample::select(vec![
                     NackReason::Unexpected,
                     NackReason::Invalid,
-                    NackReason::Busy
+                    NackReason::Busy,
+                    NackReason::Version
                 ])
             )
                 .prop_map(|(seq, reason)| Message::Nack { seq, reason }),
@@ -568,6 +633,44 @@ mod tests {
     }
 
     #[test]
+    fn a_frame_of_another_version_is_counted_and_owed_one_nack() {
+        let mut old = frame(&Message::CoachSelect { coach: 3 });
+        // The frame of version 2: its version byte and CRC rewritten, COBS again.
+        let mut payload = [0u8; MAX_FRAME];
+        let n = cobs::decode(&old[..old.len() - 1], &mut payload)
+            .unwrap()
+            .frame_size();
+        payload[0] = 2;
+        let crc = CRC.checksum(&payload[..n - 4]).to_le_bytes();
+        payload[n - 4..n].copy_from_slice(&crc);
+        let mut out = [0u8; MAX_FRAME];
+        let m = cobs::encode(&payload[..n], &mut out);
+        old = out[..m].to_vec();
+        old.push(0);
+        let mut stream = old.clone();
+        stream.extend(&old);
+        stream.extend(frame(&Message::CoachSelect { coach: 4 }));
+        let mut decoder = Decoder::new();
+        let mut got = Vec::new();
+        decoder.push_all(&stream, |m| got.push(m));
+        assert_eq!(got, [Message::CoachSelect { coach: 4 }]);
+        let counters = decoder.counters();
+        assert_eq!(
+            (counters.versions, counters.malformed, counters.crc_errors),
+            (2, 0, 0)
+        );
+        // Two old frames, one Nack; none owed after it.
+        assert_eq!(
+            decoder.reply(),
+            Some(Message::Nack {
+                seq: 0,
+                reason: NackReason::Version
+            })
+        );
+        assert_eq!(decoder.reply(), None);
+    }
+
+    #[test]
     fn an_overlong_frame_is_dropped_and_the_next_one_read() {
         let mut stream = std::vec![0x55u8; 3 * MAX_FRAME];
         stream.push(0);
@@ -594,10 +697,20 @@ mod tests {
                 swing: u32::MAX,
                 coach: u16::MAX,
                 score_centi: u16::MAX,
-                student_events: [u16::MAX; 8],
-                coach_events: [u16::MAX; 8],
+                student_positions: [u16::MAX; 10],
+                coach_positions: [u16::MAX; 10],
                 phases_ms: [[u16::MAX; 2]; 3],
                 verdicts: [u8::MAX; 3],
+                checks: core::iter::repeat_n(
+                    WireCheck {
+                        check: 255,
+                        student: i16::MIN,
+                        coach: i16::MIN,
+                        uncertainty: u16::MAX,
+                    },
+                    CHECKS.len(),
+                )
+                .collect(),
                 deviations: core::iter::repeat_n(
                     WireDeviation {
                         event: 255,

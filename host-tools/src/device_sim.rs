@@ -172,6 +172,11 @@ fn serve<L: Read + Write>(
             };
             let mut messages = Vec::new();
             decoder.push_all(&buf[..n], |m| messages.push(m));
+            // Frames of another protocol version are told so, once per read.
+            if let Some(nack) = decoder.reply() {
+                totals.refused += 1;
+                unsent.extend(frame(&nack));
+            }
             for message in &messages {
                 session.handle(message, |outcome| {
                     match &outcome {

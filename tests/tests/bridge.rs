@@ -8,7 +8,8 @@ use posecoach_adapters::log::LogReader;
 use posecoach_cli::bridge::{serve, Counters};
 use posecoach_cli::device_sim::{self, simulate, Totals};
 use posecoach_cli::replay::replay;
-use posecoach_core::events::Event;
+use posecoach_core::checks::CHECKS;
+use posecoach_core::events::{Event, Position};
 use posecoach_core::joint::Joint;
 use posecoach_core::wire::Message;
 use serde_json::Value;
@@ -257,16 +258,41 @@ fn same_report(wire: &Value, replayed: &Value) {
     assert_eq!(wire["swing"], replayed["swing"], "{context}");
     let score = (report["score"].as_f64().unwrap() * 100.0).round();
     assert_eq!(wire["score_centi"].as_f64().unwrap(), score, "{context}");
-    for (side, key) in [("student", "student_events"), ("coach", "coach_events")] {
-        for (i, event) in Event::ALL.iter().enumerate() {
-            let frame = report["events"][side][event.name()]
-                .as_u64()
+    for (side, key) in [
+        ("student_frame", "student_positions"),
+        ("coach_frame", "coach_positions"),
+    ] {
+        for (i, position) in Position::ALL.iter().enumerate() {
+            let frame = report["positions"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|p| p["position"] == position.name())
+                .and_then(|p| p[side].as_u64())
                 .unwrap_or(u64::from(u16::MAX));
             assert_eq!(
                 wire[key][i].as_u64().unwrap(),
                 frame,
                 "{context}: {side} {}",
-                event.name()
+                position.name()
+            );
+        }
+    }
+    // Body checks: tenths of a degree or millimetres on the wire, a tenth of a degree or of a
+    // centimetre in the JSON (each rounded once, so within one unit).
+    let checks = report["body_checks"].as_array().unwrap();
+    let wired = wire["checks"].as_array().unwrap();
+    assert_eq!(wired.len(), checks.len(), "{context}");
+    for (w, c) in wired.iter().zip(checks) {
+        let check = CHECKS[w["check"].as_u64().unwrap() as usize];
+        assert_eq!(check.position.name(), c["position"], "{context}");
+        assert_eq!(check.measure.name(), c["measure"], "{context}");
+        for key in ["student", "coach", "uncertainty"] {
+            let json = c[key].as_f64().unwrap() * 10.0;
+            let got = w[key].as_f64().unwrap();
+            assert!(
+                (got - json).abs() <= 1.0,
+                "{context}: {key} {got} against {json}"
             );
         }
     }

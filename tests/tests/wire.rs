@@ -6,7 +6,7 @@ use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::wire::{
     self, Config, Counters, Decoder, ImuSample, Message, NackReason, PoseFrame, SensorLayout,
-    SensorPlacement, StudentProfile, SwingReport, WireDeviation, MAX_FRAME,
+    SensorPlacement, StudentProfile, SwingReport, WireCheck, WireDeviation, MAX_FRAME,
 };
 use posecoach_tests::fixture;
 
@@ -42,8 +42,8 @@ fn every_message() -> Vec<Message> {
             swing: 3,
             coach: 1,
             score_centi: 7745,
-            student_events: [8, 34, 49, 64, 73, 80, 84, 99],
-            coach_events: [9, 34, 50, 65, 72, 79, 83, 94],
+            student_positions: [8, 34, 49, 64, 73, 77, 80, 84, 90, 99],
+            coach_positions: [9, 34, 50, 65, 72, 76, 79, 83, 88, 94],
             phases_ms: [[933, 933], [267, 233], [317, 250]],
             verdicts: [0, 1, 1],
             deviations: [WireDeviation {
@@ -55,11 +55,20 @@ fn every_message() -> Vec<Message> {
             }]
             .into_iter()
             .collect(),
+            checks: [WireCheck {
+                check: 0,
+                student: 782,
+                coach: 950,
+                uncertainty: 34,
+            }]
+            .into_iter()
+            .collect(),
         }),
         Message::Status(Counters {
             frames_ok: 10,
             crc_errors: 1,
             malformed: 2,
+            versions: 1,
             overflows: 0,
             drops: 3,
         }),
@@ -67,6 +76,10 @@ fn every_message() -> Vec<Message> {
         Message::Nack {
             seq: 10,
             reason: NackReason::Busy,
+        },
+        Message::Nack {
+            seq: 0,
+            reason: NackReason::Version,
         },
         Message::SensorLayout(SensorLayout {
             sensors: [

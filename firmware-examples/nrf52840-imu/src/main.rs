@@ -150,6 +150,10 @@ fn main() -> ! {
             if let Some(message) = decoder.push(byte[0]) {
                 handle(&mut session, &mut uart, &message);
             }
+            // A frame of another protocol version is told so.
+            if let Some(nack) = decoder.reply() {
+                send(&mut uart, &nack);
+            }
         }
         match imu.sample(clock.now_us()) {
             Ok(Some(sample)) => handle(&mut session, &mut uart, &Message::ImuSample(sample)),
@@ -172,14 +176,19 @@ fn handle(session: &mut Session<'_>, uart: &mut Uarte<pac::UARTE0>, message: &Me
                 report.score_centi / 100
             );
         }
-        let mut frame = [0u8; MAX_FRAME];
-        match encode(&reply, &mut frame) {
-            Ok(n) => {
-                if uart.write(&frame[..n]).is_err() {
-                    defmt::warn!("UART write failed");
-                }
-            }
-            Err(e) => defmt::warn!("reply not encoded: {}", e),
-        }
+        send(uart, &reply);
     });
+}
+
+/// Frames `message` and writes it to the phone.
+fn send(uart: &mut Uarte<pac::UARTE0>, message: &Message) {
+    let mut frame = [0u8; MAX_FRAME];
+    match encode(message, &mut frame) {
+        Ok(n) => {
+            if uart.write(&frame[..n]).is_err() {
+                defmt::warn!("UART write failed");
+            }
+        }
+        Err(e) => defmt::warn!("reply not encoded: {}", e),
+    }
 }
