@@ -380,7 +380,7 @@ impl Report {
                 .spatial
                 .iter()
                 .map(|d| WireDeviation {
-                    event: d.event as u8,
+                    position: Position::from(d.event) as u8,
                     joint: d.joint.index() as u8,
                     direction: d.direction as u8,
                     offset_mm: d.offset_m.map(mm),
@@ -1107,14 +1107,13 @@ pub fn compare(
     for t in tempo.iter().filter(|t| t.verdict != Verdict::Ok) {
         insert_sorted(&mut advice, Advice::Tempo(*t), Advice::severity);
     }
-    let given = || body.iter().filter(|b| Advice::severity_of_check(b) > 1.0);
-    for b in given() {
+    for b in body.iter().filter(|b| Advice::severity_of_check(b) > 1.0) {
         insert_sorted(&mut advice, Advice::Body(*b), Advice::severity);
     }
     for d in &spatial {
-        let stated = given().any(|b| {
-            b.check.position.event() == Some(d.event)
-                && states(b.check.measure, d, student_events.lead)
+        let stated = advice.iter().any(|a| {
+            matches!(a, Advice::Body(b) if b.check.position.event() == Some(d.event)
+                && states(b.check.measure, d, student_events.lead))
         });
         if !stated {
             insert_sorted(&mut advice, Advice::Spatial(*d), Advice::severity);
@@ -1225,7 +1224,7 @@ fn body_checks(
             continue;
         };
         let moved_by = body_s.joints_of(measure);
-        if moved_by.iter().any(|&k| unsure(k, x)) {
+        if moved_by.iter().any(|&k| unsure(k, x) || unsure(k, from_s)) {
             continue;
         }
         // Each joint it is measured from moved by the noise along each axis.
@@ -1260,9 +1259,13 @@ fn body_checks(
 fn states(measure: Measure, d: &Deviation, lead: Side) -> bool {
     use Direction::*;
     let hips = matches!(d.joint, Joint::Pelvis | Joint::LeftHip | Joint::RightHip);
+    // A turn moves its joints about the vertical: across it, not up or down.
+    let across = !matches!(d.direction, Up | Down);
     match measure {
-        Measure::ThoraxTurn => matches!(d.joint, Joint::LeftShoulder | Joint::RightShoulder),
-        Measure::PelvisTurn => matches!(d.joint, Joint::LeftHip | Joint::RightHip),
+        Measure::ThoraxTurn => {
+            across && matches!(d.joint, Joint::LeftShoulder | Joint::RightShoulder)
+        }
+        Measure::PelvisTurn => across && matches!(d.joint, Joint::LeftHip | Joint::RightHip),
         Measure::PelvisSway => hips && matches!(d.direction, TowardTarget | AwayFromTarget),
         Measure::PelvisThrust => hips && matches!(d.direction, TowardBall | AwayFromBall),
         Measure::HeadLift => {

@@ -140,12 +140,13 @@ pub struct Counters {
     pub drops: u32,
 }
 
-/// One joint off at one event, in a compact form.
+/// One joint off at one position, in a compact form.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct WireDeviation {
-    /// Event index in swing order (address = 0 .. finish = 7).
-    pub event: u8,
+    /// The position's index, P1 = 0 .. P10 = 9, as in [`SwingReport::student_positions`] (only
+    /// GolfDB's eight events are judged: P1-P5, P7, P8, P10).
+    pub position: u8,
     /// Canonical joint index.
     pub joint: u8,
     /// Direction: 0 toward target, 1 away, 2 toward ball, 3 away, 4 up, 5 down.
@@ -531,9 +532,9 @@ mod tests {
                             verdicts,
                             deviations: d
                                 .into_iter()
-                                .map(|(event, joint, direction, offset_mm, uncertainty_mm)| {
+                                .map(|(position, joint, direction, offset_mm, uncertainty_mm)| {
                                     WireDeviation {
-                                        event,
+                                        position,
                                         joint,
                                         direction,
                                         offset_mm,
@@ -635,7 +636,7 @@ mod tests {
     #[test]
     fn a_frame_of_another_version_is_counted_and_owed_one_nack() {
         let mut old = frame(&Message::CoachSelect { coach: 3 });
-        // The frame of version 2: its version byte and CRC rewritten, COBS again.
+        // The same frame in version 2: its version byte and CRC rewritten, COBS again.
         let mut payload = [0u8; MAX_FRAME];
         let n = cobs::decode(&old[..old.len() - 1], &mut payload)
             .unwrap()
@@ -713,7 +714,7 @@ mod tests {
                 .collect(),
                 deviations: core::iter::repeat_n(
                     WireDeviation {
-                        event: 255,
+                        position: 255,
                         joint: 255,
                         direction: 255,
                         offset_mm: [i16::MIN; 3],
@@ -739,7 +740,7 @@ mod tests {
 
     #[test]
     fn a_config_carries_its_band_as_radius_then_flag() {
-        // Version 2, variant 4, model rate 60, radius 10 (varints), anchored (one byte).
+        // Version 3, variant 4, model rate 60, radius 10 (varints), anchored (one byte).
         let f = frame(&Message::Config(Config {
             model_rate_hz: 60,
             band: Band::DEFAULT,
@@ -751,7 +752,7 @@ mod tests {
 
     #[test]
     fn frames_have_the_documented_layout() {
-        // Ack { seq: 7 }: version 2, variant 7 (varint), seq 7 (varint), CRC-32 LE; COBS; 0x00.
+        // Ack { seq: 7 }: version 3, variant 7 (varint), seq 7 (varint), CRC-32 LE; COBS; 0x00.
         let f = frame(&Message::Ack { seq: 7 });
         let mut payload = f[..f.len() - 1].to_vec();
         let n = cobs::decode_in_place(&mut payload).unwrap();

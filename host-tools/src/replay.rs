@@ -148,7 +148,7 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
     let wire = reader.counters();
     let stream = session.stream_counters();
     let counters = json!({
-        "frames_ok": wire.frames_ok, "crc_errors": wire.crc_errors, "malformed": wire.malformed,
+        "frames_ok": wire.frames_ok, "crc_errors": wire.crc_errors, "malformed": wire.malformed, "versions": wire.versions,
         "overflows": wire.overflows,
         "pose_accepted": stream.accepted, "pose_duplicates": stream.duplicates,
         "pose_out_of_order": stream.out_of_order, "pose_gaps": stream.gaps,

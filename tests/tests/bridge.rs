@@ -9,7 +9,7 @@ use posecoach_cli::bridge::{serve, Counters};
 use posecoach_cli::device_sim::{self, simulate, Totals};
 use posecoach_cli::replay::replay;
 use posecoach_core::checks::CHECKS;
-use posecoach_core::events::{Event, Position};
+use posecoach_core::events::Position;
 use posecoach_core::joint::Joint;
 use posecoach_core::wire::Message;
 use serde_json::Value;
@@ -311,7 +311,9 @@ fn same_report(wire: &Value, replayed: &Value) {
     let deviations = wire["deviations"].as_array().unwrap();
     assert_eq!(deviations.len(), spatial.len(), "{context}");
     for (d, s) in deviations.iter().zip(spatial) {
-        let event = Event::ALL[d["event"].as_u64().unwrap() as usize];
+        let event = Position::ALL[d["position"].as_u64().unwrap() as usize]
+            .event()
+            .unwrap();
         let joint = Joint::from_index(d["joint"].as_u64().unwrap() as usize).unwrap();
         assert_eq!(event.name(), s["event"], "{context}");
         assert_eq!(joint.name(), s["joint"], "{context}");

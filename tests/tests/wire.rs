@@ -47,7 +47,7 @@ fn every_message() -> Vec<Message> {
             phases_ms: [[933, 933], [267, 233], [317, 250]],
             verdicts: [0, 1, 1],
             deviations: [WireDeviation {
-                event: 5,
+                position: 6,
                 joint: 16,
                 direction: 5,
                 offset_mm: [4, -20, -159],
