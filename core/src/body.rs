@@ -427,6 +427,17 @@ impl Body {
         joints.into_iter().flatten().collect()
     }
 
+    /// The joints `link`'s rotation ([`Body::speed`]) is measured from: a turn's for the pelvis
+    /// and the thorax, the lead shoulder and wrist for the arm, grip and head for the club.
+    pub fn joints_of_link(&self, link: Link) -> heapless::Vec<usize, 5> {
+        match link {
+            Link::Pelvis => self.hips.into_iter().collect(),
+            Link::Thorax => self.joints_of(Measure::ThoraxTurn),
+            Link::LeadArm => [self.shoulders[0], self.lead_arm[1]].into_iter().collect(),
+            Link::Club => self.club.into_iter().flatten().collect(),
+        }
+    }
+
     /// The point between the hips (`frame` long enough).
     fn between_hips(&self, frame: &[Vec3]) -> Vec3 {
         (frame[self.hips[0]] + frame[self.hips[1]]) * 0.5
@@ -466,12 +477,12 @@ impl Body {
 
     /// How fast `link` turns at frame `t` of `swing` (frames × the skeleton's joints at `hz`, a
     /// positive rate), degrees per second: the angle it turns from `SMOOTHING_S / 2` before to
-    /// as long after (see [`kinematic_sequence`]). `None` within that of either end of the swing
+    /// as long after (see [`crate::sequence::kinematic_sequence`]). `None` within that of either end of the swing
     /// and for a club that is not tracked.
     pub fn speed(&self, link: Link, swing: &[Vec3], hz: f32, t: usize) -> Option<f32> {
         let joints = self.joints.max(1);
         let frame = |f: usize| swing.get(f.checked_mul(joints)?..)?.get(..joints);
-        let half = (libm::roundf(0.5 * SMOOTHING_S * hz) as usize).max(1);
+        let half = self.window(hz) / 2;
         let turned = self.turned(
             link,
             frame(t.checked_sub(half)?)?,
@@ -480,10 +491,16 @@ impl Body {
         Some(turned * hz / (2 * half) as f32)
     }
 
+    /// How many frames at `hz` apart the two poses [`Body::speed`] compares are (even, at
+    /// least 2).
+    pub fn window(&self, hz: f32) -> usize {
+        2 * (libm::roundf(0.5 * SMOOTHING_S * hz) as usize).max(1)
+    }
+
     /// How far `link` turns from frame `a` to frame `b` (both long enough), degrees: the
-    /// angle of the rotation between the pelvis's or the thorax's [`axes`] in the two, the
-    /// angle between the lead arm's (shoulder to wrist) or the shaft's (grip to head)
-    /// directions; `None` for a club that is not tracked.
+    /// angle of the rotation between the thorax's [`axes`] in the two, the angle between the
+    /// hip lines, the lead arm's (shoulder to wrist) or the shaft's (grip to head) directions;
+    /// `None` for a club that is not tracked.
     fn turned(&self, link: Link, a: &[Vec3], b: &[Vec3]) -> Option<f32> {
         let rotation = |[la, ua, fa]: [Vec3; 3], [lb, ub, fb]: [Vec3; 3]| {
             // The rotation taking one orthonormal frame to the other: its sine from the
@@ -493,11 +510,13 @@ impl Body {
             degrees(libm::atan2f(sin, cos))
         };
         match link {
+            // The hip line alone: the pelvis's long axis is the trunk's (see the module
+            // documentation), which would carry the thorax's motion into the pelvis's.
+            Link::Pelvis => {
+                let hips = |f: &[Vec3]| f[self.hips[0]] - f[self.hips[1]];
+                Some(between(hips(a), hips(b)))
+            }
             // In the world's own coordinates: only the change between the two matters.
-            Link::Pelvis => Some(rotation(
-                self.pelvis_axes(a, |d| d),
-                self.pelvis_axes(b, |d| d),
-            )),
             Link::Thorax => Some(rotation(
                 self.thorax_axes(a, |d| d),
                 self.thorax_axes(b, |d| d),
@@ -514,6 +533,8 @@ impl Body {
 /// A link of the kinematic sequence, in the order an efficient downswing peaks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 #[allow(missing_docs)]
 pub enum Link {
     Pelvis,
@@ -534,122 +555,6 @@ impl Link {
             Link::LeadArm => "lead_arm",
             Link::Club => "club",
         }
-    }
-}
-
-/// A link's fastest rotation in the downswing.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Peak {
-    /// Degrees per second.
-    pub speed: f32,
-    /// When, in frames of the swing (between frames).
-    pub time: f32,
-}
-
-/// The kinematic sequence of one downswing: each link's peak rotational speed, per
-/// [`Link::ALL`] (`None` for a club that is not tracked). See [`kinematic_sequence`].
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct KinematicSequence {
-    /// Per link in [`Link::ALL`] order.
-    pub peaks: [Option<Peak>; 4],
-}
-
-impl KinematicSequence {
-    /// The peak of `link`, if measured.
-    pub fn peak(&self, link: Link) -> Option<Peak> {
-        self.peaks[link as usize]
-    }
-
-    /// The links in the order they peak (ties keep [`Link::ALL`]'s order).
-    pub fn order(&self) -> heapless::Vec<Link, 4> {
-        let mut order: heapless::Vec<Link, 4> = Link::ALL
-            .into_iter()
-            .filter(|&l| self.peak(l).is_some())
-            .collect();
-        let time = |l: &Link| self.peak(*l).map_or(f32::INFINITY, |p| p.time);
-        order.sort_unstable_by(|a, b| {
-            time(a)
-                .total_cmp(&time(b))
-                .then((*a as u8).cmp(&(*b as u8)))
-        });
-        order
-    }
-
-    /// Whether the links peak in the efficient order: pelvis, thorax, lead arm, club.
-    pub fn in_order(&self) -> bool {
-        self.order().iter().zip(Link::ALL).all(|(&a, b)| a == b)
-    }
-}
-
-/// The kinematic sequence of a full swing: each link's fastest rotation in the downswing, from
-/// the top (P4) to impact (P7): the club's comes just before impact, and whatever the pose
-/// model makes of the fastest motion just after it is no part of the sequence. A link's rotational speed is how fast it
-/// turns, in degrees per second, over ±[`SMOOTHING_S`] / 2: the pelvis and the thorax as
-/// rigid segments (the whole angle of their rotation, whatever its axis), the lead arm
-/// (shoulder to wrist) and the shaft (grip to head) as directions. A peak lies between
-/// frames (a parabola through the fastest frame and its neighbours). `swing` is frames ×
-/// `skeleton` joints at `hz`, `events` its events; `None` for a putt or a swing without a
-/// top and an impact.
-///
-/// # Errors
-/// [`BodyError::MissingJoint`] as [`Body::new`].
-pub fn kinematic_sequence(
-    skeleton: &Skeleton,
-    swing: &[Vec3],
-    hz: f32,
-    events: &SwingEvents,
-) -> Result<Option<KinematicSequence>, BodyError> {
-    let body = Body::new(skeleton, events.lead)?;
-    let (Some(top), Some(impact)) = (events.frame(Position::P4), events.frame(Position::P7)) else {
-        return Ok(None);
-    };
-    if events.kind != crate::events::SwingKind::Full || !(hz.is_finite() && hz > 0.0) {
-        return Ok(None);
-    }
-    Ok(Some(body.peaks(swing, hz, top, impact)))
-}
-
-impl Body {
-    /// Each link's fastest rotation (see [`kinematic_sequence`]) between frames `from` and
-    /// `to` of `swing` (frames × the skeleton's joints at `hz`, a positive rate).
-    fn peaks(&self, swing: &[Vec3], hz: f32, from: usize, to: usize) -> KinematicSequence {
-        let mut sequence = KinematicSequence::default();
-        for link in Link::ALL {
-            let speed = |t: usize| self.speed(link, swing, hz, t);
-            let mut best: Option<(usize, f32)> = None;
-            for t in from..=to {
-                if let Some(v) = speed(t) {
-                    if best.is_none_or(|(_, b)| v > b) {
-                        best = Some((t, v));
-                    }
-                }
-            }
-            sequence.peaks[link as usize] = best.map(|(t, v)| {
-                let (shift, top) = match (t.checked_sub(1).and_then(&speed), speed(t + 1)) {
-                    (Some(before), Some(after)) => vertex(before, v, after),
-                    _ => (0.0, v),
-                };
-                Peak {
-                    speed: top,
-                    time: t as f32 + shift,
-                }
-            });
-        }
-        sequence
-    }
-}
-
-/// Where the parabola through `(-1, a)`, `(0, b)`, `(1, c)` turns (within ±0.5) and its value
-/// there; `(0, b)` for three points on a line.
-fn vertex(a: f32, b: f32, c: f32) -> (f32, f32) {
-    let curve = a - 2.0 * b + c;
-    if curve.abs() > f32::EPSILON * (a.abs() + b.abs() + c.abs()) {
-        let x = (0.5 * (a - c) / curve).clamp(-0.5, 0.5);
-        (x, b + 0.25 * (c - a) * x)
-    } else {
-        (0.0, b)
     }
 }
 
@@ -745,7 +650,7 @@ fn degrees(radians: f32) -> f32 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::format::Format;
     use crate::joint::JOINT_COUNT;
@@ -769,22 +674,22 @@ mod tests {
 
     /// What a golfer's pose is made of, in stance coordinates.
     #[derive(Clone, Copy)]
-    struct Posed {
-        pelvis: Angles,
-        thorax: Angles,
+    pub(crate) struct Posed {
+        pub(crate) pelvis: Angles,
+        pub(crate) thorax: Angles,
         /// Between the hips.
-        centre: Vec3,
+        pub(crate) centre: Vec3,
         /// Lead arm: across the chest and elbow flexion, degrees.
-        arm: (f32, f32),
+        pub(crate) arm: (f32, f32),
         /// The shaft about the lead forearm and its wrist hinge from it, degrees.
-        club: (f32, f32),
+        pub(crate) club: (f32, f32),
     }
 
     const UPPER_ARM: f32 = 0.3;
     const FOREARM: f32 = 0.27;
 
     /// The joints of `skeleton` for `posed`, in stance coordinates (lead side +target).
-    fn pose(skeleton: &Skeleton, lead: Side, posed: &Posed) -> [Vec3; 24] {
+    pub(crate) fn pose(skeleton: &Skeleton, lead: Side, posed: &Posed) -> [Vec3; 24] {
         let (rp, rt) = (rotation(posed.pelvis), rotation(posed.thorax));
         let pelvis = posed.centre;
         // The pelvis's long axis is the trunk, the thorax's from the spine joint up.
@@ -870,7 +775,7 @@ mod tests {
     /// Stance coordinates to a world frame: `up` is +Y, the target line turned `heading`
     /// degrees about it, mirrored across the vertical plane of +Y and +Z when `mirror`, and
     /// moved by `by`.
-    fn world(p: Vec3, heading: f32, mirror: bool, by: Vec3) -> Vec3 {
+    pub(crate) fn world(p: Vec3, heading: f32, mirror: bool, by: Vec3) -> Vec3 {
         let v = Vec3::new(if mirror { -p.x } else { p.x }, p.z, p.y);
         Rotation3::from_axis_angle(&Vector3::y_axis(), heading.to_radians()) * v + by
     }
@@ -879,7 +784,7 @@ mod tests {
         (a - b).abs() <= tolerance
     }
 
-    const ADDRESS: Posed = Posed {
+    pub(crate) const ADDRESS: Posed = Posed {
         pelvis: Angles {
             turn: -3.0,
             bend: 20.0,
@@ -1097,97 +1002,6 @@ mod tests {
             "{m:?}"
         );
         assert!(close(m.x_factor, 45.0, 0.02) && m.shaft_lean.is_none());
-    }
-
-    /// The normal distribution's share below `x` standard deviations.
-    fn phi(x: f32) -> f32 {
-        0.5 * (1.0 + libm::erff(x / core::f32::consts::SQRT_2))
-    }
-
-    /// A downswing at `hz` in which each of `links` (link, peak time s, degrees turned) turns
-    /// about the vertical in a bell of speed 30 ms wide (one standard deviation), measured.
-    fn downswing(hz: f32, links: [(Link, f32, f32); 3]) -> KinematicSequence {
-        let sigma = 0.03;
-        let turned = |k: usize, t: f32| links[k].2 * phi((t - links[k].1) / sigma);
-        let skeleton = Skeleton::standard(Format::H36m17).unwrap();
-        let n = skeleton.len();
-        let frames = (0.4 * hz) as usize;
-        let mut swing = std::vec::Vec::new();
-        for f in 0..frames {
-            let t = f as f32 / hz;
-            let (pelvis, thorax) = (40.0 - turned(0, t), 90.0 - turned(1, t));
-            // The arm's own heading, whatever the thorax does: across the chest from it.
-            let arm = 150.0 - turned(2, t);
-            let posed = Posed {
-                pelvis: Angles {
-                    turn: pelvis,
-                    ..Angles::default()
-                },
-                thorax: Angles {
-                    turn: thorax,
-                    ..Angles::default()
-                },
-                arm: (arm - thorax, 0.0),
-                ..ADDRESS
-            };
-            let at = pose(&skeleton, Side::Left, &posed);
-            swing.extend(
-                at[..n]
-                    .iter()
-                    .map(|&v| world(v, 30.0, false, Vec3::zeros())),
-            );
-        }
-        Body::new(&skeleton, Side::Left)
-            .unwrap()
-            .peaks(&swing, hz, 0, frames - 1)
-    }
-
-    #[test]
-    fn each_links_peak_is_timed_and_measured() {
-        let links = [
-            (Link::Pelvis, 0.10, 80.0),
-            (Link::Thorax, 0.13, 100.0),
-            (Link::LeadArm, 0.16, 160.0),
-        ];
-        // One rate under Miri, which takes minutes over each.
-        let rates: &[f32] = if cfg!(miri) { &[60.0] } else { &[60.0, 240.0] };
-        for &hz in rates {
-            let sequence = downswing(hz, links);
-            for (link, at, total) in links {
-                let peak = sequence.peak(link).unwrap();
-                // Peak speed of the bell: degrees turned / (σ √(2π)); the window of ±17 ms
-                // averages a little off the top.
-                let fastest = total / (0.03 * libm::sqrtf(core::f32::consts::TAU));
-                assert!(
-                    (peak.time / hz - at).abs() < 0.1 / hz + 0.001,
-                    "{hz} Hz {link:?}: {peak:?}"
-                );
-                assert!(
-                    (peak.speed / fastest - 1.0).abs() < 0.06,
-                    "{hz} Hz {link:?}: {peak:?} against {fastest}"
-                );
-            }
-            assert_eq!(sequence.peak(Link::Club), None);
-            assert_eq!(
-                sequence.order(),
-                [Link::Pelvis, Link::Thorax, Link::LeadArm]
-            );
-            assert!(sequence.in_order());
-            // The chest first, then the hips: out of order.
-            let early_chest = downswing(
-                hz,
-                [
-                    (Link::Pelvis, 0.13, 80.0),
-                    (Link::Thorax, 0.10, 100.0),
-                    (Link::LeadArm, 0.16, 160.0),
-                ],
-            );
-            assert_eq!(
-                early_chest.order(),
-                [Link::Thorax, Link::Pelvis, Link::LeadArm]
-            );
-            assert!(!early_chest.in_order());
-        }
     }
 
     #[test]

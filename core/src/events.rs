@@ -260,6 +260,21 @@ pub struct SwingEvents {
 
 const ABSENT: u16 = u16::MAX;
 
+#[cfg(test)]
+impl SwingEvents {
+    /// A full swing's events led by `lead`, at these times (frames; `None` where it has none),
+    /// each position's frame the one its time falls in.
+    pub(crate) fn at_times(lead: Side, times: [Option<f32>; 10]) -> SwingEvents {
+        SwingEvents {
+            kind: SwingKind::Full,
+            lead,
+            club: false,
+            frames: times.map(|t| t.map_or(ABSENT, |t| t as u16)),
+            times: times.map(|t| t.unwrap_or(0.0)),
+        }
+    }
+}
+
 impl SwingEvents {
     /// Frame of `at` (an event or a position), if this swing has it.
     pub fn frame(&self, at: impl Into<Position>) -> Option<usize> {

@@ -15,7 +15,7 @@
 //!
 //! Modules, in data-flow order:
 //! - [`config`]: the capacity constants more than one module shares.
-//! - [`math`]: square root and length, on the device's FPU.
+//! - [`math`]: square root and length, on the device's FPU; median and selection.
 //! - [`joint`]: the canonical joint vocabulary and its parent table.
 //! - [`format`](mod@format): built-in keypoint formats mapped onto the vocabulary.
 //! - [`skeleton`]: joints, parents, rest offsets, body segments, end effectors, height.
@@ -26,6 +26,8 @@
 //! - [`detector`]: which stretch of a live pose stream is a swing.
 //! - [`events`]: the eight swing events.
 //! - [`body`]: the angles and shifts coaches read a swing by (turn, bend, sway, X-factor).
+//! - [`checks`]: the body metrics advice speaks of, at the positions it speaks of them.
+//! - [`sequence`]: the kinematic sequence, and its gaps against the coach's.
 //! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
 //! - [`score`]: the score, tempo, spatial deviations and advice of one swing.
 //! - [`setup`]: a swing's set-up, and the coach whose set-up (so club) it is nearest.
@@ -60,6 +62,7 @@ pub mod reference;
 pub mod resample;
 pub mod retarget;
 pub mod score;
+pub mod sequence;
 pub mod setup;
 pub mod skeleton;
 pub mod weights;

@@ -1,7 +1,8 @@
-//! Float functions that `core` lacks.
+//! Float functions that `core` lacks: square roots, and the median and selection the scoring's
+//! robust spreads read.
 //!
-//! With std (the host build and tests) these are std's, which the compiler can vectorize; on
-//! an ARM FPU (the `eabihf` targets: the Cortex-M4F) the square root is the FPU's `VSQRT.F32`;
+//! With std (the host build and tests) the square roots are std's, which the compiler can
+//! vectorize; on an ARM FPU (the `eabihf` targets: the Cortex-M4F) the square root is the FPU's `VSQRT.F32`;
 //! elsewhere libm's (about 90 instructions on a Cortex-M4F, a tenth of all the device's
 //! instructions before the FPU path existed). All three are correctly rounded IEEE square
 //! roots, so results are bit-identical on the host and on the device.
@@ -25,6 +26,37 @@ pub fn norm(v: &crate::Vec3) -> f32 {
 #[inline]
 pub fn sum_sqrt(squares: &[f32]) -> f32 {
     imp::sum_sqrt(squares)
+}
+
+/// The median of `values` (reordered; the upper one of an even count), 0 for none.
+pub fn median(values: &mut [f32]) -> f32 {
+    let mid = values.len() / 2;
+    select(values, mid)
+}
+
+/// The `mid`-th smallest of `values` (reordered), 0 for none: a quickselect written out, as the
+/// core library's selection brings 15 KiB of sorting code to a device's flash.
+pub fn select(values: &mut [f32], mid: usize) -> f32 {
+    let (mut lo, mut hi) = (0, values.len());
+    while hi > lo + 1 {
+        // Partition around the middle value of the range (Lomuto).
+        values.swap((lo + hi) / 2, hi - 1);
+        let pivot = values[hi - 1];
+        let mut store = lo;
+        for i in lo..hi - 1 {
+            if values[i] < pivot {
+                values.swap(i, store);
+                store += 1;
+            }
+        }
+        values.swap(store, hi - 1);
+        match store.cmp(&mid) {
+            core::cmp::Ordering::Equal => return values[mid],
+            core::cmp::Ordering::Less => lo = store + 1,
+            core::cmp::Ordering::Greater => hi = store,
+        }
+    }
+    values.get(mid).copied().unwrap_or(0.0)
 }
 
 /// std's or libm's square root.
@@ -136,5 +168,35 @@ mod imp {
             );
         }
         f32::from_bits(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    proptest::proptest! {
+        #[test]
+        fn the_median_is_the_middle_of_the_sorted_values(
+            values in proptest::collection::vec(-1e3f32..1e3, 0..64),
+        ) {
+            let mut sorted = values.clone();
+            sorted.sort_by(f32::total_cmp);
+            let mut work = values.clone();
+            let expected = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+            proptest::prop_assert_eq!(median(&mut work), expected);
+        }
+
+        #[test]
+        fn the_kth_smallest_is_the_kth_of_the_sorted_values(
+            values in proptest::collection::vec(-1e3f32..1e3, 1..64),
+            at in 0.0f64..1.0,
+        ) {
+            let mut sorted = values.clone();
+            sorted.sort_by(f32::total_cmp);
+            let k = ((values.len() - 1) as f64 * at) as usize;
+            let mut work = values.clone();
+            proptest::prop_assert_eq!(select(&mut work, k), sorted[k]);
+        }
     }
 }

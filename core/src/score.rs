@@ -23,6 +23,10 @@
 //!   (see [`compare`]), each joint with its uncertainty along its offset: the wander of its
 //!   offset over the swing per axis (a camera's depth axis is noisier), and along its path its
 //!   speed times the event's timing uncertainty.
+//! - **Body checks** ([`crate::checks`]): a few body metrics' change since address at the top
+//!   and at impact, against the coach's.
+//! - **Sequence** ([`crate::sequence`]): the gaps between the links' peaks in the downswing,
+//!   against the coach's, advice only when their interval is past the tolerance, as tempo.
 //! - **Stance frame** ([`Stance`]): each swing in its own, so a pelvis that moves toward the
 //!   ball is reported as the pelvis moving.
 
@@ -32,9 +36,10 @@ use crate::config::{DEVIATIONS_PER_EVENT, MAX_DEVIATIONS, MAX_JOINTS, MAX_SWING_
 use crate::dtw::{self, Band, DtwError, Sequence, Window};
 use crate::events::{self, Event, EventError, Position, Side, SwingEvents};
 use crate::joint::Joint;
-use crate::math::norm;
+use crate::math::{median, norm, select};
+use crate::sequence::{self, Downswing, Gap, GAPS, GAP_TOLERANCE_S};
 use crate::skeleton::Skeleton;
-use crate::wire::{SwingReport, WireCheck, WireDeviation};
+use crate::wire::{SwingReport, WireCheck, WireDeviation, WireGap};
 use crate::Vec3;
 use heapless::Vec as HVec;
 
@@ -249,6 +254,8 @@ pub enum Advice {
     Spatial(Deviation),
     /// A body metric's change since address off the coach's at a position.
     Body(BodyDeviation),
+    /// A gap between two links' peaks in the downswing off the coach's.
+    Sequence(Gap),
 }
 
 impl Advice {
@@ -260,7 +267,14 @@ impl Advice {
             }
             Advice::Spatial(d) => Advice::severity_of(d),
             Advice::Body(b) => Advice::severity_of_check(b),
+            Advice::Sequence(g) => libm::fabsf(g.student_s - g.coach_s) / GAP_TOLERANCE_S,
         }
+    }
+
+    /// Whether a gap is advice: its interval, ± [`TEMPO_CONFIDENCE`] uncertainties, wholly
+    /// past [`GAP_TOLERANCE_S`] from the coach's (a NaN gives none).
+    pub fn is_clear(g: &Gap) -> bool {
+        libm::fabsf(g.student_s - g.coach_s) - TEMPO_CONFIDENCE * g.uncertainty_s > GAP_TOLERANCE_S
     }
 
     /// A deviation's severity: how far past the larger of [`SPATIAL_THRESHOLD_M`] and
@@ -323,6 +337,7 @@ impl core::fmt::Display for Advice {
                 )
             }
             Advice::Body(b) => b.fmt(f),
+            Advice::Sequence(g) => g.fmt(f),
         }
     }
 }
@@ -353,6 +368,8 @@ pub struct Report {
     pub spatial: HVec<Deviation, MAX_DEVIATIONS>,
     /// The body checks ([`CHECKS`]) both swings could be measured at, in that order.
     pub body: HVec<BodyDeviation, { CHECKS.len() }>,
+    /// The sequence's gaps ([`GAPS`]) both swings could be measured at, in that order.
+    pub gaps: HVec<Gap, { GAPS.len() }>,
     /// The most important advice first.
     pub advice: HVec<Advice, MAX_ADVICE>,
 }
@@ -361,7 +378,7 @@ impl Report {
     /// The wire form of swing number `swing`'s report, scored against coach reference `coach`:
     /// durations in milliseconds saturate at 65.534 s, offsets at ±32.767 m (uncertainties at
     /// 65.535 m), the score is rounded to hundredths, body checks go in tenths of a degree or
-    /// millimetres (saturating likewise).
+    /// millimetres, gaps in milliseconds (saturating likewise).
     pub fn to_wire(&self, swing: u32, coach: u16) -> SwingReport {
         let frames = |events: &SwingEvents| {
             Position::ALL.map(|p| events.frame(p).map_or(u16::MAX, |f| f as u16))
@@ -403,6 +420,21 @@ impl Report {
                         student: wide(b.student),
                         coach: wide(b.coach),
                         uncertainty: libm::roundf(b.uncertainty * scale)
+                            .clamp(0.0, f32::from(u16::MAX))
+                            as u16,
+                    })
+                })
+                .collect(),
+            gaps: self
+                .gaps
+                .iter()
+                .filter_map(|g| {
+                    let ms = |s: f32| libm::roundf(s * 1000.0).clamp(-32767.0, 32767.0) as i16;
+                    Some(WireGap {
+                        gap: GAPS.iter().position(|&p| p == (g.first, g.then))? as u8,
+                        student_ms: ms(g.student_s),
+                        coach_ms: ms(g.coach_s),
+                        uncertainty_ms: libm::roundf(g.uncertainty_s * 1000.0)
                             .clamp(0.0, f32::from(u16::MAX))
                             as u16,
                     })
@@ -563,37 +595,6 @@ fn coach_frame(x: f32, student: &SwingEvents, coach: &SwingEvents, ratio: f32) -
         before = after;
     }
     before.1 + (x - before.0) * ratio
-}
-
-/// The median of `values` (reordered; the upper one of an even count), 0 for none.
-fn median(values: &mut [f32]) -> f32 {
-    let mid = values.len() / 2;
-    select(values, mid)
-}
-
-/// The `mid`-th smallest of `values` (reordered), 0 for none: a quickselect written out, as the
-/// core library's selection brings 15 KiB of sorting code to a device's flash.
-fn select(values: &mut [f32], mid: usize) -> f32 {
-    let (mut lo, mut hi) = (0, values.len());
-    while hi > lo + 1 {
-        // Partition around the middle value of the range (Lomuto).
-        values.swap((lo + hi) / 2, hi - 1);
-        let pivot = values[hi - 1];
-        let mut store = lo;
-        for i in lo..hi - 1 {
-            if values[i] < pivot {
-                values.swap(i, store);
-                store += 1;
-            }
-        }
-        values.swap(store, hi - 1);
-        match store.cmp(&mid) {
-            core::cmp::Ordering::Equal => return values[mid],
-            core::cmp::Ordering::Less => lo = store + 1,
-            core::cmp::Ordering::Greater => hi = store,
-        }
-    }
-    values.get(mid).copied().unwrap_or(0.0)
 }
 
 /// Scores `student` (frames × skeleton joints at `student_hz`) against the coach's virtual
@@ -1101,11 +1102,38 @@ pub fn compare(
         &timing.map(|t| t * coach_hz),
     );
 
-    // Advice: tempo, body and joint items by severity; a joint item that states what a body
-    // item given at its event states is left out.
+    let gaps = match (
+        Body::new(skeleton, student_events.lead),
+        Body::new(skeleton, coach_events.lead),
+    ) {
+        (Ok(body_s), Ok(body_c)) => sequence::gaps(
+            &Downswing {
+                body: &body_s,
+                positions: student,
+                hz: student_hz,
+                events: &student_events,
+            },
+            &Downswing {
+                body: &body_c,
+                positions: coach,
+                hz: coach_hz,
+                events: &coach_events,
+            },
+            &|k, from, to| {
+                (from..=to.min(n.saturating_sub(1))).any(|f| unsure.at(f) & (1 << k) != 0)
+            },
+        ),
+        _ => HVec::new(),
+    };
+
+    // Advice: tempo, sequence, body and joint items by severity; a joint item that states what
+    // a body item given at its event states is left out.
     let mut advice: HVec<Advice, MAX_ADVICE> = HVec::new();
     for t in tempo.iter().filter(|t| t.verdict != Verdict::Ok) {
         insert_sorted(&mut advice, Advice::Tempo(*t), Advice::severity);
+    }
+    for g in gaps.iter().filter(|g| Advice::is_clear(g)) {
+        insert_sorted(&mut advice, Advice::Sequence(*g), Advice::severity);
     }
     for b in body.iter().filter(|b| Advice::severity_of_check(b) > 1.0) {
         insert_sorted(&mut advice, Advice::Body(*b), Advice::severity);
@@ -1132,6 +1160,7 @@ pub fn compare(
         coach_tempo_ratio: tempo_ratio(&coach_events, coach_hz),
         spatial,
         body,
+        gaps,
         advice,
     })
 }
@@ -1309,7 +1338,7 @@ fn insert_sorted<T: Copy, const N: usize>(list: &mut HVec<T, N>, item: T, key: i
 
 #[cfg(test)]
 mod tests {
-    use super::{median, select, Advice, Unsure, SPATIAL_THRESHOLD_M};
+    use super::{Advice, Unsure, SPATIAL_THRESHOLD_M};
     use crate::checks::{BodyDeviation, CHECKS, SHIFT_TOLERANCE_M};
 
     #[test]
@@ -1341,30 +1370,5 @@ mod tests {
         assert_eq!(swing.at(4), 0b10); // frame 9
         assert_eq!(swing.at(5), 0); // frame 10: not yet pushed
         assert_eq!(Unsure::default().at(3), 0);
-    }
-
-    proptest::proptest! {
-        #[test]
-        fn the_median_is_the_middle_of_the_sorted_values(
-            values in proptest::collection::vec(-1e3f32..1e3, 0..64),
-        ) {
-            let mut sorted = values.clone();
-            sorted.sort_by(f32::total_cmp);
-            let mut work = values.clone();
-            let expected = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
-            proptest::prop_assert_eq!(median(&mut work), expected);
-        }
-
-        #[test]
-        fn the_kth_smallest_is_the_kth_of_the_sorted_values(
-            values in proptest::collection::vec(-1e3f32..1e3, 1..64),
-            at in 0.0f64..1.0,
-        ) {
-            let mut sorted = values.clone();
-            sorted.sort_by(f32::total_cmp);
-            let k = ((values.len() - 1) as f64 * at) as usize;
-            let mut work = values.clone();
-            proptest::prop_assert_eq!(select(&mut work, k), sorted[k]);
-        }
     }
 }

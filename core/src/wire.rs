@@ -35,11 +35,12 @@ use crate::config::MAX_DEVIATIONS;
 use crate::dtw::Band;
 use crate::format::Format;
 use crate::joint::Joint;
+use crate::sequence::GAPS;
 use heapless::Vec as HVec;
 use serde::{Deserialize, Serialize};
 
 /// Protocol version carried in every frame.
-pub const VERSION: u8 = 3;
+pub const VERSION: u8 = 4;
 /// Largest frame on the wire, delimiter included.
 pub const MAX_FRAME: usize = 640;
 /// Most joints a pose frame or profile carries (BlazePose's 33 landmarks fit).
@@ -173,6 +174,22 @@ pub struct WireCheck {
     pub uncertainty: u16,
 }
 
+/// One gap of the kinematic sequence ([`crate::sequence::GAPS`]) in a compact form: how long
+/// after the first link's peak the second's comes, student and coach, and its uncertainty,
+/// milliseconds (negative: before).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WireGap {
+    /// Its index in `GAPS`.
+    pub gap: u8,
+    /// The student's gap.
+    pub student_ms: i16,
+    /// The coach's gap.
+    pub coach_ms: i16,
+    /// The student's uncertainty (one standard deviation).
+    pub uncertainty_ms: u16,
+}
+
 /// A swing's report, small enough for one frame (the frame correspondence stays on the device).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -197,6 +214,8 @@ pub struct SwingReport {
     pub deviations: HVec<WireDeviation, MAX_DEVIATIONS>,
     /// The body checks both swings could be measured at, in `CHECKS` order.
     pub checks: HVec<WireCheck, { CHECKS.len() }>,
+    /// The sequence's gaps both swings could be measured at, in `GAPS` order.
+    pub gaps: HVec<WireGap, { GAPS.len() }>,
 }
 
 /// Why a message was refused.
@@ -494,6 +513,10 @@ mod tests {
                     0..=CHECKS.len()
                 ),
                 prop::collection::vec(
+                    (any::<u8>(), any::<i16>(), any::<i16>(), any::<u16>()),
+                    0..=GAPS.len()
+                ),
+                prop::collection::vec(
                     (
                         any::<u8>(),
                         any::<u8>(),
@@ -511,6 +534,7 @@ mod tests {
                         coach_positions,
                         (phases_ms, verdicts),
                         checks,
+                        gaps,
                         d,
                     )| {
                         Message::SwingReport(SwingReport {
@@ -526,6 +550,15 @@ mod tests {
                                     student,
                                     coach,
                                     uncertainty,
+                                })
+                                .collect(),
+                            gaps: gaps
+                                .into_iter()
+                                .map(|(gap, student_ms, coach_ms, uncertainty_ms)| WireGap {
+                                    gap,
+                                    student_ms,
+                                    coach_ms,
+                                    uncertainty_ms,
                                 })
                                 .collect(),
                             phases_ms,
@@ -710,6 +743,16 @@ mod tests {
                         uncertainty: u16::MAX,
                     },
                     CHECKS.len(),
+                )
+                .collect(),
+                gaps: core::iter::repeat_n(
+                    WireGap {
+                        gap: 255,
+                        student_ms: i16::MIN,
+                        coach_ms: i16::MIN,
+                        uncertainty_ms: u16::MAX,
+                    },
+                    GAPS.len(),
                 )
                 .collect(),
                 deviations: core::iter::repeat_n(

@@ -12,10 +12,11 @@
 use crate::score::{whole, KEY_METRICS};
 use base64::Engine;
 use posecoach_adapters::session::Compared;
-use posecoach_core::body::{self, KinematicSequence, Link, Metrics, Stance};
+use posecoach_core::body::{self, Link, Metrics, Stance};
 use posecoach_core::events::{Event, Position, SwingEvents};
 use posecoach_core::joint::Joint;
-use posecoach_core::score::{Report, SPATIAL_THRESHOLD_M};
+use posecoach_core::score::{Advice, Report, SPATIAL_THRESHOLD_M};
+use posecoach_core::sequence::{self, KinematicSequence, GAP_TOLERANCE_S};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
 use std::fmt::Write;
@@ -93,7 +94,8 @@ impl Scored {
     pub fn sequences(&self) -> [Sequenced; 2] {
         let of = |swing: &[Vec3], hz: f32, events: &SwingEvents| {
             let top = events.time(Position::P4)?;
-            let sequence = body::kinematic_sequence(&self.skeleton, swing, hz, events).ok()??;
+            let sequence =
+                sequence::kinematic_sequence(&self.skeleton, swing, hz, events).ok()??;
             Some((sequence, top, hz))
         };
         [
@@ -281,6 +283,20 @@ fn body_table(out: &mut String, n: usize, s: &Scored) {
             "<li>{who}: {} after the top; peaking {}</li>",
             peaks.join(", "),
             order.join(", ")
+        );
+    }
+    for g in &s.report.gaps {
+        let ms = |v: f32| v * 1000.0 + 0.0;
+        let _ = write!(
+            out,
+            "<li class=\"gap\">{} to {}: you {:.0} &#177; {:.0} ms, coach {:.0} ms (tolerance {:.0}){}</li>",
+            g.first.name().replace('_', " "),
+            g.then.name().replace('_', " "),
+            ms(g.student_s),
+            ms(g.uncertainty_s),
+            ms(g.coach_s),
+            ms(GAP_TOLERANCE_S),
+            if Advice::is_clear(g) { ": past it" } else { "" }
         );
     }
     out.push_str("</ul>\n");

@@ -7,6 +7,7 @@ use posecoach_core::checks::BodyDeviation;
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{Event, SwingEvents};
 use posecoach_core::score::{self, Advice, Report};
+use posecoach_core::sequence::GAP_TOLERANCE_S;
 use posecoach_io::{self as io, Motion};
 use serde_json::{json, Map, Value};
 use std::fmt::Write;
@@ -259,7 +260,16 @@ pub fn to_json(s: &html::Scored) -> Value {
             })
         }).collect::<Vec<_>>(),
         "advice": r.advice.iter().map(Advice::to_string).collect::<Vec<_>>(),
-        "kinematic_sequence": {"student": sequence_json(&student), "coach": sequence_json(&coach)},
+        "kinematic_sequence": {"student": sequence_json(&student), "coach": sequence_json(&coach),
+            "gaps": r.gaps.iter().map(|g| {
+                let ms = |v: f32| (f64::from(v) * 1000.0).round();
+                json!({
+                    "first": g.first.name(), "then": g.then.name(),
+                    "student_ms": ms(g.student_s), "coach_ms": ms(g.coach_s),
+                    "uncertainty_ms": ms(g.uncertainty_s), "tolerance_ms": ms(GAP_TOLERANCE_S),
+                    "advice": Advice::is_clear(g),
+                })
+            }).collect::<Vec<_>>()},
         "positions": s.body_table().iter().map(|(p, a, b)| json!({
             "position": p.name(), "moment": p.moment(),
             "student_frame": r.student_events.frame(*p), "coach_frame": r.coach_events.frame(*p),
@@ -349,6 +359,19 @@ pub fn to_text(s: &html::Scored) -> String {
             }
             let order: Vec<_> = k.order().iter().map(|l| l.name()).collect();
             let _ = writeln!(out, " peaking {}", order.join(" > "));
+        }
+        for g in &r.gaps {
+            let _ = writeln!(
+                out,
+                "  {} to {}: you {:.0} ± {:.0} ms (coach {:.0}), tolerance {:.0}{}",
+                g.first.name(),
+                g.then.name(),
+                g.student_s * 1000.0 + 0.0,
+                g.uncertainty_s * 1000.0,
+                g.coach_s * 1000.0 + 0.0,
+                GAP_TOLERANCE_S * 1000.0,
+                if Advice::is_clear(g) { "  past it" } else { "" }
+            );
         }
     }
     if !r.body.is_empty() {

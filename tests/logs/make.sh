@@ -3,9 +3,9 @@
 # reports beside them are rewritten by `POSECOACH_BLESS=1 cargo test -p posecoach-tests --test replay`.
 #
 # The committed sessions were made by an earlier synth-log, whose noise draws have since
-# changed, and re-framed for wire versions 2 and 3 (every message kept byte for byte, the
-# version byte and CRC rewritten; for version 2 the short session's CoachSelect dropped, so
-# its swings get the coaches of their clubs). This script
+# changed, and re-framed for wire versions 2, 3 and 4 (every message kept byte for byte, the
+# version byte and CRC rewritten, by scripts/reframe.py since version 4; for version 2 the short
+# session's CoachSelect dropped, so its swings get the coaches of their clubs). This script
 # makes sessions of the same description with other draws: on some draws of the short session
 # the driver's backswing comes out 8 to 10 % short (docs/COACHING.md, "What misses and why").
 set -euo pipefail

@@ -81,7 +81,8 @@ fn a_left_handed_golfer_reads_like_the_right_handed_one() {
 
 #[test]
 fn tour_swings_speed_up_from_the_hips_to_the_club() {
-    use posecoach_core::body::{kinematic_sequence, Link};
+    use posecoach_core::body::Link;
+    use posecoach_core::sequence::kinematic_sequence;
     for name in SWINGS {
         let swing = io::load(&fixture(name)).unwrap();
         let events = detect(&swing.skeleton, &swing.positions, swing.rate_hz).unwrap();

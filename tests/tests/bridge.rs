@@ -11,6 +11,7 @@ use posecoach_cli::replay::replay;
 use posecoach_core::checks::CHECKS;
 use posecoach_core::events::Position;
 use posecoach_core::joint::Joint;
+use posecoach_core::sequence::GAPS;
 use posecoach_core::wire::Message;
 use serde_json::Value;
 use serialport::{SerialPort, TTYPort};
@@ -290,6 +291,25 @@ fn same_report(wire: &Value, replayed: &Value) {
         for key in ["student", "coach", "uncertainty"] {
             let json = c[key].as_f64().unwrap() * 10.0;
             let got = w[key].as_f64().unwrap();
+            assert!(
+                (got - json).abs() <= 1.0,
+                "{context}: {key} {got} against {json}"
+            );
+        }
+    }
+    // Gaps of the sequence: milliseconds on the wire and in the JSON (each rounded once).
+    let gaps = report["kinematic_sequence"]["gaps"].as_array().unwrap();
+    let wired = wire["gaps"].as_array().unwrap();
+    assert_eq!(wired.len(), gaps.len(), "{context}");
+    for (w, g) in wired.iter().zip(gaps) {
+        let (first, then) = GAPS[w["gap"].as_u64().unwrap() as usize];
+        assert_eq!(
+            (first.name(), then.name()),
+            (g["first"].as_str().unwrap(), g["then"].as_str().unwrap()),
+            "{context}"
+        );
+        for key in ["student_ms", "coach_ms", "uncertainty_ms"] {
+            let (got, json) = (w[key].as_f64().unwrap(), g[key].as_f64().unwrap());
             assert!(
                 (got - json).abs() <= 1.0,
                 "{context}: {key} {got} against {json}"

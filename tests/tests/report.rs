@@ -65,6 +65,8 @@ fn check_parts(page: &str, n: usize, events: usize) {
         sequence.matches("<li>").count(),
         if events == 8 { 2 } else { 0 }
     );
+    // And the gaps between peaks both swings could be timed.
+    assert!(sequence.matches("<li class=\"gap\">").count() <= if events == 8 { 2 } else { 0 });
     // The sequence's graph, for a full swing: per swing a curve and a peak for each link
     // (three without a club, four with one).
     let chart = section.find(&format!("id=\"sequence-chart-{n}\""));

@@ -6,7 +6,7 @@ use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::wire::{
     self, Config, Counters, Decoder, ImuSample, Message, NackReason, PoseFrame, SensorLayout,
-    SensorPlacement, StudentProfile, SwingReport, WireCheck, WireDeviation, MAX_FRAME,
+    SensorPlacement, StudentProfile, SwingReport, WireCheck, WireDeviation, WireGap, MAX_FRAME,
 };
 use posecoach_tests::fixture;
 
@@ -60,6 +60,14 @@ fn every_message() -> Vec<Message> {
                 student: 782,
                 coach: 950,
                 uncertainty: 34,
+            }]
+            .into_iter()
+            .collect(),
+            gaps: [WireGap {
+                gap: 0,
+                student_ms: -17,
+                coach_ms: 33,
+                uncertainty_ms: 9,
             }]
             .into_iter()
             .collect(),
