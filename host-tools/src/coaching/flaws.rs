@@ -5,11 +5,13 @@
 //! golfer is still before its first frame), with its events in seconds from there, found in
 //! the source swing with its club at the source's own rate.
 
+use posecoach_core::body::Link;
 use posecoach_core::body::{self, Metrics, Stance};
 use posecoach_core::checks::{Check, CHECKS};
 use posecoach_core::events::{Event, Side, SwingEvents};
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{Direction, Phase, Verdict};
+use posecoach_core::sequence::{self, GAPS, GAP_TOLERANCE_S};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
 use posecoach_io::Motion;
@@ -29,16 +31,20 @@ pub enum Body {
     ReducedTurn,
     /// The lead elbow bends at the top.
     BentLeadArm,
+    /// The chest (and everything it carries) moves ahead of time in the downswing, so it peaks
+    /// `size` ms early.
+    UpperBodyFirst,
 }
 
 impl Body {
     /// Every kind.
-    pub const ALL: [Body; 5] = [
+    pub const ALL: [Body; 6] = [
         Body::EarlyExtension,
         Body::Sway,
         Body::HeadDown,
         Body::ReducedTurn,
         Body::BentLeadArm,
+        Body::UpperBodyFirst,
     ];
 }
 
@@ -69,7 +75,8 @@ pub enum Flaw {
         /// How far.
         metres: f32,
     },
-    /// A body-level fault of `size` (metres, or degrees for the turn and the lead arm).
+    /// A body-level fault of `size` (metres; degrees for the turn and the lead arm; ms for the
+    /// upper body first).
     Body {
         /// Which.
         body: Body,
@@ -116,6 +123,15 @@ pub enum Truth {
         /// Which.
         check: Check,
         /// More than the clean swing's (else less).
+        more: bool,
+    },
+    /// This gap of the kinematic sequence is past its tolerance from the clean swing's.
+    Sequence {
+        /// The link that should peak first.
+        first: Link,
+        /// The link that should peak after it.
+        then: Link,
+        /// Longer than the clean swing's (else shorter).
         more: bool,
     },
 }
@@ -217,6 +233,7 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
         });
     }
     truths.extend(body_truths(&swing, &warped, &warped_times, lead));
+    truths.extend(sequence_truths(&swing, &warped, &warped_times, lead));
     let t = &warped_times;
     let (top, impact) = (Event::Top as usize, Event::Impact as usize);
     Planted {
@@ -267,6 +284,38 @@ fn body_truths(flawed: &Motion, clean: &Motion, times: &Times, lead: Side) -> Ve
         }
     }
     truths
+}
+
+/// The gaps of the kinematic sequence ([`GAPS`]) that `flawed` moves past their tolerance
+/// from `clean`'s, both between the same top and impact (`times`).
+fn sequence_truths(flawed: &Motion, clean: &Motion, times: &Times, lead: Side) -> Vec<Truth> {
+    let Ok(body) = body::Body::new(&clean.skeleton, lead) else {
+        return Vec::new();
+    };
+    let gaps = |m: &Motion| {
+        let frame = |e: Event| {
+            ((times[e as usize] * m.rate_hz).round().max(0.0) as usize).min(m.frames() - 1)
+        };
+        let k = sequence::peaks(
+            &body,
+            &m.positions,
+            m.rate_hz,
+            frame(Event::Top),
+            frame(Event::Impact),
+        );
+        GAPS.map(|(a, b)| Some((k.peak(b)?.time - k.peak(a)?.time) / m.rate_hz))
+    };
+    GAPS.into_iter()
+        .zip(gaps(flawed).into_iter().zip(gaps(clean)))
+        .filter_map(|((first, then), (f, c))| {
+            let (f, c) = (f?, c?);
+            ((f - c).abs() > GAP_TOLERANCE_S).then_some(Truth::Sequence {
+                first,
+                then,
+                more: f > c,
+            })
+        })
+        .collect()
 }
 
 /// The stance direction of `d`'s largest component, as the report names it.
@@ -458,6 +507,14 @@ fn move_joints(swing: &mut Motion, times: &Times, lead: Side, flaw: &Flaw) {
         }
         _ => 0.0,
     };
+    // The swing as it was, for the upper body first to take its upper body from a later moment.
+    let source: Vec<Vec3> = match flaw {
+        Flaw::Body {
+            body: Body::UpperBodyFirst,
+            ..
+        } => swing.positions.clone(),
+        _ => Vec::new(),
+    };
     for f in 0..swing.frames() {
         let u = f as f32 / rate;
         let frame = &mut swing.positions[f * joints..(f + 1) * joints];
@@ -584,6 +641,32 @@ fn move_joints(swing: &mut Motion, times: &Times, lead: Side, flaw: &Flaw) {
                 for (k, p) in frame.iter_mut().enumerate() {
                     if skeleton.ancestry(k).any(|a| a == e) {
                         *p = pivot + rot * (*p - pivot);
+                    }
+                }
+            }
+            Flaw::Body {
+                body: Body::UpperBodyFirst,
+                size,
+            } => {
+                // Everything from the thorax up, as it was `size` ms later about the spine, from
+                // the top to impact: its downswing comes that much early, its shape kept. The
+                // lead grows from halfway back to the top and fades from impact to the finish.
+                let (Some(spine), Some(thorax)) = (find(Joint::Spine), find(Joint::Thorax)) else {
+                    return;
+                };
+                let w = bump(u, t(Event::MidBackswing), t(Event::Top), t(Event::Top))
+                    * bump(u, t(Event::Impact), t(Event::Impact), t(Event::Finish));
+                let last = source.len() / joints - 1;
+                let x = ((u + size / 1000.0 * w) * rate).clamp(0.0, last as f32);
+                let (i, fraction) = (x.floor() as usize, x.fract());
+                let later = |k: usize| {
+                    source[i * joints + k] * (1.0 - fraction)
+                        + source[(i + 1).min(last) * joints + k] * fraction
+                };
+                let (pivot, from) = (frame[spine], later(spine));
+                for (k, p) in frame.iter_mut().enumerate() {
+                    if k == thorax || skeleton.ancestry(k).any(|a| a == thorax) {
+                        *p = pivot + (later(k) - from);
                     }
                 }
             }
@@ -816,5 +899,64 @@ mod tests {
                 "{first}"
             );
         }
+    }
+    /// The upper body turned ahead of time leaves the hips peaking after the chest: planted, it
+    /// is true of that gap; scored against the clean swing with no noise, it is advice in a
+    /// coach's words, and a smaller one within the tolerance is neither.
+    #[test]
+    fn the_upper_body_first_is_a_gap_out_of_order() {
+        use posecoach_core::dtw::Band;
+        use posecoach_core::score::Advice;
+        let (swing, t, lead) = clean();
+        let at_60 = |m: &Motion| m.resampled(60.0).unwrap();
+        let flaw = |size| Flaw::Body {
+            body: Body::UpperBodyFirst,
+            size,
+        };
+        let planted = plant(&swing, &t, lead, &[flaw(50.0)]);
+        let hips_late = Truth::Sequence {
+            first: Link::Pelvis,
+            then: Link::Thorax,
+            more: false,
+        };
+        assert!(planted.truths.contains(&hips_late), "{:?}", planted.truths);
+        // The golfer stands still for 0.3 s before the takeaway, as a recorded swing does: the
+        // pose noise is read there.
+        let still = |m: &Motion| {
+            let mut m = at_60(m);
+            let first = m.frame(0).to_vec();
+            let mut positions: Vec<Vec3> = first
+                .iter()
+                .cycle()
+                .take(18 * first.len())
+                .copied()
+                .collect();
+            positions.extend_from_slice(&m.positions);
+            m.missing = vec![false; positions.len()];
+            m.positions = positions;
+            m
+        };
+        let report =
+            crate::score::score_swings(&still(&planted.swing), &still(&swing), Band::DEFAULT)
+                .unwrap();
+        let item = report
+            .advice
+            .iter()
+            .find(|a| matches!(a, Advice::Sequence(g) if g.first == Link::Pelvis))
+            .unwrap_or_else(|| panic!("{:?} {:?}", report.gaps, planted.truths));
+        assert!(
+            item.to_string()
+                .ends_with(": the upper body starts the downswing."),
+            "{item}"
+        );
+        let small = plant(&swing, &t, lead, &[flaw(10.0)]);
+        assert!(
+            !small
+                .truths
+                .iter()
+                .any(|t| matches!(t, Truth::Sequence { .. })),
+            "{:?}",
+            small.truths
+        );
     }
 }

@@ -45,6 +45,7 @@ use posecoach_core::events::{self, Event, Position, Side};
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{Advice, Direction, Phase, Report, TEMPO_CONFIDENCE};
+use posecoach_core::sequence::{Gap, GAPS};
 use posecoach_core::wire::{self, Config, Message, StudentProfile, MAX_FRAME};
 use posecoach_core::Vec3;
 use posecoach_io::{self as io, Motion};
@@ -162,14 +163,18 @@ struct Outcome1 {
     right_coach: bool,
     any_advice: bool,
     tempo_verdict: bool,
-    /// The planted flaws move a body check past its tolerance.
+    /// The planted flaws move a body check or a gap of the sequence past its tolerance.
     body_truth: bool,
-    /// The advice has a body item stating one.
+    /// The advice has a body or sequence item stating one.
     body_named: bool,
-    /// The advice has a body item.
+    /// The advice has a body or sequence item.
     body_advice: bool,
+    /// The advice has a sequence item.
+    sequence_advice: bool,
     /// The report's body checks.
     body: Vec<BodyDeviation>,
+    /// The report's gaps of the sequence.
+    gaps: Vec<Gap>,
     /// The planted truths.
     truths: Vec<Truth>,
     score: Option<f32>,
@@ -364,6 +369,7 @@ fn cases(cleans: &[Clean], args: &Args) -> Vec<Case> {
                 let size = match body {
                     Body::ReducedTurn => rng.random_range(10.0f32..=25.0),
                     Body::BentLeadArm => rng.random_range(20.0f32..=40.0),
+                    Body::UpperBodyFirst => rng.random_range(15.0f32..=50.0),
                     _ => rng.random_range(0.05f32..=0.12),
                 };
                 sets.push(vec![Flaw::Body { body, size }]);
@@ -518,13 +524,18 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     outcome.body_truth = planted
         .truths
         .iter()
-        .any(|t| matches!(t, Truth::Body { .. }));
+        .any(|t| matches!(t, Truth::Body { .. } | Truth::Sequence { .. }));
     let body_items = || {
         report
             .advice
             .iter()
-            .filter(|a| matches!(a, Advice::Body(_)))
+            .filter(|a| matches!(a, Advice::Body(_) | Advice::Sequence(_)))
     };
+    outcome.sequence_advice = report
+        .advice
+        .iter()
+        .any(|a| matches!(a, Advice::Sequence(_)));
+    outcome.gaps = report.gaps.to_vec();
     outcome.body_advice = body_items().next().is_some();
     outcome.body = report.body.to_vec();
     outcome.truths = planted.truths.clone();
@@ -710,6 +721,9 @@ fn states(advice: &Advice, planted: &Planted) -> bool {
         (Truth::Body { check, more }, Advice::Body(b)) => {
             b.check == *check && (b.student > b.coach) == *more
         }
+        (Truth::Sequence { first, then, more }, Advice::Sequence(g)) => {
+            g.first == *first && g.then == *then && (g.student_s > g.coach_s) == *more
+        }
         _ => false,
     })
 }
@@ -806,6 +820,19 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
         "false_tempo": share(unflawed.iter().filter(|(_, o)| o.tempo_verdict).count(), unflawed.len()),
         "false_advice": share(unflawed.iter().filter(|(_, o)| o.any_advice).count(), unflawed.len()),
         "false_body": share(unflawed.iter().filter(|(_, o)| o.body_advice).count(), unflawed.len()),
+        "false_sequence": share(unflawed.iter().filter(|(_, o)| o.sequence_advice).count(), unflawed.len()),
+        "gaps": GAPS.iter().map(|&(first, then)| {
+            // On unflawed swings the student's gap is the coach's: its error, and whether it lies
+            // within its stated interval (± TEMPO_CONFIDENCE uncertainties).
+            let timed: Vec<&Gap> = unflawed.iter().flat_map(|(_, o)| &o.gaps).filter(|g| (g.first, g.then) == (first, then)).collect();
+            let errors: Vec<f32> = timed.iter().map(|g| (g.student_s - g.coach_s) * 1000.0).collect();
+            (format!("{}_{}", first.name(), then.name()), json!({
+                "timed": share(timed.len(), unflawed.len()),
+                "error_ms": quantiles(&errors),
+                "uncertainty_ms": quantiles(&timed.iter().map(|g| g.uncertainty_s * 1000.0).collect::<Vec<_>>()),
+                "covered": share(timed.iter().filter(|g| (g.student_s - g.coach_s).abs() <= TEMPO_CONFIDENCE * g.uncertainty_s).count(), timed.len()),
+            }))
+        }).collect::<serde_json::Map<_, _>>(),
         "body_named": {
             "all": named(&|_| true),
             "by_flaw": Body::ALL.iter().map(|&b| (
@@ -845,7 +872,7 @@ fn case_json(clean: &Clean, case: &Case, o: &Outcome1) -> Value {
         },
         "shown_cm": o.shown_m * 100.0, "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
         "tempo_error": o.tempo_error, "backswing_z": o.backswing_z, "score": o.score, "first": o.first, "right_first": o.right_first, "right_coach": o.right_coach,
-        "any_advice": o.any_advice, "body_truth": o.body_truth, "body_named": o.body_named, "truths": o.truths, "body": o.body, "error": o.error,
+        "any_advice": o.any_advice, "body_truth": o.body_truth, "body_named": o.body_named, "truths": o.truths, "body": o.body, "gaps": o.gaps, "error": o.error,
     })
 }
 
@@ -895,6 +922,32 @@ fn table(doc: &Value) -> String {
             sc(&l["score"]["unflawed"]),
             sc(&l["score"]["offset_10_15cm"]),
             sc(&l["score"]["tempo_30_50pc"]),
+        );
+    }
+    let _ = writeln!(
+        out,
+        "sequence gaps on unflawed swings, hips to chest | chest to lead arm: timed, error ms median / p95, uncertainty ms median, covered [90 %]; false sequence items"
+    );
+    for l in doc["levels"].as_array().into_iter().flatten() {
+        let cells: Vec<String> = GAPS
+            .iter()
+            .map(|(first, then)| {
+                let g = &l["gaps"][format!("{}_{}", first.name(), then.name())];
+                format!(
+                    "{}, {}, {:.0}, {}",
+                    pct(&g["timed"]),
+                    q(&g["error_ms"]),
+                    g["uncertainty_ms"]["median"].as_f64().unwrap_or(f64::NAN),
+                    pct(&g["covered"])
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            out,
+            "{:>8} | {} | {}",
+            l["input"].as_str().unwrap_or("-"),
+            cells.join(" | "),
+            pct(&l["false_sequence"])
         );
     }
     for metrics in [&KEY_METRICS[..], &MORE_METRICS[..]] {
