@@ -15,7 +15,7 @@ Outcome of each run, from its exit status and stderr:
   hang      ran past --timeout (its process group is killed)
   panic     stderr says `panicked`, or exit 101
   abort     killed by a signal (exit 128+N under /usr/bin/time), or stderr says `memory allocation of`
-  accepted  exit 0;  refused: exit 1 or 2 with an `error:` line;  other: any other exit
+  accepted  exit 0;  refused: exit 1, 2 or 3 with an `error:` line;  other: any other exit
   memory bomb, counted on top: peak RSS over 1 GiB (/usr/bin/time -f %M, when present). Runs are
   capped at 4 GiB of address space (prlimit, when present), so a runaway allocation aborts
   instead of exhausting the machine.
@@ -148,7 +148,7 @@ def classify(rc, err):
         return "abort"
     if rc == 0:
         return "accepted"
-    return "refused" if rc in (1, 2) and re.search(r"^error:", err, re.M) else "other"
+    return "refused" if rc in (1, 2, 3) and re.search(r"^error:", err, re.M) else "other"
 
 
 def run(argv, timeout, mem_path):

@@ -11,6 +11,7 @@ pub mod coaches;
 pub mod coaching;
 pub mod demo;
 pub mod device_sim;
+pub mod failure;
 pub mod html;
 pub mod inspect;
 #[cfg(feature = "learn")]

@@ -1,8 +1,10 @@
 //! `posecoach`: the host command-line tool.
 //!
 //! Every command returns its output as text (a readable summary, or one JSON object with
-//! `--json`) and `main` prints it.
+//! `--json`) and `main` prints it; a failure is printed and its exit status given as
+//! [`posecoach_cli::failure`] says.
 
+use posecoach_cli::failure::{self, Kind};
 #[cfg(feature = "learn")]
 use posecoach_cli::learn;
 use posecoach_cli::{
@@ -72,7 +74,20 @@ enum Command {
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let json = std::env::args_os().skip(1).any(|a| a == "--json");
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        // Help and version, and a usage error as a person reads it, as clap prints them.
+        Err(e) if !json || !e.use_stderr() => e.exit(),
+        Err(e) => {
+            let rendered = e.render().to_string();
+            let message = rendered.lines().next().unwrap_or_default();
+            let message = message.strip_prefix("error: ").unwrap_or(message);
+            println!("{}", failure::to_json(Kind::Usage, message));
+            eprint!("{rendered}");
+            return ExitCode::from(Kind::Usage.status());
+        }
+    };
     let result = match cli.command {
         Command::Demo(args) => demo::run(&args),
         Command::Retarget(args) => retarget::run(&args),
@@ -96,24 +111,31 @@ fn main() -> ExitCode {
         #[cfg(feature = "learn")]
         Command::Eval(args) => learn::eval(&args),
     };
-    match result {
-        Ok(output) => {
-            // A reader that stops early (`| head`) is not an error.
-            let mut stdout = std::io::stdout().lock();
-            match stdout
-                .write_all(output.as_bytes())
-                .and_then(|()| stdout.flush())
-            {
-                Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
-                    eprintln!("error: writing the output: {e}");
-                    ExitCode::FAILURE
-                }
-                _ => ExitCode::SUCCESS,
-            }
-        }
+    let (output, status) = match result {
+        Ok(output) => (output, ExitCode::SUCCESS),
         Err(e) => {
+            let kind = Kind::of(&e);
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            // A command that found nothing may still have its usual output; else, under
+            // `--json`, the error as an object.
+            let output = match (failure::output(&e), json) {
+                (Some(output), _) => output.to_string(),
+                (None, true) => format!("{}\n", failure::to_json(kind, &format!("{e:#}"))),
+                (None, false) => String::new(),
+            };
+            (output, ExitCode::from(kind.status()))
         }
+    };
+    // A reader that stops early (`| head`) is not an error.
+    let mut stdout = std::io::stdout().lock();
+    match stdout
+        .write_all(output.as_bytes())
+        .and_then(|()| stdout.flush())
+    {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            eprintln!("error: writing the output: {e}");
+            ExitCode::from(Kind::BadInput.status())
+        }
+        _ => status,
     }
 }

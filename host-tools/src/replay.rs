@@ -1,5 +1,6 @@
 //! `posecoach replay`: a recorded session through the device's pipeline, swing by swing.
 
+use crate::failure::NothingFound;
 use crate::{coaches, device_sim, html, score};
 use anyhow::{Context, Result};
 use posecoach_adapters::log::LogReader;
@@ -16,8 +17,8 @@ pub struct Args {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
-    /// Also write the report to this file: the HTML page for a name ending in `.html`, else
-    /// the JSON.
+    /// Also write the report to this file: the HTML page for a name ending in `.html` or
+    /// `.htm`, the JSON for `.json`.
     #[arg(long)]
     report: Option<PathBuf>,
     /// Also write the frames the device sends back (a `SwingReport` per scored swing, a
@@ -55,6 +56,9 @@ impl Replay {
 }
 
 pub fn run(args: &Args) -> Result<String> {
+    if let Some(path) = &args.report {
+        score::ReportFormat::of(path)?;
+    }
     let bytes =
         std::fs::read(&args.log).with_context(|| format!("reading {}", args.log.display()))?;
     let replay = coaches::with_network(args.weights.as_deref(), |weights| {
@@ -71,14 +75,29 @@ pub fn run(args: &Args) -> Result<String> {
             html::page("posecoach session report", &notes, &replay.pages)
         })?;
     }
-    if args.json {
-        return Ok(format!("{json}\n"));
+    let out = if args.json {
+        format!("{json}\n")
+    } else {
+        let mut out = replay.text;
+        for r in &replay.refused {
+            let _ = writeln!(out, "refused: {r}");
+        }
+        let _ = writeln!(out, "counters: {}", replay.counters);
+        out
+    };
+    // No swing scored: the output all the same, and the status says so.
+    if replay.swings.is_empty() {
+        return Err(NothingFound {
+            message: format!(
+                "{}: no swing found in {} frames read ({} messages refused)",
+                args.log.display(),
+                replay.counters["frames_ok"],
+                replay.refused.len()
+            ),
+            output: out,
+        }
+        .into());
     }
-    let mut out = replay.text;
-    for r in &replay.refused {
-        let _ = writeln!(out, "refused: {r}");
-    }
-    let _ = writeln!(out, "counters: {}", replay.counters);
     Ok(out)
 }
 

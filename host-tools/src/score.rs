@@ -1,12 +1,13 @@
 //! `posecoach score`: a student's swing against the coach's, retargeted onto the student.
 
+use crate::failure::{NothingFound, Usage};
 use crate::{html, teacher};
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_core::body::{Angles, Link, Metrics, Shift};
 use posecoach_core::checks::BodyDeviation;
 use posecoach_core::dtw::Band;
-use posecoach_core::events::{Event, SwingEvents};
-use posecoach_core::score::{self, Advice, Report};
+use posecoach_core::events::{Event, EventError, SwingEvents};
+use posecoach_core::score::{self, Advice, Report, ScoreError};
 use posecoach_core::sequence::GAP_TOLERANCE_S;
 use posecoach_io::{self as io, Motion};
 use serde_json::{json, Map, Value};
@@ -45,7 +46,7 @@ pub struct Args {
     #[arg(long)]
     json: bool,
     /// Also write the report to this file: the HTML page (self-contained, for any browser)
-    /// for a name ending in `.html`, else the JSON.
+    /// for a name ending in `.html` or `.htm`, the JSON for `.json`.
     #[arg(long)]
     report: Option<PathBuf>,
 }
@@ -53,6 +54,9 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<String> {
     if !(args.rate.is_finite() && (10.0..=240.0).contains(&args.rate)) {
         bail!("--rate {} must be between 10 and 240 Hz", args.rate);
+    }
+    if let Some(path) = &args.report {
+        ReportFormat::of(path)?;
     }
     let coach = io::load(&args.coach)?;
     let student = io::load(&args.student)?;
@@ -81,7 +85,18 @@ pub fn run(args: &Args) -> Result<String> {
         radius: args.band,
         anchored: !args.global_band,
     };
-    let report = score_swings(&student, &virtual_coach, band)?;
+    let report = score_swings(&student, &virtual_coach, band).map_err(|e| {
+        match e.downcast_ref::<ScoreError>() {
+            Some(ScoreError::Events {
+                student: true,
+                error: EventError::NoSwing,
+            }) => anyhow::Error::new(NothingFound {
+                message: format!("{}: {e}", args.student.display()),
+                output: String::new(),
+            }),
+            _ => e,
+        }
+    })?;
     let scored = html::Scored {
         report,
         skeleton: student.skeleton.clone(),
@@ -116,17 +131,42 @@ pub fn run(args: &Args) -> Result<String> {
     })
 }
 
-/// Writes `path`: the page `html` makes for a name ending in `.html`, else `json`.
+/// What a report file holds, by its name's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReportFormat {
+    /// `.html`, `.htm`: the page.
+    Html,
+    /// `.json`: the JSON `--json` prints.
+    Json,
+}
+
+impl ReportFormat {
+    /// The format of a report named `path`.
+    ///
+    /// # Errors
+    /// [`Usage`] for any other extension, before any work is done.
+    pub fn of(path: &Path) -> Result<ReportFormat> {
+        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+        match extension.to_ascii_lowercase().as_str() {
+            "html" | "htm" => Ok(ReportFormat::Html),
+            "json" => Ok(ReportFormat::Json),
+            _ => Err(Usage(format!(
+                "--report {}: a report is a page (.html) or JSON (.json); name the file so",
+                path.display()
+            ))
+            .into()),
+        }
+    }
+}
+
+/// Writes `path`: the page `html` makes, or `json`, as its extension says ([`ReportFormat`]).
 ///
 /// # Errors
-/// If the file cannot be written.
+/// For another extension, or if the file cannot be written.
 pub fn write_report(path: &Path, json: &Value, html: impl FnOnce() -> String) -> Result<()> {
-    let text = match path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("html"))
-    {
-        true => html(),
-        false => format!("{json:#}\n"),
+    let text = match ReportFormat::of(path)? {
+        ReportFormat::Html => html(),
+        ReportFormat::Json => format!("{json:#}\n"),
     };
     std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
 }

@@ -144,6 +144,120 @@ fn errors_name_the_file_and_what_to_fix() {
     assert!(err.contains("swing"), "{err}");
 }
 
+/// The exit status, standard output and standard error of `posecoach args`.
+fn posecoach_status(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_posecoach"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap(),
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    )
+}
+
+#[test]
+fn failures_have_a_kind_and_an_exit_status() {
+    let iron = fixture("golf_iron_60hz.csv");
+    let iron = iron.to_str().unwrap();
+    let error = |out: &str| -> (String, String) {
+        let v: Value = serde_json::from_str(out).unwrap();
+        let e = &v["error"];
+        (
+            e["kind"].as_str().unwrap().into(),
+            e["message"].as_str().unwrap().into(),
+        )
+    };
+    // Bad input: 1, the file named.
+    let (status, out, err) = posecoach_status(&[
+        "score",
+        "--coach",
+        "missing.csv",
+        "--student",
+        iron,
+        "--json",
+    ]);
+    assert_eq!(status, 1, "{err}");
+    let (kind, message) = error(&out);
+    assert_eq!(kind, "bad_input");
+    assert!(message.contains("missing.csv"), "{message}");
+    assert!(err.starts_with("error: "), "{err}");
+    // Usage: 2, from clap and from a command, under --json too; a report's name is checked
+    // before any work, and nothing is written.
+    let (status, out, _) = posecoach_status(&["score", "--student", iron, "--json"]);
+    assert_eq!(status, 2);
+    assert_eq!(error(&out).0, "usage");
+    let (status, _, err) = posecoach_status(&["score", "--student", iron]);
+    assert_eq!(status, 2, "{err}");
+    let dir = std::env::temp_dir().join(format!("posecoach-failures-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // The iron against itself, its report written to `name` (with `--json`).
+    let with_report = |name: &str| {
+        let path = dir.join(name);
+        let run = posecoach_status(&[
+            "score",
+            "--coach",
+            iron,
+            "--student",
+            iron,
+            "--report",
+            path.to_str().unwrap(),
+            "--json",
+        ]);
+        (path, run)
+    };
+    let (pdf, (status, out, _)) = with_report("report.pdf");
+    assert_eq!(status, 2);
+    let (kind, message) = error(&out);
+    assert_eq!(kind, "usage");
+    assert!(
+        message.contains(".html") && message.contains(".json"),
+        "{message}"
+    );
+    assert!(!pdf.exists());
+    // Reports by extension.
+    let (htm, (status, _, err)) = with_report("report.HTM");
+    assert_eq!(status, 0, "{err}");
+    assert!(std::fs::read_to_string(&htm)
+        .unwrap()
+        .starts_with("<!DOCTYPE html>"));
+    // Nothing found: 3. A student standing still at address for two seconds has no swing.
+    let text = std::fs::read_to_string(fixture("golf_iron_60hz.csv")).unwrap();
+    let mut lines = text.lines();
+    let (header, address) = (lines.next().unwrap(), lines.next().unwrap());
+    let pose = address.split_once(',').unwrap().1;
+    let still = dir.join("still.csv");
+    let rows: Vec<String> = (0..120)
+        .map(|f| format!("{},{pose}", f as f32 / 60.0))
+        .collect();
+    std::fs::write(&still, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
+    let (status, out, err) = posecoach_status(&[
+        "score",
+        "--coach",
+        iron,
+        "--student",
+        still.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(status, 3, "{err}");
+    assert_eq!(status, 3);
+    let (kind, message) = error(&out);
+    assert_eq!(kind, "nothing_found");
+    assert!(message.contains("still.csv"), "{message}");
+    // A recording cut short: its usual output all the same, and 3.
+    let log = std::fs::read(fixture("../logs/short_cmu_30hz.pclog")).unwrap();
+    let cut = dir.join("cut.pclog");
+    std::fs::write(&cut, &log[..3000]).unwrap();
+    let (status, out, err) = posecoach_status(&["replay", cut.to_str().unwrap(), "--json"]);
+    assert_eq!(status, 3, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["swings"].as_array().unwrap().len(), 0);
+    assert!(v["counters"]["frames_ok"].as_u64().unwrap() > 0);
+    assert!(err.contains("no swing found"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 fn weights(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../weights")
