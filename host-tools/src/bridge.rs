@@ -27,7 +27,7 @@ use anyhow::{Context, Result};
 use posecoach_core::wire::{Decoder, Message, MAX_FRAME};
 use serde_json::{json, Value};
 use std::io::{BufRead, BufReader, Read, Write};
-use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::net::{TcpListener, TcpStream};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender, TrySendError};
@@ -53,21 +53,27 @@ const ACCEPT_POLL: Duration = Duration::from_millis(20);
 pub struct Args {
     #[command(flatten)]
     serial: Serial,
-    /// Where phone apps connect, as ADDRESS:PORT.
+    /// Where phone apps connect, as HOST:PORT: a name (`localhost:7879`) or an address
+    /// (`0.0.0.0:7879`, `[::1]:7879`); port 0 takes a free one, and the line on standard error
+    /// says which.
     #[arg(long)]
-    listen: SocketAddr,
+    listen: String,
     /// On Ctrl-C, print the counters as one JSON object instead of text.
     #[arg(long)]
     json: bool,
 }
 
 pub fn run(args: &Args) -> Result<String> {
-    let listener =
-        TcpListener::bind(args.listen).with_context(|| format!("listening on {}", args.listen))?;
+    let listener = TcpListener::bind(args.listen.as_str()).with_context(|| {
+        format!(
+            "listening on {}: give HOST:PORT, a name or an address and a free port",
+            args.listen
+        )
+    })?;
     eprintln!(
         "bridge: {} <-> {} (one JSON message per line; Ctrl-C to stop)",
         args.serial.port.display(),
-        args.listen
+        listener.local_addr().context("the listener's address")?
     );
     let c = serve(
         &args.serial.port,

@@ -143,6 +143,41 @@ fn come_and_go(addr: SocketAddr, n: usize) {
     }
 }
 
+/// A bridge told to listen on a host name and port 0 says on standard error where it listens,
+/// and a client reaches it there.
+#[test]
+fn a_bridge_listens_on_a_name_and_says_where() {
+    let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_posecoach"))
+        .args([
+            "bridge",
+            "--listen",
+            "localhost:0",
+            "--port",
+            "/nonexistent/tty",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    stderr.read_line(&mut line).unwrap();
+    // The bridge logs on: keep reading what it says.
+    let drain = std::thread::spawn(move || std::io::copy(&mut stderr, &mut std::io::sink()));
+    // "bridge: PORT <-> ADDRESS (one JSON message per line; ...)"
+    let addr: SocketAddr = line
+        .split(" <-> ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|a| a.parse().ok())
+        .unwrap_or_else(|| panic!("no address in {line:?}"));
+    assert!(addr.ip().is_loopback() && addr.port() != 0, "{addr}");
+    client(addr);
+    stop(&mut child, "-TERM");
+    drain.join().unwrap().unwrap();
+}
+
 #[test]
 fn ten_thousand_clients_that_come_and_go_leave_nothing_behind() {
     let _alone = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
