@@ -2,6 +2,7 @@
 //! device's, `core::weights`) or float weights (a teacher, a distilled network or a training
 //! checkpoint, `posecoach_teachfile`; read without the `learn` feature).
 
+use crate::score::decimal;
 use anyhow::{Context, Result};
 use posecoach_core::skeleton::Segment;
 use posecoach_core::weights::{self, Dense, Table, Weights};
@@ -58,7 +59,7 @@ fn describe(path: &std::path::Path, motion: &Motion) -> Value {
                 "name": name(k),
                 "canonical": skeleton.joint(k).map(|j| j.name()),
                 "parent": skeleton.parent(k).map(name),
-                "bone_m": skeleton.parent(k).map(|_| skeleton.offset(k).norm()),
+                "bone_m": skeleton.parent(k).map(|_| decimal(skeleton.offset(k).norm(), 4)),
             })
         })
         .collect();
@@ -83,9 +84,9 @@ fn describe(path: &std::path::Path, motion: &Motion) -> Value {
         "file": path.display().to_string(),
         "format": skeleton.format().name(),
         "frames": motion.frames(),
-        "rate_hz": motion.rate_hz,
-        "duration_s": motion.duration_s(),
-        "height_m": skeleton.height(),
+        "rate_hz": decimal(motion.rate_hz, 3),
+        "duration_s": decimal(motion.duration_s(), 3),
+        "height_m": decimal(skeleton.height(), 3),
         "joints": joints,
         "segments": segments,
         "missing": {"total": motion.missing.iter().filter(|&&m| m).count(), "per_joint": missing},

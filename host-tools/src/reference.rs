@@ -43,7 +43,7 @@ pub fn run(args: &Args) -> Result<String> {
     if args.json {
         let doc = serde_json::json!({
             "out": args.out.display().to_string(), "name": name, "joints": joints,
-            "frames": frames, "rate_hz": motion.rate_hz, "bytes": bytes.len(),
+            "frames": frames, "rate_hz": crate::score::decimal(motion.rate_hz, 3), "bytes": bytes.len(),
         });
         return Ok(format!("{doc}\n"));
     }

@@ -146,7 +146,7 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
                 .map(|(report, compared)| html::Scored::new(report, &compared))
                 .map_err(|error| error.to_string());
             let mut entry = json!({
-                "swing": swing.number, "start_s": start_s, "frames": swing.frames, "rate_hz": rate_hz,
+                "swing": swing.number, "start_s": (start_s * 1000.0).round() / 1000.0, "frames": swing.frames, "rate_hz": rate_hz,
                 "coach": coach,
             });
             match &outcome {

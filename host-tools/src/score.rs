@@ -105,7 +105,15 @@ pub fn run(args: &Args) -> Result<String> {
         coach: virtual_coach.positions.clone(),
         coach_hz: virtual_coach.rate_hz,
     };
-    let json = to_json(&scored);
+    let mut json = to_json(&scored);
+    // What was scored, and the rate every frame number counts at.
+    json["files"] = json!({
+        "coach": args.coach.display().to_string(),
+        "student": args.student.display().to_string(),
+        "student_tpose": args.student_tpose.as_ref().map(|p| p.display().to_string()),
+        "weights": args.weights.as_ref().map(|p| p.display().to_string()),
+    });
+    json["rate_hz"] = json!(decimal(scored.student_hz, 3));
     if let Some(path) = &args.report {
         let retargeter = match &args.weights {
             Some(w) => format!("learned retargeter {}", w.display()),
@@ -202,9 +210,19 @@ fn times(e: &SwingEvents) -> Value {
     Value::Object(
         Event::ALL
             .iter()
-            .filter_map(|&ev| e.time(ev).map(|t| (ev.name().to_string(), json!(t))))
+            .filter_map(|&ev| {
+                e.time(ev)
+                    .map(|t| (ev.name().to_string(), json!(decimal(t, 2))))
+            })
             .collect::<Map<_, _>>(),
     )
+}
+
+/// `value` rounded to `places` decimals, as reports print a measured number: to what it means
+/// (a score to 0.1 point, seconds to the ms), not as a widened `f32`'s digits.
+pub fn decimal(value: f32, places: i32) -> f64 {
+    let scale = 10f64.powi(places);
+    (f64::from(value) * scale).round() / scale
 }
 
 /// A body metric the reports and the coaching benchmark single out: its name, its unit and its
@@ -270,18 +288,18 @@ pub fn to_json(s: &html::Scored) -> Value {
     let [student, coach] = s.sequences();
     let cm = |m: f32| (f64::from(m) * 1000.0).round() / 10.0;
     json!({
-        "score": r.score,
-        "dtw": {"distance": r.distance, "normalized": r.normalized, "path": r.path.iter().map(|&(i, j)| [i, j]).collect::<Vec<_>>()},
+        "score": decimal(r.score, 1),
+        "dtw": {"distance": decimal(r.distance, 4), "normalized": decimal(r.normalized, 4), "path": r.path.iter().map(|&(i, j)| [i, j]).collect::<Vec<_>>()},
         "events": {"student": events(&r.student_events), "coach": events(&r.coach_events),
                    "student_times": times(&r.student_events), "coach_times": times(&r.coach_events),
                    "lead_side": format!("{:?}", r.student_events.lead).to_lowercase(),
                    "kind": format!("{:?}", r.student_events.kind).to_lowercase()},
         "tempo": {
-            "student_ratio": r.student_tempo_ratio,
-            "coach_ratio": r.coach_tempo_ratio,
+            "student_ratio": decimal(r.student_tempo_ratio, 2),
+            "coach_ratio": decimal(r.coach_tempo_ratio, 2),
             "phases": r.tempo.iter().map(|t| json!({
-                "phase": t.phase.name(), "student_s": t.student_s, "coach_s": t.coach_s,
-                "ratio": t.ratio, "ratio_uncertainty": t.ratio_uncertainty,
+                "phase": t.phase.name(), "student_s": decimal(t.student_s, 3), "coach_s": decimal(t.coach_s, 3),
+                "ratio": decimal(t.ratio, 3), "ratio_uncertainty": decimal(t.ratio_uncertainty, 3),
                 "verdict": t.verdict.name()})).collect::<Vec<_>>(),
         },
         "spatial": r.spatial.iter().map(|d| json!({
