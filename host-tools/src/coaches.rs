@@ -2,7 +2,7 @@
 //! them (the blobs in `coaches/`, real swings, see the README; the same bytes the firmware
 //! embeds), and optionally the int8 network's weights.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use posecoach_adapters::session::{BufferLens, Coach, OwnedBuffers, Session, RATES_HZ};
 use posecoach_core::blob::Aligned;
 use posecoach_core::config::MAX_JOINTS;
@@ -50,6 +50,13 @@ impl Network {
             words,
             len: bytes.len(),
         };
+        if bytes.starts_with(&posecoach_teachfile::MAGIC) {
+            bail!(
+                "{} holds float weights (a network from `posecoach train` or `distill`); a \
+                 device runs int8 weights: make them with `posecoach export` and give that file",
+                path.display()
+            );
+        }
         network
             .weights()
             .with_context(|| format!("reading {}", path.display()))?;

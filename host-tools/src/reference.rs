@@ -7,6 +7,7 @@ use std::path::PathBuf;
 #[derive(clap::Args)]
 pub struct Args {
     /// The coach's swing (.csv, .bvh or .c3d).
+    #[arg(long)]
     coach: PathBuf,
     /// The name it is stored under (at most 32 bytes); the file's stem by default.
     #[arg(long)]
@@ -49,7 +50,7 @@ pub fn run(args: &Args) -> Result<String> {
     }
     Ok(format!(
         "wrote coach reference `{name}` ({joints} joints, {frames} frames at {} Hz, {} bytes) to {}\n",
-        motion.rate_hz,
+        crate::score::decimal(motion.rate_hz, 3),
         bytes.len(),
         args.out.display()
     ))

@@ -1,5 +1,6 @@
 //! `posecoach retarget`: the coach's motion on the student's skeleton.
 
+use crate::failure::Usage;
 use crate::teacher;
 use anyhow::Result;
 use posecoach_io as io;
@@ -30,6 +31,14 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<String> {
+    let written = args.out.extension().and_then(|e| e.to_str());
+    if !written.is_some_and(|e| e.eq_ignore_ascii_case("bvh") || e.eq_ignore_ascii_case("csv")) {
+        return Err(Usage(format!(
+            "--out {}: a retargeted motion is written as .bvh or .csv",
+            args.out.display()
+        ))
+        .into());
+    }
     let coach = io::load(&args.coach)?;
     let student = io::load(&args.student_tpose)?;
     let (virtual_swing, method) = match &args.weights {

@@ -255,6 +255,44 @@ fn failures_have_a_kind_and_an_exit_status() {
     assert_eq!(v["swings"].as_array().unwrap().len(), 0);
     assert!(v["counters"]["frames_ok"].as_u64().unwrap() > 0);
     assert!(err.contains("no swing found"), "{err}");
+    // One flag per thing across commands: the coach is --coach for `reference` too; an
+    // output a command cannot write is refused before any work; float weights where a device's
+    // int8 ones belong are named as such, with the command that makes the right ones.
+    let pcr = dir.join("iron.pcr");
+    let (status, _, err) = posecoach_status(&["reference", iron, "--out", pcr.to_str().unwrap()]);
+    assert_eq!(status, 2, "{err}");
+    let (status, _, err) =
+        posecoach_status(&["reference", "--coach", iron, "--out", pcr.to_str().unwrap()]);
+    assert_eq!(status, 0, "{err}");
+    let c3d = dir.join("virtual.c3d");
+    let (status, out, _) = posecoach_status(&[
+        "retarget",
+        "--coach",
+        iron,
+        "--student-tpose",
+        fixture("h36m17_tpose.csv").to_str().unwrap(),
+        "--out",
+        c3d.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(status, 2);
+    let (kind, message) = error(&out);
+    assert_eq!(kind, "usage");
+    assert!(message.contains(".bvh or .csv"), "{message}");
+    assert!(!c3d.exists());
+    let float = weights("teacher.pcw");
+    let log = fixture("../logs/short_cmu_30hz.pclog");
+    let (status, _, err) = posecoach_status(&[
+        "replay",
+        log.to_str().unwrap(),
+        "--weights",
+        float.to_str().unwrap(),
+    ]);
+    assert_eq!(status, 1, "{err}");
+    assert!(
+        err.contains("float weights") && err.contains("posecoach export"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
