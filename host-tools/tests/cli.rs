@@ -109,7 +109,16 @@ fn a_swing_against_itself_scores_100() {
 
 #[test]
 fn driver_against_iron_matches_its_golden_report() {
-    let r = score_json("golf_driver_60hz.csv", "golf_iron_60hz.csv", &[]);
+    let mut r = score_json("golf_driver_60hz.csv", "golf_iron_60hz.csv", &[]);
+    // The files as given (this checkout's paths), then the rest against the golden report.
+    let files = r.as_object_mut().unwrap().remove("files").unwrap();
+    for (key, name) in [
+        ("coach", "golf_driver_60hz.csv"),
+        ("student", "golf_iron_60hz.csv"),
+    ] {
+        assert!(files[key].as_str().unwrap().ends_with(name), "{files}");
+    }
+    assert_eq!(files["student_tpose"], Value::Null);
     let golden = fixture("score_iron_vs_driver.json");
     if std::env::var_os("POSECOACH_BLESS").is_some() {
         std::fs::write(&golden, format!("{r:#}\n")).unwrap();
