@@ -91,13 +91,15 @@ pub fn kinematic_sequence(
     events: &SwingEvents,
 ) -> Result<Option<KinematicSequence>, BodyError> {
     let body = Body::new(skeleton, events.lead)?;
-    let (Some(top), Some(impact)) = (events.frame(Position::P4), events.frame(Position::P7)) else {
-        return Ok(None);
+    let downswing = Downswing {
+        body: &body,
+        positions: swing,
+        hz,
+        events,
     };
-    if events.kind != crate::events::SwingKind::Full || !(hz.is_finite() && hz > 0.0) {
-        return Ok(None);
-    }
-    Ok(Some(peaks(&body, swing, hz, top, impact)))
+    Ok(downswing
+        .span()
+        .map(|(top, impact)| peaks(&body, swing, hz, top, impact)))
 }
 
 /// Each link's fastest rotation (see [`kinematic_sequence`]) between frames `from` and `to`
@@ -119,11 +121,10 @@ pub fn peaks(body: &Body, swing: &[Vec3], hz: f32, from: usize, to: usize) -> Ki
 /// around it, `window` frames each way (at least two; past `from` and `to` too), and the
 /// uncertainty that vertex's from the fit's residuals, the speeds of `window` neighbouring
 /// frames (which share the poses they are measured from) counted as one, or, where another
-/// hump the noise
-/// could have made the highest (a local maximum within twice the standard deviation of the
-/// difference of two speeds, `2√2 s`, `s` the larger of the speeds' scatter about the
-/// parabola and their [`roughness`] over the downswing), the
-/// distance to the farthest such. Without at least four speeds, or where the fit turns no
+/// hump the noise could have made the highest (a local maximum within twice the standard
+/// deviation of the difference of two speeds, `2√2 s`, `s` the larger of the speeds' scatter
+/// about the parabola and their [`roughness`] over the downswing), the distance to the
+/// farthest such. Without at least four speeds, or where the fit turns no
 /// maximum within them, the time is the first parabola's and has no uncertainty.
 fn peak(
     speed: &dyn Fn(usize) -> Option<f32>,
@@ -132,7 +133,7 @@ fn peak(
     window: usize,
 ) -> Option<(Peak, Option<f32>)> {
     let (at, peak) = fastest(speed, from, to)?;
-    let reach = window.max(2);
+    let reach = reach(window);
     let (lo, hi) = (at.saturating_sub(reach), at + reach);
     // Normal equations of v = a x² + b x + c, x in frames from `at`.
     let (mut m, mut y, mut n) = (nalgebra::Matrix3::<f32>::zeros(), Vec3::zeros(), 0u32);
@@ -155,7 +156,8 @@ fn peak(
         for t in lo..=hi {
             if let Some(v) = speed(t) {
                 let x = t as f32 - at as f32;
-                residuals += (v - (a * x * x + b * x + c)) * (v - (a * x * x + b * x + c));
+                let residual = v - (a * x * x + b * x + c);
+                residuals += residual * residual;
             }
         }
         let scatter = (residuals / (n - 3) as f32).max(roughness(speed, from, to));
@@ -221,24 +223,33 @@ fn fastest(speed: &dyn Fn(usize) -> Option<f32>, from: usize, to: usize) -> Opti
 /// 0.4 s at 240 Hz with the fit's reach; beyond them a speed is measured each time it is read.
 const KEPT_SPEEDS: usize = 128;
 
-/// [`peak`] of `speed` from frame `from` to `to`, each speed it reads measured once.
+/// How many frames each way of the fastest [`peak`] fits its parabola to, for a speed window
+/// of `window` frames.
+const fn reach(window: usize) -> usize {
+    if window > 2 {
+        window
+    } else {
+        2
+    }
+}
+
+/// [`peak`] of `speed` from frame `from` to `to`, each speed it reads measured once: those from
+/// the fit's reach (and one more) before `from` to as far after `to`.
 fn timed(
     speed: &dyn Fn(usize) -> Option<f32>,
     from: usize,
     to: usize,
     window: usize,
 ) -> Option<(Peak, Option<f32>)> {
-    let first = from.saturating_sub(window.max(2) + 1);
-    let mut kept = [f32::NAN; KEPT_SPEEDS];
-    for (k, v) in kept.iter_mut().enumerate() {
-        if first + k > to + window.max(2) + 1 {
-            break;
-        }
-        *v = speed(first + k).unwrap_or(f32::NAN);
+    let first = from.saturating_sub(reach(window) + 1);
+    let count = (to + reach(window) + 2 - first).min(KEPT_SPEEDS);
+    let mut kept = [None; KEPT_SPEEDS];
+    for (k, v) in kept.iter_mut().take(count).enumerate() {
+        *v = speed(first + k);
     }
-    let read = |t: usize| match t.checked_sub(first).and_then(|k| kept.get(k)) {
-        Some(v) if t <= to + window.max(2) + 1 => (!v.is_nan()).then_some(*v),
-        _ => speed(t),
+    let read = |t: usize| match t.checked_sub(first).filter(|&k| k < count) {
+        Some(k) => kept.get(k).copied().flatten(),
+        None => speed(t),
     };
     peak(&read, from, to, window)
 }

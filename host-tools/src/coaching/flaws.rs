@@ -455,8 +455,13 @@ fn carried(skeleton: &Skeleton, joint: Joint) -> Vec<usize> {
             | Joint::Neck
     );
     (0..skeleton.len())
-        .filter(|&k| k == at || (limb && skeleton.ancestry(k).any(|a| a == at)))
+        .filter(|&k| k == at || (limb && carries(skeleton, at, k)))
         .collect()
+}
+
+/// Whether joint `k` of `skeleton` is `joint` or one it carries.
+fn carries(skeleton: &Skeleton, joint: usize, k: usize) -> bool {
+    k == joint || skeleton.ancestry(k).any(|a| a == joint)
 }
 
 /// The joints of the head beyond the thorax: whichever of neck, head and head top the
@@ -608,7 +613,7 @@ fn move_joints(swing: &mut Motion, times: &Times, lead: Side, flaw: &Flaw) {
                 );
                 let pivot = frame[spine];
                 for (k, p) in frame.iter_mut().enumerate() {
-                    if k == thorax || skeleton.ancestry(k).any(|a| a == thorax) {
+                    if carries(&skeleton, thorax, k) {
                         *p = pivot + rot * (*p - pivot);
                     }
                 }
@@ -665,7 +670,7 @@ fn move_joints(swing: &mut Motion, times: &Times, lead: Side, flaw: &Flaw) {
                 };
                 let (pivot, from) = (frame[spine], later(spine));
                 for (k, p) in frame.iter_mut().enumerate() {
-                    if k == thorax || skeleton.ancestry(k).any(|a| a == thorax) {
+                    if carries(&skeleton, thorax, k) {
                         *p = pivot + (later(k) - from);
                     }
                 }
