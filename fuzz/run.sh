@@ -11,7 +11,7 @@ cd "$(dirname "$0")"
 seconds="${1:-30}"
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(bvh c3d csv wire log session reference weights teachfile)
+[ ${#targets[@]} -gt 0 ] || targets=(bvh c3d csv json wire log session reference weights teachfile)
 
 # The longest input of each target, in bytes: room for a small file of its kind and its
 # mutations. A recording needs 48 KiB for a pose session's set-up and first swing; the int8

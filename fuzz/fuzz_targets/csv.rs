@@ -1,11 +1,9 @@
-//! Keypoint CSV text must never make the reader panic.
+//! Keypoint CSV bytes, in any encoding, must never make the reader panic.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use posecoach_io::csv;
+use posecoach_io::{csv, Hints};
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok(text) = std::str::from_utf8(data) {
-        let _ = csv::read(text);
-    }
+    let _ = csv::read_with(data, &Hints::default());
 });

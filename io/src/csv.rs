@@ -1,23 +1,33 @@
-//! Keypoint CSV: `time,<joint>_x,<joint>_y,<joint>_z,...` with canonical joint names.
+//! Keypoint CSV as spreadsheets, pandas and pose-estimator scripts write it.
 //!
-//! Any subset of the canonical joints that includes `pelvis`, in any column order; metres,
-//! +Y up; `time` in seconds, strictly increasing. An empty cell marks a missing sample (all
-//! three coordinates of a joint must be empty together). A file with one data row is a
-//! T-pose: the skeleton is that pose. With more rows the skeleton takes its bone directions
+//! A header row, then one row per frame. The first column is the time if its name says so
+//! (`time`, `t`, `timestamp`, `time_ms`, `frame`, an empty name as pandas writes for its index:
+//! [`keypoints::clock_of`]); every other column is `<landmark><sep><axis>`, the separator one
+//! of `_ . : -` or a space and the axis `x`, `y`, `z` or a confidence (`visibility`,
+//! `presence`, `score`, `confidence`, `conf`, `c`, `likelihood`), in any case and order.
+//! Landmark names are those of any vocabulary [`crate::landmarks`] knows; columns of other
+//! names are kept aside and reported, not refused. The separator is whichever of `,` `;` and
+//! tab the header holds most of; with `;`, numbers may use a decimal comma. Quotes, a UTF-8
+//! byte-order mark, CRLF line ends, blank lines and `#` comment lines are read as the
+//! [`csv`](https://docs.rs/csv) crate reads them.
+//!
+//! An empty cell or `nan` marks a missing sample (all three coordinates of a landmark
+//! together), as does a confidence under [`keypoints::MIN_CONFIDENCE`]. Units, up axis and
+//! clock are decided for the whole file by [`keypoints::motion`]. A file with one data row is
+//! a T-pose: the skeleton is that pose. With more rows the skeleton takes its bone directions
 //! from the standard T-pose and its bone lengths from the mean over the frames.
 
-use crate::limits::{check_limits, LimitError};
-use crate::motion::{hold_missing, measured_skeleton, Motion};
-use posecoach_core::format::t_pose;
+use crate::keypoints::{self, Hints, KeypointError, Reading, Samples, MIN_CONFIDENCE};
+use crate::landmarks::{self, Landmarks};
+use crate::motion::Motion;
 use posecoach_core::joint::Joint;
-use posecoach_core::skeleton::{Skeleton, SkeletonError};
 use posecoach_core::Vec3;
 use std::fmt;
 
 /// A CSV problem, with the 1-based line and column where it was found.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CsvError {
-    /// 1-based line.
+    /// 1-based line; 0 when the whole file is concerned.
     pub line: usize,
     /// 1-based column, 0 when the whole line is concerned.
     pub column: usize,
@@ -28,16 +38,14 @@ pub struct CsvError {
 /// What is wrong with a CSV file.
 #[derive(Clone, Debug, PartialEq)]
 pub enum CsvErrorKind {
-    /// The file has no header line.
+    /// The file has no header line, or no data row.
     Empty,
-    /// The first column is not `time`.
-    NoTimeColumn(String),
-    /// A header cell is not `<canonical joint>_x|_y|_z` in x, y, z order.
-    BadHeader(String),
-    /// A joint appears twice.
-    DuplicateJoint(Joint),
-    /// The header has no `pelvis` columns.
-    NoPelvis,
+    /// Text the CSV parser refuses.
+    Syntax(String),
+    /// A column appears twice.
+    DuplicateColumn(String),
+    /// A landmark lacks a coordinate column (the one expected is named).
+    MissingColumn(String),
     /// A data row has the wrong number of cells.
     CellCount {
         /// Cells in the header.
@@ -47,45 +55,48 @@ pub enum CsvErrorKind {
     },
     /// A cell is not a finite number.
     BadNumber(String),
-    /// Only some of a joint's three coordinates are empty.
-    PartialJoint(Joint),
-    /// `time` does not increase.
+    /// Only some of a landmark's three coordinates are empty.
+    PartialJoint(String),
+    /// Time does not increase.
     TimeNotIncreasing,
-    /// A T-pose (single row) has a missing joint.
-    MissingInTPose(Joint),
-    /// The joints do not make a valid skeleton.
-    Skeleton(SkeletonError),
-    /// The motion is beyond the limits (the rate comes from the median time step).
-    Limit(LimitError),
+    /// The samples are not a motion (the whole file).
+    Keypoints(KeypointError),
 }
 
 impl fmt::Display for CsvError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "line {}", self.line)?;
-        if self.column > 0 {
-            write!(f, ", column {}", self.column)?;
+        if self.line > 0 {
+            write!(f, "line {}", self.line)?;
+            if self.column > 0 {
+                write!(f, ", column {}", self.column)?;
+            }
+            f.write_str(": ")?;
         }
-        f.write_str(": ")?;
         match &self.kind {
-            CsvErrorKind::Empty => f.write_str("empty file, expected a header `time,pelvis_x,...`"),
-            CsvErrorKind::NoTimeColumn(c) => write!(f, "expected `time` as the first column, found `{c}`"),
-            CsvErrorKind::BadHeader(c) => write!(
-                f,
-                "expected `<joint>_x`, `<joint>_y`, `<joint>_z` with a canonical joint name (pelvis, left_hip, ...), found `{c}`"
+            CsvErrorKind::Empty => f.write_str(
+                "expected a header (`time,pelvis_x,pelvis_y,pelvis_z,...`) and at least one row",
             ),
-            CsvErrorKind::DuplicateJoint(j) => write!(f, "joint `{j}` appears twice"),
-            CsvErrorKind::NoPelvis => f.write_str("the header needs pelvis_x, pelvis_y, pelvis_z"),
+            CsvErrorKind::Syntax(e) => write!(f, "not CSV: {e}"),
+            CsvErrorKind::DuplicateColumn(c) => write!(f, "column `{c}` appears twice"),
+            CsvErrorKind::MissingColumn(c) => write!(
+                f,
+                "no column `{c}`: every landmark needs x, y and z (2D keypoints are not enough)"
+            ),
             CsvErrorKind::CellCount { expected, actual } => {
-                write!(f, "expected {expected} cells as in the header, found {actual}")
+                write!(
+                    f,
+                    "expected {expected} cells as in the header, found {actual}"
+                )
             }
             CsvErrorKind::BadNumber(c) => write!(f, "expected a finite number, found `{c}`"),
             CsvErrorKind::PartialJoint(j) => {
-                write!(f, "joint `{j}` has some coordinates empty: leave all three empty or none")
+                write!(
+                    f,
+                    "landmark `{j}` has some coordinates empty: leave all three empty or none"
+                )
             }
             CsvErrorKind::TimeNotIncreasing => f.write_str("time must increase from row to row"),
-            CsvErrorKind::MissingInTPose(j) => write!(f, "a one-row T-pose needs every joint; `{j}` is empty"),
-            CsvErrorKind::Skeleton(e) => write!(f, "the joints do not form a skeleton: {e}"),
-            CsvErrorKind::Limit(e) => e.fmt(f),
+            CsvErrorKind::Keypoints(e) => e.fmt(f),
         }
     }
 }
@@ -96,155 +107,256 @@ fn err(line: usize, column: usize, kind: CsvErrorKind) -> CsvError {
     CsvError { line, column, kind }
 }
 
-/// Parses a keypoint CSV file.
+/// Parses a keypoint CSV file with nothing given: units, up and clock detected.
 ///
 /// # Errors
-/// A [`CsvError`] naming the line, the column and what was expected; a motion beyond the limits
-/// ([`check_limits`]) at the last row's time.
+/// As [`read_with`].
 pub fn read(text: &str) -> Result<Motion, CsvError> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
-        .filter(|(_, l)| !l.trim().is_empty());
-    let (_, header) = lines.next().ok_or(err(1, 0, CsvErrorKind::Empty))?;
-    let columns = parse_header(header)?;
-    let n = columns.len();
+    read_with(text.as_bytes(), &Hints::default()).map(|(motion, _)| motion)
+}
 
-    let mut times = Vec::new();
-    let mut values: Vec<Vec3> = Vec::new();
-    let mut missing = Vec::new();
-    let mut last = 0;
-    for (line, row) in lines {
-        last = line;
-        let cells: Vec<&str> = row.split(',').map(str::trim).collect();
-        if cells.len() != 1 + 3 * n {
-            let kind = CsvErrorKind::CellCount {
-                expected: 1 + 3 * n,
-                actual: cells.len(),
-            };
-            return Err(err(line, 0, kind));
-        }
-        let number = |c: usize| -> Result<Option<f32>, CsvError> {
-            match cells[c] {
-                "" => Ok(None),
-                s => s
-                    .parse::<f32>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .map(Some)
-                    .ok_or_else(|| err(line, c + 1, CsvErrorKind::BadNumber(s.to_string()))),
-            }
-        };
-        let t = number(0)?.ok_or_else(|| err(line, 1, CsvErrorKind::BadNumber(String::new())))?;
-        if times.last().is_some_and(|&last| t <= last) {
-            return Err(err(line, 1, CsvErrorKind::TimeNotIncreasing));
-        }
-        times.push(t);
-        for (j, joint) in columns.iter().enumerate() {
-            let c = 1 + 3 * j;
-            match (number(c)?, number(c + 1)?, number(c + 2)?) {
-                (Some(x), Some(y), Some(z)) => {
-                    values.push(Vec3::new(x, y, z));
-                    missing.push(false);
-                }
-                (None, None, None) => {
-                    values.push(Vec3::zeros());
-                    missing.push(true);
-                }
-                _ => return Err(err(line, c + 1, CsvErrorKind::PartialJoint(*joint))),
-            }
-        }
-    }
-    if times.is_empty() {
-        return Err(err(2, 0, CsvErrorKind::Empty));
-    }
-    let rate_hz = if times.len() > 1 {
-        rate_from_times(&times)
-    } else {
-        0.0
-    };
-    check_limits(times.len(), n, rate_hz).map_err(|e| err(last, 1, CsvErrorKind::Limit(e)))?;
+/// Parses a keypoint CSV file, with what [`Hints`] say about it, and says how it was read.
+///
+/// # Errors
+/// A [`CsvError`] naming the line, the column and what was expected, or (line 0) why the
+/// samples are not a motion.
+pub fn read_with(bytes: &[u8], hints: &Hints) -> Result<(Motion, Reading), CsvError> {
+    let samples = samples(bytes)?;
+    keypoints::motion(&samples, hints).map_err(|e| err(0, 0, CsvErrorKind::Keypoints(e)))
+}
 
-    // Reorder the columns into canonical order so parents precede children.
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by_key(|&j| columns[j]);
-    let joints: Vec<Joint> = order.iter().map(|&j| columns[j]).collect();
-    let reorder = |v: &[Vec3]| -> Vec<Vec3> {
-        v.chunks_exact(n)
-            .flat_map(|f| order.iter().map(|&j| f[j]))
-            .collect()
-    };
-    let mut positions = reorder(&values);
-    let missing: Vec<bool> = missing
-        .chunks_exact(n)
-        .flat_map(|f| order.iter().map(|&j| f[j]))
-        .collect();
+/// What a header cell is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Axis {
+    Coordinate(usize),
+    Confidence,
+}
 
-    let skeleton_error = |e| err(1, 0, CsvErrorKind::Skeleton(e));
-    let skeleton = if times.len() == 1 {
-        if let Some(j) = missing.iter().position(|&m| m) {
-            return Err(err(2, 0, CsvErrorKind::MissingInTPose(joints[j])));
-        }
-        Skeleton::canonical(&joints, &positions).map_err(skeleton_error)?
-    } else {
-        let rest: Vec<Vec3> = joints.iter().map(|&j| t_pose(j)).collect();
-        let template = Skeleton::canonical(&joints, &rest).map_err(skeleton_error)?;
-        measured_skeleton(&template, &positions, &missing).map_err(skeleton_error)?
-    };
-    hold_missing(n, &mut positions, &missing);
-    Ok(Motion {
-        skeleton,
-        names: joints.iter().map(|j| j.name().to_string()).collect(),
-        rate_hz,
-        positions,
-        missing,
+/// A landmark's columns: x, y, z and a confidence, 0-based.
+#[derive(Clone, Debug, Default)]
+struct Columns {
+    name: String,
+    /// How the first column spelt the separator and axis case, for naming a missing one.
+    pattern: (String, bool),
+    first: usize,
+    xyz: [Option<usize>; 3],
+    confidence: Option<usize>,
+}
+
+/// The landmark name and axis of a header cell, if it is one.
+fn column(cell: &str) -> Option<(&str, &str, Axis)> {
+    const AXES: [(&str, Axis); 10] = [
+        ("x", Axis::Coordinate(0)),
+        ("y", Axis::Coordinate(1)),
+        ("z", Axis::Coordinate(2)),
+        ("visibility", Axis::Confidence),
+        ("presence", Axis::Confidence),
+        ("score", Axis::Confidence),
+        ("confidence", Axis::Confidence),
+        ("conf", Axis::Confidence),
+        ("c", Axis::Confidence),
+        ("likelihood", Axis::Confidence),
+    ];
+    let lower = cell.to_ascii_lowercase();
+    AXES.iter().find_map(|&(word, axis)| {
+        let rest = lower.strip_suffix(word)?;
+        let sep = rest.chars().last().filter(|c| "_.:- ".contains(*c))?;
+        let name = &cell[..rest.len() - sep.len_utf8()];
+        (!name.is_empty()).then_some((name, &cell[rest.len() - sep.len_utf8()..rest.len()], axis))
     })
 }
 
-fn parse_header(header: &str) -> Result<Vec<Joint>, CsvError> {
-    let cells: Vec<&str> = header.split(',').map(str::trim).collect();
-    if cells[0] != "time" {
-        return Err(err(1, 1, CsvErrorKind::NoTimeColumn(cells[0].to_string())));
-    }
-    let mut joints: Vec<Joint> = Vec::new();
-    for (k, triple) in cells[1..].chunks(3).enumerate() {
-        let column = 2 + 3 * k;
-        let name = triple[0].strip_suffix("_x").unwrap_or("");
-        let joint = Joint::from_name(name)
-            .ok_or_else(|| err(1, column, CsvErrorKind::BadHeader(triple[0].to_string())))?;
-        for (axis, (cell, suffix)) in triple.iter().zip(["_x", "_y", "_z"]).enumerate() {
-            if cell.strip_suffix(suffix) != Some(name) {
-                return Err(err(
-                    1,
-                    column + axis,
-                    CsvErrorKind::BadHeader(cell.to_string()),
-                ));
-            }
-        }
-        if triple.len() != 3 {
-            return Err(err(
-                1,
-                column + triple.len(),
-                CsvErrorKind::BadHeader(String::new()),
-            ));
-        }
-        if joints.contains(&joint) {
-            return Err(err(1, column, CsvErrorKind::DuplicateJoint(joint)));
-        }
-        joints.push(joint);
-    }
-    if !joints.contains(&Joint::Pelvis) {
-        return Err(err(1, 0, CsvErrorKind::NoPelvis));
-    }
-    Ok(joints)
+/// The separator the header line uses most of: `,`, `;` or tab.
+fn separator(bytes: &[u8]) -> u8 {
+    let line = bytes.split(|&b| b == b'\n').next().unwrap_or_default();
+    [b',', b';', b'\t']
+        .into_iter()
+        .max_by_key(|&s| (line.iter().filter(|&&b| b == s).count(), s == b','))
+        .unwrap_or(b',')
 }
 
-/// Frame rate from the median time step.
-fn rate_from_times(times: &[f32]) -> f32 {
-    let mut steps: Vec<f32> = times.windows(2).map(|w| w[1] - w[0]).collect();
-    steps.sort_by(f32::total_cmp);
-    1.0 / steps[steps.len() / 2]
+/// The file's samples, as written.
+fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
+    let sep = separator(bytes);
+    let mut reader = ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .delimiter(sep)
+        .comment(Some(b'#'))
+        .trim(::csv::Trim::All)
+        .from_reader(bytes);
+    let mut records = reader.byte_records();
+    // The line of a byte: the parser's own line count leaves out the blank lines it skips.
+    let line_at = |byte: u64| {
+        let start = usize::try_from(byte).unwrap_or(usize::MAX).min(bytes.len());
+        let blank = bytes[start..]
+            .iter()
+            .take_while(|b| b"\r\n".contains(b))
+            .count();
+        1 + bytes[..start + blank]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+    };
+    let line_of = |p: Option<&::csv::Position>| p.map_or(0, |p| line_at(p.byte()));
+    let syntax = |e: ::csv::Error| {
+        let line = line_of(e.position());
+        err(line, 0, CsvErrorKind::Syntax(e.to_string()))
+    };
+    let header = records
+        .next()
+        .ok_or(err(1, 0, CsvErrorKind::Empty))?
+        .map_err(syntax)?;
+    let header_line = line_of(header.position()).max(1);
+    let cells: Vec<String> = header
+        .iter()
+        .map(|c| String::from_utf8_lossy(c).into_owned())
+        .collect();
+    let has_clock = cells
+        .first()
+        .is_some_and(|c| keypoints::clock_of(c).is_some());
+    let mut landmarks: Vec<Columns> = Vec::new();
+    let mut ignored = Vec::new();
+    for (i, cell) in cells.iter().enumerate().skip(usize::from(has_clock)) {
+        let Some((name, sep, axis)) = column(cell) else {
+            ignored.push(cell.clone());
+            continue;
+        };
+        let key = landmarks::key(name);
+        let at = match landmarks
+            .iter()
+            .position(|c| landmarks::key(&c.name) == key)
+        {
+            Some(at) => at,
+            None => {
+                let upper = cell.ends_with(|c: char| c.is_ascii_uppercase());
+                landmarks.push(Columns {
+                    name: name.to_string(),
+                    pattern: (sep.to_string(), upper),
+                    first: i,
+                    ..Columns::default()
+                });
+                landmarks.len() - 1
+            }
+        };
+        let slot = match axis {
+            Axis::Coordinate(a) => &mut landmarks[at].xyz[a],
+            Axis::Confidence => &mut landmarks[at].confidence,
+        };
+        if slot.is_some() {
+            return Err(err(
+                header_line,
+                i + 1,
+                CsvErrorKind::DuplicateColumn(cell.clone()),
+            ));
+        }
+        *slot = Some(i);
+    }
+    // A landmark some vocabulary knows must have all three coordinates; others are set aside.
+    let known = |name: &str| {
+        let k = landmarks::key(name);
+        Landmarks::ALL
+            .iter()
+            .any(|l| l.names().iter().any(|n| landmarks::key(n) == k))
+    };
+    let mut read = Vec::new();
+    for c in landmarks {
+        if let Some(a) = c.xyz.iter().position(Option::is_none) {
+            if known(&c.name) {
+                let axis = ["x", "y", "z"][a];
+                let axis = if c.pattern.1 {
+                    axis.to_ascii_uppercase()
+                } else {
+                    axis.to_string()
+                };
+                let expected = format!("{}{}{axis}", c.name, c.pattern.0);
+                return Err(err(
+                    header_line,
+                    c.first + 1,
+                    CsvErrorKind::MissingColumn(expected),
+                ));
+            }
+            ignored.extend(
+                c.xyz
+                    .iter()
+                    .chain([&c.confidence])
+                    .flatten()
+                    .map(|&i| cells[i].clone()),
+            );
+            continue;
+        }
+        read.push(c);
+    }
+
+    let mut out = Samples {
+        names: read.iter().map(|c| c.name.clone()).collect(),
+        clock: has_clock.then(|| cells[0].clone()),
+        ignored,
+        ..Samples::default()
+    };
+    for record in records {
+        let record = record.map_err(syntax)?;
+        let line = line_of(record.position());
+        if record.len() != cells.len() {
+            let kind = CsvErrorKind::CellCount {
+                expected: cells.len(),
+                actual: record.len(),
+            };
+            return Err(err(line, 0, kind));
+        }
+        let cell = |i: usize| String::from_utf8_lossy(&record[i]).into_owned();
+        let bad = |i: usize| err(line, i + 1, CsvErrorKind::BadNumber(cell(i)));
+        let coordinate = |i: usize| number::<f32>(&cell(i), sep).map_err(|()| bad(i));
+        if has_clock {
+            let t = number::<f64>(&cell(0), sep)
+                .map_err(|()| bad(0))?
+                .ok_or_else(|| bad(0))?;
+            if out.times.last().is_some_and(|&last| t <= last) {
+                return Err(err(line, 1, CsvErrorKind::TimeNotIncreasing));
+            }
+            out.times.push(t);
+        }
+        for c in &read {
+            let [x, y, z] = c.xyz.map(|i| i.unwrap_or_default());
+            let unsure = match c.confidence {
+                Some(i) => coordinate(i)?.is_some_and(|v| v < MIN_CONFIDENCE),
+                None => false,
+            };
+            match (coordinate(x)?, coordinate(y)?, coordinate(z)?) {
+                (Some(x), Some(y), Some(z)) => {
+                    out.positions.push(Vec3::new(x, y, z));
+                    out.missing.push(unsure);
+                }
+                (None, None, None) => {
+                    out.positions.push(Vec3::zeros());
+                    out.missing.push(true);
+                }
+                _ => return Err(err(line, x + 1, CsvErrorKind::PartialJoint(c.name.clone()))),
+            }
+        }
+    }
+    if out.positions.is_empty() && out.times.is_empty() {
+        return Err(err(header_line + 1, 0, CsvErrorKind::Empty));
+    }
+    Ok(out)
+}
+
+/// A cell's number: `None` for an empty cell or `nan`; with `;` separators a decimal comma is
+/// read as a point. Coordinates are parsed as `f32` straight from the text (rounding once),
+/// times as `f64` (timestamps since an epoch need its digits).
+fn number<T: std::str::FromStr + Into<f64> + Copy>(cell: &str, sep: u8) -> Result<Option<T>, ()> {
+    if cell.is_empty() || cell.eq_ignore_ascii_case("nan") {
+        return Ok(None);
+    }
+    let parse = |s: &str| s.parse::<T>().ok().filter(|v| (*v).into().is_finite());
+    parse(cell)
+        .or_else(|| {
+            (sep == b';')
+                .then(|| parse(&cell.replace(',', ".")))
+                .flatten()
+        })
+        .map(Some)
+        .ok_or(())
 }
 
 /// Writes the canonical joints of `motion` as keypoint CSV (joints without a canonical name are
@@ -281,8 +393,10 @@ pub fn write(motion: &Motion) -> String {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+    use posecoach_core::skeleton::SkeletonError;
 
     const T_POSE: &str = "time,pelvis_x,pelvis_y,pelvis_z,left_hip_x,left_hip_y,left_hip_z,\
 left_ankle_x,left_ankle_y,left_ankle_z,right_hip_x,right_hip_y,right_hip_z,\
@@ -318,32 +432,222 @@ right_wrist_x,right_wrist_y,right_wrist_z\n\
     fn errors_name_line_column_and_expectation() {
         let cases = [
             ("", 1, 0),
-            ("t,pelvis_x,pelvis_y,pelvis_z\n0,0,0,0\n", 1, 1),
-            ("time,pelvis_x,pelvis_y,pelvis_q\n0,0,0,0\n", 1, 4),
-            ("time,elbow_x,elbow_y,elbow_z\n0,0,0,0\n", 1, 2),
-            ("time,head_x,head_y,head_z\n0,0,0,0\n", 1, 0),
+            ("time,pelvis_x,pelvis_y,pelvis_q\n0,0,0,0\n", 1, 2),
+            (
+                "time,pelvis_x,pelvis_y,pelvis_z,pelvis_x\n0,0,0,0,0\n",
+                1,
+                5,
+            ),
             ("time,pelvis_x,pelvis_y,pelvis_z\n0,0,0\n", 2, 0),
             ("time,pelvis_x,pelvis_y,pelvis_z\n0,0,abc,0\n", 2, 3),
             ("time,pelvis_x,pelvis_y,pelvis_z\n0,0,,0\n", 2, 2),
-            ("time,pelvis_x,pelvis_y,pelvis_z\n0,0,0,0\n0,0,0,0\n", 3, 1),
-            ("time,pelvis_x,pelvis_y,pelvis_z\n0,0,NaN,0\n", 2, 3),
+            (
+                "time,pelvis_x,pelvis_y,pelvis_z\n0,0,0,0\n\n0,0,0,0\n",
+                4,
+                1,
+            ),
+            ("time,pelvis_x,pelvis_y,pelvis_z\n0,0,inf,0\n", 2, 3),
+            ("time,pelvis_x,pelvis_y,pelvis_z\n", 2, 0),
         ];
         for (text, line, column) in cases {
             let e = read(text).unwrap_err();
             assert_eq!((e.line, e.column), (line, column), "{text:?}: {e}");
             assert!(!e.to_string().is_empty());
         }
+        let e = read("time,pelvis_x,pelvis_y,pelvis_q\n0,0,0,0\n").unwrap_err();
+        assert_eq!(e.kind, CsvErrorKind::MissingColumn("pelvis_z".into()));
         // One 1e4 s step: resampling it to 240 Hz asked for 17 GB.
-        let e = read("time,pelvis_x,pelvis_y,pelvis_z\n0,0,1,0\n\n10000,0,1,0\n").unwrap_err();
-        assert_eq!((e.line, e.column), (4, 1));
-        assert_eq!(e.kind, CsvErrorKind::Limit(LimitError::Rate(1e-4)));
+        let (header, row) = T_POSE.split_once('\n').unwrap();
+        let header = header.replacen("time", "time_s", 1);
+        let later = row.replacen('0', "10000", 1);
+        let e = read(&format!("{header}\n{row}\n{later}")).unwrap_err();
+        assert_eq!(
+            e.kind,
+            CsvErrorKind::Keypoints(KeypointError::Limit(crate::LimitError::Rate(1e-4)))
+        );
         assert!(e
             .to_string()
             .contains("0.0001 Hz is outside the limits of 1 to 2000 Hz"));
         let e = read("time,pelvis_x,pelvis_y,pelvis_z\n0,0,0,0\n").unwrap_err();
         assert_eq!(
             e.kind,
-            CsvErrorKind::Skeleton(SkeletonError::MissingJoint(Joint::Head))
+            CsvErrorKind::Keypoints(KeypointError::Skeleton(SkeletonError::MissingJoint(
+                Joint::Head
+            )))
         );
+    }
+
+    const DRIVER: &str = include_str!("../../tests/fixtures/golf_driver_60hz.csv");
+
+    /// The driver fixture rewritten: each header cell and each number passed through `cell`
+    /// and `value` (cell, position and column name), joined by `sep`, lines ended by `end`.
+    fn driver_as(
+        header: impl Fn(&str) -> String,
+        value: impl Fn(f64, &str) -> String,
+        sep: &str,
+        end: &str,
+    ) -> String {
+        let mut lines = DRIVER.lines();
+        let names: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let mut out: Vec<String> = vec![names
+            .iter()
+            .map(|n| header(n))
+            .collect::<Vec<_>>()
+            .join(sep)];
+        for line in lines {
+            let cells: Vec<String> = line
+                .split(',')
+                .zip(&names)
+                .map(|(c, n)| match c.parse::<f64>() {
+                    Ok(v) => value(v, n),
+                    Err(_) => c.to_string(),
+                })
+                .collect();
+            out.push(cells.join(sep));
+        }
+        out.join(end) + end
+    }
+
+    fn close(a: &Motion, b: &Motion, tolerance: f32) {
+        assert_eq!(a.frames(), b.frames());
+        assert!(
+            (a.rate_hz - b.rate_hz).abs() < 1e-2,
+            "{} {}",
+            a.rate_hz,
+            b.rate_hz
+        );
+        for (p, q) in a.positions.iter().zip(&b.positions) {
+            assert!((p - q).norm() < tolerance, "{p} {q}");
+        }
+    }
+
+    #[test]
+    fn a_spreadsheet_in_millimetres_z_up_reads_as_the_original() {
+        let original = read(DRIVER).unwrap();
+        // Z up: (x, y, z) → (x, -z, y); millimetres; milliseconds; `;` with decimal commas;
+        // quoted header cells; a byte-order mark; CRLF.
+        let text = driver_as(
+            |n| match n {
+                "time" => "\"time_ms\"".to_string(),
+                n => format!("\"{n}\""),
+            },
+            |v, n| {
+                let _ = n;
+                format!("{:.3}", v * 1000.0).replace('.', ",")
+            },
+            ";",
+            "\r\n",
+        );
+        // Swap the axes column by column: y ← -z, z ← y.
+        let mut rows: Vec<Vec<String>> = text
+            .trim_end()
+            .split("\r\n")
+            .map(|l| l.split(';').map(str::to_string).collect())
+            .collect();
+        for row in rows.iter_mut().skip(1) {
+            for j in (1..row.len()).step_by(3) {
+                let (y, z) = (row[j + 1].clone(), row[j + 2].clone());
+                row[j + 1] = match z.strip_prefix('-') {
+                    Some(rest) => rest.to_string(),
+                    None if z.is_empty() => z,
+                    None => format!("-{z}"),
+                };
+                row[j + 2] = y;
+            }
+        }
+        let text: Vec<String> = rows.iter().map(|r| r.join(";")).collect();
+        let text = format!("\u{feff}{}\r\n", text.join("\r\n"));
+        let (motion, reading) = read_with(text.as_bytes(), &Hints::default()).unwrap();
+        assert_eq!(reading.units, (crate::units::Units::Mm, false));
+        assert_eq!(reading.up.0.to_string(), "+z");
+        assert_eq!(reading.clock.0, keypoints::Clock::Milliseconds);
+        close(&motion, &original, 2e-6);
+    }
+
+    #[test]
+    fn pose_estimator_names_are_mapped_and_the_pelvis_made_from_the_hips() {
+        let original = read(DRIVER).unwrap();
+        // OpenPose spelling, pelvis dropped: MidHip is absent, so the pelvis is the hips'
+        // midpoint, and a name no vocabulary knows is set aside.
+        let openpose = |n: &str| {
+            let (name, axis) = n.rsplit_once('_').unwrap_or((n, ""));
+            let name = match name {
+                "left_hip" => "LHip",
+                "right_hip" => "RHip",
+                "left_knee" => "LKnee",
+                "right_knee" => "RKnee",
+                "left_ankle" => "LAnkle",
+                "right_ankle" => "RAnkle",
+                "left_shoulder" => "LShoulder",
+                "right_shoulder" => "RShoulder",
+                "left_elbow" => "LElbow",
+                "right_elbow" => "RElbow",
+                "left_wrist" => "LWrist",
+                "right_wrist" => "RWrist",
+                "thorax" => "Neck",
+                "head" => "LEar",
+                "head_top" => "REar",
+                "time" => return "frame".to_string(),
+                other => return format!("x{other}_{axis}"),
+            };
+            format!("{name}_{axis}")
+        };
+        let text = driver_as(
+            openpose,
+            |v, n| {
+                if n == "time" {
+                    format!("{}", (v * 60.0).round())
+                } else {
+                    format!("{v}")
+                }
+            },
+            ",",
+            "\n",
+        );
+        let hints = Hints {
+            rate_hz: Some(60.0),
+            ..Hints::default()
+        };
+        let (motion, reading) = read_with(text.as_bytes(), &hints).unwrap();
+        assert_eq!(reading.landmarks, Landmarks::OpenPose25);
+        assert_eq!(reading.midpoints[0].0, Joint::Pelvis);
+        assert!(
+            reading.ignored.iter().any(|c| c == "xspine"),
+            "{:?}",
+            reading.ignored
+        );
+        let at = |m: &Motion, f: usize, j: Joint| m.frame(f)[m.skeleton.index_of(j).unwrap()];
+        for f in [0, 50, 100] {
+            let mid = |a, b| (at(&original, f, a) + at(&original, f, b)) * 0.5;
+            let pelvis = mid(Joint::LeftHip, Joint::RightHip);
+            let head = mid(Joint::Head, Joint::HeadTop);
+            assert!((at(&motion, f, Joint::Pelvis) - pelvis).norm() < 1e-5);
+            assert!((at(&motion, f, Joint::Head) - head).norm() < 1e-5);
+            let thorax = at(&original, f, Joint::Thorax);
+            assert!((at(&motion, f, Joint::Thorax) - thorax).norm() < 1e-5);
+        }
+        // Without the rate, frame numbers are refused, saying so.
+        let e = read(&text).unwrap_err();
+        assert!(
+            e.to_string().contains("give the frame rate with --rate"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_missing_coordinate_column_is_named_as_the_file_spells_it() {
+        let text = driver_as(
+            |n| n.to_uppercase().replace("RIGHT_WRIST_Z", "RW"),
+            |v, _| format!("{v}"),
+            ",",
+            "\n",
+        );
+        let e = read(&text).unwrap_err();
+        assert_eq!(
+            e.kind,
+            CsvErrorKind::MissingColumn("RIGHT_WRIST_Z".into()),
+            "{e}"
+        );
+        assert_eq!(e.line, 1);
     }
 }

@@ -1,14 +1,22 @@
 //! Host-side file import and export (the `std` feature).
 //!
 //! [`load`] and [`save`] pick the format from the file extension: `.bvh` and `.csv` in and
-//! out, `.c3d` and `.pcr` (a coach reference, [`posecoach_core::reference`]) in.
+//! out, `.c3d`, `.json` (keypoints, [`json`]) and `.pcr` (a coach reference,
+//! [`posecoach_core::reference`]) in. [`load_with`] takes what a person says about the files
+//! that do not say it themselves ([`Hints`]: units, up axis, rate) and says how a keypoint
+//! file was read ([`Reading`]).
 pub mod bvh;
 pub mod c3d;
 pub mod csv;
 pub mod golf;
+pub mod json;
+pub mod keypoints;
+pub mod landmarks;
 pub mod limits;
 pub mod motion;
+pub mod units;
 
+pub use keypoints::{Hints, Reading};
 pub use limits::LimitError;
 pub use motion::Motion;
 
@@ -34,6 +42,8 @@ pub enum FileErrorKind {
     UnknownExtension,
     /// A keypoint CSV problem.
     Csv(csv::CsvError),
+    /// A keypoint JSON problem.
+    Json(json::JsonError),
     /// A BVH syntax problem.
     Bvh(bvh::BvhError),
     /// A BVH hierarchy that is not a usable skeleton.
@@ -60,9 +70,10 @@ impl fmt::Display for FileError {
         match &self.kind {
             FileErrorKind::Io(e) => e.fmt(f),
             FileErrorKind::UnknownExtension => {
-                f.write_str("unknown extension: expected .bvh, .c3d, .csv or .pcr")
+                f.write_str("unknown extension: expected .bvh, .c3d, .csv, .json or .pcr")
             }
             FileErrorKind::Csv(e) => e.fmt(f),
+            FileErrorKind::Json(e) => e.fmt(f),
             FileErrorKind::Bvh(e) => e.fmt(f),
             FileErrorKind::BvhSkeleton(e) => e.fmt(f),
             FileErrorKind::C3d(e) => e.fmt(f),
@@ -101,13 +112,24 @@ fn extension(path: &Path) -> String {
 /// # Errors
 /// A [`FileError`] naming the file and, inside it, the line, frame, byte or joint at fault.
 pub fn load(path: &Path) -> Result<Motion, FileError> {
+    load_with(path, &Hints::default()).map(|loaded| loaded.0)
+}
+
+/// As [`load`], with what [`Hints`] say about the file; a keypoint file also says how it was
+/// read. A file that states what a hint says keeps its own: units are used by keypoint files
+/// and BVH, the up axis by keypoint files, the rate by keypoint files with frame numbers or no
+/// time column.
+///
+/// # Errors
+/// As [`load`].
+pub fn load_with(path: &Path, hints: &Hints) -> Result<(Motion, Option<Reading>), FileError> {
     let fail = |kind| FileError {
         path: path.to_path_buf(),
         kind,
     };
-    let motion = read(path)?;
-    human(&motion).map_err(fail)?;
-    Ok(motion)
+    let loaded = read(path, hints)?;
+    human(&loaded.0).map_err(fail)?;
+    Ok(loaded)
 }
 
 /// Whether `motion` is a human body that was seen: every joint captured in some frame, the
@@ -136,35 +158,45 @@ fn human(motion: &Motion) -> Result<(), FileErrorKind> {
 }
 
 /// Reads a motion, choosing the reader by extension.
-fn read(path: &Path) -> Result<Motion, FileError> {
+fn read(path: &Path, hints: &Hints) -> Result<(Motion, Option<Reading>), FileError> {
     let fail = |kind| FileError {
         path: path.to_path_buf(),
         kind,
     };
+    let bytes = || std::fs::read(path).map_err(|e| fail(FileErrorKind::Io(e)));
     let text = || std::fs::read_to_string(path).map_err(|e| fail(FileErrorKind::Io(e)));
-    match extension(path).as_str() {
-        "csv" => csv::read(&text()?).map_err(|e| fail(FileErrorKind::Csv(e))),
+    let read = |(motion, reading)| (motion, Some(reading));
+    let motion = match extension(path).as_str() {
+        "csv" => {
+            return csv::read_with(&bytes()?, hints)
+                .map(read)
+                .map_err(|e| fail(FileErrorKind::Csv(e)))
+        }
+        "json" => {
+            return json::read_with(&bytes()?, hints)
+                .map(read)
+                .map_err(|e| fail(FileErrorKind::Json(e)))
+        }
         "bvh" => {
             let bvh = bvh::Bvh::parse(&text()?).map_err(|e| fail(FileErrorKind::Bvh(e)))?;
-            Motion::from_bvh(bvh, None).map_err(|e| fail(FileErrorKind::BvhSkeleton(e)))
+            Motion::from_bvh(bvh, hints.units).map_err(|e| fail(FileErrorKind::BvhSkeleton(e)))
         }
         "c3d" => {
-            let bytes = std::fs::read(path).map_err(|e| fail(FileErrorKind::Io(e)))?;
-            let c3d = c3d::C3d::parse(&bytes).map_err(|e| fail(FileErrorKind::C3d(e)))?;
+            let c3d = c3d::C3d::parse(&bytes()?).map_err(|e| fail(FileErrorKind::C3d(e)))?;
             let centres = golf::joint_centres(&c3d).map_err(|e| fail(FileErrorKind::Golf(e)))?;
             Motion::from_golf(&centres).map_err(|e| fail(FileErrorKind::Skeleton(e)))
         }
         "pcr" => {
-            let bytes = std::fs::read(path).map_err(|e| fail(FileErrorKind::Io(e)))?;
             let motion =
-                Motion::from_reference(&bytes).map_err(|e| fail(FileErrorKind::Reference(e)))?;
+                Motion::from_reference(&bytes()?).map_err(|e| fail(FileErrorKind::Reference(e)))?;
             let (frames, joints) = (motion.frames(), motion.skeleton.len());
             limits::check_limits(frames, joints, motion.rate_hz)
                 .map_err(|e| fail(FileErrorKind::Limit(e)))?;
             Ok(motion)
         }
         _ => Err(fail(FileErrorKind::UnknownExtension)),
-    }
+    };
+    motion.map(|motion| (motion, None))
 }
 
 /// Writes a motion, choosing the writer by extension.
@@ -263,7 +295,10 @@ mod tests {
             assert!(
                 matches!(
                     e.kind,
-                    FileErrorKind::Implausible(Implausible::Stature(_), None)
+                    FileErrorKind::Csv(csv::CsvError {
+                        kind: csv::CsvErrorKind::Keypoints(keypoints::KeypointError::Stature(_)),
+                        ..
+                    })
                 ),
                 "scale {scale}: {e}"
             );

@@ -4,6 +4,7 @@
 use crate::bvh::{Bvh, Channel};
 use crate::golf::{JointCentres, GOLF_JOINTS};
 use crate::limits::{check_limits, LimitError, MAX_RATE_HZ, MIN_RATE_HZ};
+use crate::units::Units;
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::reference::{self, Reference, ReferenceError};
@@ -124,26 +125,6 @@ impl Motion {
     }
 }
 
-/// Length units a BVH file may use, in metres: m, cm, mm, inch, and the CMU conversions' unit
-/// (1/0.45 inch).
-pub const BVH_UNITS: [(&str, f32); 5] = [
-    ("m", 1.0),
-    ("cm", 0.01),
-    ("mm", 0.001),
-    ("in", 0.0254),
-    ("cmu", 0.0254 / 0.45),
-];
-
-/// The [`BVH_UNITS`] entry that makes a skeleton `height` (in file units) closest to 1.75 m on a
-/// log scale: BVH files do not state their units.
-pub fn guess_bvh_units(height: f32) -> (&'static str, f32) {
-    let off = |scale: f32| (height * scale / 1.75).ln().abs();
-    BVH_UNITS
-        .into_iter()
-        .min_by(|a, b| off(a.1).total_cmp(&off(b.1)))
-        .unwrap_or(BVH_UNITS[0])
-}
-
 /// Why a BVH hierarchy cannot become a motion.
 #[derive(Clone, Debug, PartialEq)]
 pub enum BvhImportError {
@@ -175,13 +156,13 @@ impl Motion {
     /// A motion from a BVH file: joints above the pelvis that have a single child (Bandai's
     /// `joint_Root`) are dropped, the format is recognized by joint names (else joints named
     /// like the canonical vocabulary make a custom skeleton), a leading all-zero rest frame is
-    /// dropped, and lengths are converted with `units` metres per file unit, or with the units
-    /// [`guess_bvh_units`] picks when `None`.
+    /// dropped, and lengths are converted from `units`, or from the units [`Units::nearest`]
+    /// picks when `None`.
     ///
     /// # Errors
     /// [`BvhImportError`] when no joint can be identified as the pelvis, the tree is not a
     /// valid skeleton, or the motion is beyond the limits ([`check_limits`]).
-    pub fn from_bvh(mut bvh: Bvh, units: Option<f32>) -> Result<Motion, BvhImportError> {
+    pub fn from_bvh(mut bvh: Bvh, units: Option<Units>) -> Result<Motion, BvhImportError> {
         if bvh.first_frame_is_rest() {
             bvh.drop_first_frame();
         }
@@ -238,9 +219,10 @@ impl Motion {
             Skeleton::new(format, &parents, &scaled, &names).map_err(BvhImportError::Skeleton)
         };
         let scale = match units {
-            Some(scale) => scale,
-            None => guess_bvh_units(build(1.0)?.height()).1,
-        };
+            Some(units) => units,
+            None => Units::nearest(build(1.0)?.height()),
+        }
+        .metres();
         let skeleton = build(scale)?;
         let mut frame = vec![[0.0; 3]; n];
         let mut positions = Vec::with_capacity(bvh.frames * (n - start));
