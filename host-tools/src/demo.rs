@@ -23,9 +23,10 @@ const PROVENANCE: &str = "Bundled session: tests/logs/short_cmu_30hz.pclog, an a
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Folder for report.html and report.json (created if missing).
+    /// Folder for report.html and report.json (created if missing): `--out-dir`, as a folder
+    /// is named everywhere (`--out` is always a file).
     #[arg(long, default_value = "posecoach-demo")]
-    out: PathBuf,
+    out_dir: PathBuf,
     /// Print one JSON object (the report) instead of text.
     #[arg(long)]
     json: bool,
@@ -33,10 +34,13 @@ pub struct Args {
 
 pub fn run(args: &Args) -> Result<String> {
     let replay = replay::replay(SESSION, None).context("replaying the bundled session")?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
+    std::fs::create_dir_all(&args.out_dir)
+        .with_context(|| format!("creating {}", args.out_dir.display()))?;
     let json = replay.to_json();
-    let (html_path, json_path) = (args.out.join("report.html"), args.out.join("report.json"));
+    let (html_path, json_path) = (
+        args.out_dir.join("report.html"),
+        args.out_dir.join("report.json"),
+    );
     let page = html::page(
         "posecoach demo: an amateur's session",
         &[PROVENANCE.to_string()],

@@ -2,21 +2,24 @@
 //! device's, `core::weights`) or float weights (a teacher, a distilled network or a training
 //! checkpoint, `posecoach_teachfile`; read without the `learn` feature).
 
+use crate::input;
 use crate::score::decimal;
 use anyhow::{Context, Result};
 use posecoach_core::skeleton::Segment;
 use posecoach_core::weights::{self, Dense, Table, Weights};
-use posecoach_io::{self as io, Motion};
+use posecoach_io::{Motion, Reading};
 use posecoach_teachfile::{self as teachfile, Header};
 use serde_json::{json, Value};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// A motion file (.bvh, .c3d, .csv, .pcr), int8 weights (.pcw from `posecoach export`) or
+    /// A motion file (.bvh, .c3d, .csv, .json, .pcr), int8 weights (.pcw from `posecoach export`) or
     /// float weights (.pcw from `train --teacher` or `distill --distilled`, or a .pcckpt
     /// checkpoint).
     file: PathBuf,
+    #[command(flatten)]
+    input: input::Args,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -41,8 +44,11 @@ pub fn run(args: &Args) -> Result<String> {
             false => float_text(&report),
         });
     }
-    let motion = io::load(&args.file)?;
-    let report = describe(&args.file, &motion);
+    let (motion, reading) = args.input.load_read(&args.file)?;
+    let mut report = describe(&args.file, &motion);
+    if let Some(r) = &reading {
+        report["reading"] = reading_json(r);
+    }
     Ok(if args.json {
         format!("{report}\n")
     } else {
@@ -93,11 +99,77 @@ fn describe(path: &std::path::Path, motion: &Motion) -> Value {
     })
 }
 
+/// How a keypoint file was read, as JSON.
+fn reading_json(r: &Reading) -> Value {
+    let midpoints: Vec<Value> = r
+        .midpoints
+        .iter()
+        .map(|(joint, a, b)| json!({"joint": joint.name(), "of": [a, b]}))
+        .collect();
+    json!({
+        "landmarks": r.landmarks.title(),
+        "midpoints": midpoints,
+        "units": r.units.0.symbol(),
+        "units_given": r.units.1,
+        "up": r.up.0.to_string(),
+        "up_given": r.up.1,
+        "time": r.clock.0.title(),
+        "time_column": r.clock.1,
+        "skipped_frames": r.skipped,
+        "not_read": r.ignored,
+    })
+}
+
 fn text(r: &Value) -> String {
     use std::fmt::Write;
     let mut out = String::new();
     _ = writeln!(out, "file:     {}", r["file"].as_str().unwrap_or(""));
     _ = writeln!(out, "format:   {}", r["format"].as_str().unwrap_or(""));
+    if let Some(reading) = r.get("reading") {
+        let given = |key: &str| match reading[key].as_bool() {
+            Some(true) => "given",
+            _ => "detected",
+        };
+        let field = |key: &str| reading[key].as_str().unwrap_or("").to_string();
+        _ = writeln!(out, "read as:  {}", field("landmarks"));
+        for m in reading["midpoints"]
+            .as_array()
+            .map(Vec::as_slice)
+            .unwrap_or(&[])
+        {
+            let of: Vec<&str> = m["of"]
+                .as_array()
+                .map(|o| o.iter().filter_map(Value::as_str).collect())
+                .unwrap_or_default();
+            _ = writeln!(
+                out,
+                "  {} = midpoint of {}",
+                m["joint"].as_str().unwrap_or(""),
+                of.join(" and ")
+            );
+        }
+        _ = writeln!(
+            out,
+            "units:    {} ({})",
+            field("units"),
+            given("units_given")
+        );
+        _ = writeln!(out, "up:       {} ({})", field("up"), given("up_given"));
+        match reading["time_column"].as_str() {
+            Some(column) => _ = writeln!(out, "time:     {} (column `{column}`)", field("time")),
+            None => _ = writeln!(out, "time:     {}", field("time")),
+        }
+        if let Some(n) = reading["skipped_frames"].as_u64().filter(|&n| n > 0) {
+            _ = writeln!(out, "skipped:  {n} frames (kept as missing samples)");
+        }
+        let not_read: Vec<&str> = reading["not_read"]
+            .as_array()
+            .map(|a| a.iter().filter_map(Value::as_str).collect())
+            .unwrap_or_default();
+        if !not_read.is_empty() {
+            _ = writeln!(out, "not read: {}", not_read.join(", "));
+        }
+    }
     let frames = r["frames"].as_u64().unwrap_or(0);
     match r["rate_hz"].as_f64().unwrap_or(0.0) {
         rate if rate > 0.0 => {

@@ -365,6 +365,11 @@ fn run(
         }
     }
     bar.finish_and_clear();
+    // Nothing left to train (`--epochs 0`, or a checkpoint already there): the checkpoint
+    // named is still written, as it stands (at step 0, the untrained prior).
+    if trainer.step() == first {
+        trainer.save(out)?;
+    }
     if let Some(path) = teacher {
         trainer.save_teacher(path)?;
     }

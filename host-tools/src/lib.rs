@@ -13,6 +13,7 @@ pub mod demo;
 pub mod device_sim;
 pub mod failure;
 pub mod html;
+pub mod input;
 pub mod inspect;
 #[cfg(feature = "learn")]
 pub mod learn;

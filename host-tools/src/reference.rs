@@ -1,12 +1,12 @@
 //! `posecoach reference`: a coach's swing stored as the device stores it (a `.pcr` blob).
 
+use crate::input;
 use anyhow::{bail, Context, Result};
-use posecoach_io as io;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The coach's swing (.csv, .bvh or .c3d).
+    /// The coach's swing (.csv, .json, .bvh or .c3d).
     #[arg(long)]
     coach: PathBuf,
     /// The name it is stored under (at most 32 bytes); the file's stem by default.
@@ -15,13 +15,15 @@ pub struct Args {
     /// Where to write it (.pcr).
     #[arg(long)]
     out: PathBuf,
+    #[command(flatten)]
+    input: input::Args,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
 }
 
 pub fn run(args: &Args) -> Result<String> {
-    let motion = io::load(&args.coach)?;
+    let motion = args.input.load(&args.coach)?;
     if motion.rate_hz <= 0.0 {
         bail!(
             "{} is a single pose; a coach reference is a swing",

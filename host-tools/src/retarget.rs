@@ -1,7 +1,7 @@
 //! `posecoach retarget`: the coach's motion on the student's skeleton.
 
 use crate::failure::Usage;
-use crate::teacher;
+use crate::{input, teacher};
 use anyhow::Result;
 use posecoach_io as io;
 use serde_json::json;
@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The coach's motion (.bvh, .c3d or .csv).
+    /// The coach's motion (.bvh, .c3d, .csv or .json).
     #[arg(long)]
     coach: PathBuf,
     /// The student's T-pose: a one-row CSV, or any motion file whose skeleton is used.
@@ -25,6 +25,8 @@ pub struct Args {
     /// the `learn` feature).
     #[arg(long)]
     weights: Option<PathBuf>,
+    #[command(flatten)]
+    input: input::Args,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -39,8 +41,8 @@ pub fn run(args: &Args) -> Result<String> {
         ))
         .into());
     }
-    let coach = io::load(&args.coach)?;
-    let student = io::load(&args.student_tpose)?;
+    let coach = args.input.load(&args.coach)?;
+    let student = args.input.load(&args.student_tpose)?;
     let (virtual_swing, method) = match &args.weights {
         Some(path) => (
             teacher::retarget(path, &coach, &student.skeleton)?,

@@ -1,7 +1,7 @@
 //! `posecoach score`: a student's swing against the coach's, retargeted onto the student.
 
 use crate::failure::{NothingFound, Usage};
-use crate::{html, teacher};
+use crate::{html, input, teacher};
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_core::body::{Angles, Link, Metrics, Shift};
 use posecoach_core::checks::BodyDeviation;
@@ -9,17 +9,17 @@ use posecoach_core::dtw::Band;
 use posecoach_core::events::{Event, EventError, SwingEvents};
 use posecoach_core::score::{self, Advice, Report, ScoreError};
 use posecoach_core::sequence::GAP_TOLERANCE_S;
-use posecoach_io::{self as io, Motion};
+use posecoach_io::Motion;
 use serde_json::{json, Map, Value};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The coach's swing (.bvh, .c3d or .csv).
+    /// The coach's swing (.bvh, .c3d, .csv or .json).
     #[arg(long)]
     coach: PathBuf,
-    /// The student's swing (.bvh, .c3d or .csv).
+    /// The student's swing (.bvh, .c3d, .csv or .json).
     #[arg(long)]
     student: PathBuf,
     /// The student's T-pose; without it the skeleton comes from the student's own frames.
@@ -41,7 +41,9 @@ pub struct Args {
     global_band: bool,
     /// Both swings are resampled to this rate before scoring.
     #[arg(long, default_value_t = 60.0)]
-    rate: f32,
+    score_rate: f32,
+    #[command(flatten)]
+    input: input::Args,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -52,19 +54,22 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<String> {
-    if !(args.rate.is_finite() && (10.0..=240.0).contains(&args.rate)) {
-        bail!("--rate {} must be between 10 and 240 Hz", args.rate);
+    if !(args.score_rate.is_finite() && (10.0..=240.0).contains(&args.score_rate)) {
+        bail!(
+            "--score-rate {} must be between 10 and 240 Hz",
+            args.score_rate
+        );
     }
     if let Some(path) = &args.report {
         ReportFormat::of(path)?;
     }
-    let coach = io::load(&args.coach)?;
-    let student = io::load(&args.student)?;
+    let coach = args.input.load(&args.coach)?;
+    let student = args.input.load(&args.student)?;
     // The student's body: the T-pose if given, else the skeleton measured from the swing. Both
     // swings are compared on it, as rigid bones: the coach's retargeted, the student's own
     // re-expressed (bone-direction copy), so measurement wobble in bone lengths is no fault.
     let body = match &args.student_tpose {
-        Some(path) => io::load(path)?,
+        Some(path) => args.input.load(path)?,
         None => student.clone(),
     };
     let on_body = |motion: &Motion, who: &str| {
@@ -78,8 +83,8 @@ pub fn run(args: &Args) -> Result<String> {
         None => on_body(&coach, "coach")?,
     };
     let (student, virtual_coach) = (
-        student.resampled(args.rate)?,
-        virtual_coach.resampled(args.rate)?,
+        student.resampled(args.score_rate)?,
+        virtual_coach.resampled(args.score_rate)?,
     );
     let band = Band {
         radius: args.band,

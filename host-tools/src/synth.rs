@@ -23,7 +23,7 @@ use posecoach_core::format::{Format, Source};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{self, Config, Message, StudentProfile, MAX_FRAME};
 use posecoach_core::Vec3;
-use posecoach_io::{self as io, csv, Motion};
+use posecoach_io::{csv, Motion};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{json, Map, Value};
@@ -54,7 +54,7 @@ pub struct Args {
     backswing_tempo: f32,
     /// Pose frames per second.
     #[arg(long, default_value_t = 30.0)]
-    rate: f32,
+    pose_rate: f32,
     /// Keypoint noise fresh every frame, mm (3D RMS per keypoint; the camera's depth axis
     /// twice the others).
     #[arg(long, default_value_t = 7.0)]
@@ -94,6 +94,8 @@ pub struct Args {
     /// Seed of the noise, jitter and losses.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    #[command(flatten)]
+    input: crate::input::Args,
     /// Where to write the log; the sidecar goes beside it.
     #[arg(long)]
     out: PathBuf,
@@ -190,10 +192,10 @@ pub fn run(args: &Args) -> Result<String> {
     {
         bail!("--imu-rate must be between 200 and 1000 Hz");
     }
-    if !(10.0..=120.0).contains(&args.rate) {
+    if !(10.0..=120.0).contains(&args.pose_rate) {
         bail!(
-            "--rate {} must be between 10 and 120 frames per second",
-            args.rate
+            "--pose-rate {} must be between 10 and 120 frames per second",
+            args.pose_rate
         );
     }
     if !(0.5..=3.0).contains(&args.backswing_tempo) {
@@ -208,13 +210,13 @@ pub fn run(args: &Args) -> Result<String> {
     if [args.noise_mm, args.drift_mm, args.bias_mm]
         .iter()
         .any(|mm| !(0.0..=100.0).contains(mm))
-        || !(0.0..1000.0 / (2.0 * args.rate)).contains(&args.jitter_ms)
+        || !(0.0..1000.0 / (2.0 * args.pose_rate)).contains(&args.jitter_ms)
         || !(0.0..=0.5).contains(&args.occluded)
     {
         bail!("--noise-mm, --drift-mm and --bias-mm must be 0 to 100, --occluded 0 to 0.5, and --jitter-ms under half a frame");
     }
     let body = match &args.student_tpose {
-        Some(path) => io::load(path)?,
+        Some(path) => args.input.load(path)?,
         None => csv::read(include_str!("../../tests/fixtures/h36m17_tpose.csv"))
             .context("bundled T-pose")?,
     };
@@ -223,9 +225,13 @@ pub fn run(args: &Args) -> Result<String> {
     };
     let keypoint_joints = keypoint_sources(format, &body.skeleton)?;
     let onto_body = |path: &Path| -> Result<Motion> {
-        let motion = io::load(path)?.retarget_analytic(&body).map_err(|(f, e)| {
-            anyhow::anyhow!("{} frame {f} onto the student: {e}", path.display())
-        })?;
+        let motion = args
+            .input
+            .load(path)?
+            .retarget_analytic(&body)
+            .map_err(|(f, e)| {
+                anyhow::anyhow!("{} frame {f} onto the student: {e}", path.display())
+            })?;
         Ok(motion.resampled(TIMELINE_HZ)?)
     };
     let swings: Vec<(PathBuf, Motion)> = args
@@ -274,7 +280,7 @@ pub fn run(args: &Args) -> Result<String> {
                 first.events.lead,
             );
             let camera = Camera {
-                rate_hz: args.rate,
+                rate_hz: args.pose_rate,
                 depth: match args.camera {
                     View::FaceOn => stance.toward_ball(),
                     View::DownTheLine => stance.toward_target(),
@@ -300,7 +306,7 @@ pub fn run(args: &Args) -> Result<String> {
     let doc = json!({
         "log": args.out.file_name().map(|n| n.to_string_lossy().into_owned()),
         "kind": if args.imu_rate.is_some() { "imu" } else { "pose" },
-        "rate_hz": args.imu_rate.unwrap_or(args.rate), "magnetometers": args.imu_rate.map(|_| !args.no_mag), "seed": args.seed, "noise_mm": args.noise_mm,
+        "rate_hz": args.imu_rate.unwrap_or(args.pose_rate), "magnetometers": args.imu_rate.map(|_| !args.no_mag), "seed": args.seed, "noise_mm": args.noise_mm,
         "drift_mm": args.drift_mm, "bias_mm": args.bias_mm, "occluded": args.occluded,
         "jitter_ms": args.jitter_ms, "drop": args.drop,
         "duration_s": timeline.frames() as f32 / TIMELINE_HZ,

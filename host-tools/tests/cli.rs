@@ -362,3 +362,95 @@ fn inspect_describes_float_weights_and_refuses_damaged_ones() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The iron fixture as a spreadsheet writes it from a Z-up capture in millimetres with frame
+/// numbers: `;` separators, decimal commas, quoted header cells, a byte-order mark, CRLF.
+fn iron_as_a_spreadsheet() -> String {
+    let text = std::fs::read_to_string(fixture("golf_iron_60hz.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|c| format!("\"{}\"", if c == "time" { "frame" } else { c }))
+        .collect();
+    let mut out = vec![header.join(";")];
+    for line in lines {
+        let cells: Vec<&str> = line.split(',').collect();
+        let mut row = vec![format!(
+            "{}",
+            (cells[0].parse::<f64>().unwrap() * 60.0).round()
+        )];
+        for xyz in cells[1..].chunks(3) {
+            let mm = |c: &str| match c {
+                "" => String::new(),
+                c => format!("{:.2}", c.parse::<f64>().unwrap() * 1000.0).replace('.', ","),
+            };
+            // Z up: y ← -z, z ← y.
+            let minus_z = match mm(xyz[2]) {
+                z if z.is_empty() => z,
+                z => z.strip_prefix('-').map_or(format!("-{z}"), str::to_string),
+            };
+            row.extend([mm(xyz[0]), minus_z, mm(xyz[1])]);
+        }
+        out.push(row.join(";"));
+    }
+    format!("\u{feff}{}\r\n", out.join("\r\n"))
+}
+
+#[test]
+fn input_files_say_how_they_were_read() {
+    let dir = std::env::temp_dir().join(format!("posecoach-byod-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("iron_mm_zup.csv");
+    std::fs::write(&file, iron_as_a_spreadsheet()).unwrap();
+    let file = file.to_str().unwrap();
+    // Frame numbers without a rate: bad input, saying what to give.
+    let (ok, out, err) = posecoach(&["inspect", file, "--json"]);
+    assert!(!ok && err.contains("--rate"), "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["error"]["kind"], "bad_input");
+    // With the rate: millimetres and Z up found, and said.
+    let (ok, out, err) = posecoach(&["inspect", file, "--rate", "60", "--json"]);
+    assert!(ok, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    let reading = &v["reading"];
+    assert_eq!(reading["units"], "mm");
+    assert_eq!(reading["up"], "+z");
+    assert_eq!(reading["time"], "frame numbers");
+    let iron: Value = serde_json::from_str(
+        &posecoach(&[
+            "inspect",
+            fixture("golf_iron_60hz.csv").to_str().unwrap(),
+            "--json",
+        ])
+        .1,
+    )
+    .unwrap();
+    assert_eq!(v["height_m"], iron["height_m"]);
+    // Scored as the original file is, with a note of what was converted.
+    let coach = fixture("golf_driver_60hz.csv");
+    let coach = coach.to_str().unwrap();
+    let (ok, out, err) = posecoach(&[
+        "score",
+        "--coach",
+        coach,
+        "--student",
+        file,
+        "--rate",
+        "60",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("units mm (detected)") && err.contains("up +z (detected)"),
+        "{err}"
+    );
+    let converted: Value = serde_json::from_str(&out).unwrap();
+    let original = score_json("golf_driver_60hz.csv", "golf_iron_60hz.csv", &[]);
+    assert_eq!(converted["score"], original["score"]);
+    // A unit given that makes no golfer is refused, saying the stature.
+    let (ok, _, err) = posecoach(&["inspect", file, "--rate", "60", "--units", "m"]);
+    assert!(!ok && err.contains("m tall in m"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -163,3 +163,27 @@ fn eval_compares_a_teacher_with_the_analytic_baseline() {
     assert!((tiny - analytic).abs() < 1e-3, "{tiny} against {analytic}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn train_with_no_epochs_writes_the_checkpoint_it_names() {
+    // Nothing to train: the untrained prior, still written where `--out` says.
+    let dir = std::env::temp_dir().join(format!("posecoach-epochs0-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("data")).unwrap();
+    let (checkpoint, teacher) = (dir.join("run.pcckpt"), dir.join("teacher.pcw"));
+    let args: learn::TrainArgs = parse(&[
+        "--data",
+        dir.join("data").to_str().unwrap(),
+        "--synthetic",
+        "1",
+        "--epochs",
+        "0",
+        "--out",
+        checkpoint.to_str().unwrap(),
+        "--teacher",
+        teacher.to_str().unwrap(),
+    ]);
+    let said = learn::train(&args).unwrap();
+    assert!(said.starts_with("0 steps"), "{said}");
+    assert!(checkpoint.is_file() && teacher.is_file(), "{said}");
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -143,7 +143,7 @@ fn replay_and_demo_pages_hold_every_swing_of_the_session() {
     }
     // The demo replays the same bundled session: the same page and the same JSON.
     let out = dir.join("demo").display().to_string();
-    let text = demo::run(&parse::<demo::Args>(&["--out", &out])).unwrap();
+    let text = demo::run(&parse::<demo::Args>(&["--out-dir", &out])).unwrap();
     assert!(
         text.contains("advice") && text.contains("report.html"),
         "{text}"
