@@ -22,7 +22,8 @@
 //!   through horizontal after impact; the other eight positions are the events above
 //!   ([`Position`]).
 //!
-//! A stroke whose hands rise less than [`PUTT_RISE_M`] is a putt: top, address and impact as
+//! Feet that travel more than [`PLANTED_M`] from address to impact make no stroke (someone
+//! walking). A stroke whose hands rise less than [`PUTT_RISE_M`] is a putt: top, address and impact as
 //! above, and the finish where the forward stroke stops.
 //!
 //! On the two tour swings at 60 Hz every position lands within two frames of a hand label, with
@@ -70,6 +71,10 @@ pub const IMPACT_LAG_S: f32 = 0.02;
 /// A stroke whose hands rise less than this (metres, over the whole motion) is a putt; a full
 /// swing raises them 0.8 m or more.
 pub const PUTT_RISE_M: f32 = 0.25;
+/// A golfer strikes the ball from where they stand: feet (their midpoint) that move farther
+/// than this (metres) from address to impact are someone walking, not a stroke. Planted feet
+/// move a few centimetres; one walking step is 0.6 m or more.
+pub const PLANTED_M: f32 = 0.4;
 
 /// One of GolfDB's eight swing events, in swing order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -883,6 +888,10 @@ pub fn detect(
         .min_by(|&a, &b| away(a).total_cmp(&away(b)))
         .filter(|&t| t + 1 < frames)
         .ok_or(EventError::NoSwing)?;
+    let stance = |t: usize| (track.at(feet[0], t) + track.at(feet[1], t)) * 0.5;
+    if (address..=impact).any(|t| norm(&(stance(t) - stance(address))) > PLANTED_M) {
+        return Err(EventError::NoSwing);
+    }
     // Turning points between frames: the slowest hands at the top, the nearest at impact.
     let turning = |f: &dyn Fn(usize) -> f32, t: usize| {
         if t == 0 || t + 1 >= frames {

@@ -258,3 +258,28 @@ fn a_takeaway_timed_against_the_coach_follows_a_slow_backswing_through_noise() {
     assert_eq!(moved.address(), found as usize);
     assert_eq!(moved.time(Event::Top), s.time(Event::Top));
 }
+
+#[test]
+fn someone_walking_makes_no_stroke() {
+    // The driver carried along at a walking pace (1.2 m/s): the same hands, but the feet
+    // travel a metre between address and impact.
+    let (swing, _) = driver();
+    let n = swing.skeleton.len();
+    let mut walking = swing.clone();
+    for (f, frame) in walking.positions.chunks_exact_mut(n).enumerate() {
+        let along = 1.2 * f as f32 / swing.rate_hz;
+        frame.iter_mut().for_each(|p| p.x += along);
+    }
+    let e = detect(&walking.skeleton, &walking.positions, walking.rate_hz).unwrap_err();
+    assert_eq!(e, posecoach_core::events::EventError::NoSwing);
+    // Real walking, which the hands' small rise made a putt.
+    let Some(data) = posecoach_tests::shared_data("someone_walking_makes_no_stroke") else {
+        return;
+    };
+    for name in ["walk_normal_001", "walk-left_normal_001", "walk_giant_001"] {
+        let path = data.join(format!("bvh/bandai/dataset-1_{name}.bvh"));
+        let walk = io::load(&path).unwrap().resampled(60.0).unwrap();
+        let found = detect(&walk.skeleton, &walk.positions, walk.rate_hz);
+        assert!(found.is_err(), "{name}: {found:?}");
+    }
+}
