@@ -45,8 +45,29 @@ step "tests of the learned retargeter's commands (the learn feature: train, expo
 # --workspace keeps every dependency's features as in the step above: only our two crates rebuild.
 cargo test --workspace --features posecoach-cli/learn,posecoach-tests/learn --test learned --test int8
 
-step "banded DTW also on baseline x86-64 (4 SSE2 lanes; host builds use x86-64-v3, see .cargo/config.toml)"
-RUSTFLAGS="-C target-cpu=x86-64" CARGO_TARGET_DIR=target/baseline cargo test -p posecoach-core --lib dtw
+step "installs as a Rust tool: cargo install --path host-tools, then the installed posecoach runs the demo"
+install_root="$(mktemp -d)"
+cargo install --quiet --locked --path host-tools --root "$install_root" --target-dir target
+"$install_root/bin/posecoach" demo --out-dir "$install_root/demo" >/dev/null
+"$install_root/bin/posecoach" --version
+
+step "one host binary for every CPU: the DTW's cell costs chosen at run time (its tests and the demo under qemu-x86_64 as a Nehalem, SSE4.2 without AVX, and a Haswell, AVX2), and an aarch64 build (the demo under qemu-aarch64); every demo report the bytes this machine writes"
+if ! { command -v qemu-x86_64 && command -v qemu-aarch64 && command -v aarch64-linux-gnu-gcc; } >/dev/null 2>&1; then
+    apt_install qemu-user gcc-aarch64-linux-gnu libc6-dev-arm64-cross
+fi
+rustup target add aarch64-unknown-linux-gnu
+cargo build --release -q -p posecoach-cli
+dtw_tests="$(cargo test -p posecoach-core --lib --no-run 2>&1 | sed -n 's/.*Executable unittests src\/lib.rs (\(.*\))/\1/p')"
+CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc cargo build --release -q -p posecoach-cli --target aarch64-unknown-linux-gnu
+cpus="$(mktemp -d)"
+target/release/posecoach demo --out-dir "$cpus/here" >/dev/null
+for cpu in Nehalem Haswell; do
+    qemu-x86_64 -cpu "$cpu" "$dtw_tests" dtw 2>/dev/null
+    qemu-x86_64 -cpu "$cpu" target/release/posecoach demo --out-dir "$cpus/$cpu" >/dev/null 2>&1
+    cmp "$cpus/here/report.json" "$cpus/$cpu/report.json"
+done
+qemu-aarch64 -L /usr/aarch64-linux-gnu target/aarch64-unknown-linux-gnu/release/posecoach demo --out-dir "$cpus/aarch64" >/dev/null
+cmp "$cpus/here/report.json" "$cpus/aarch64/report.json"
 
 step "thumbv7em-none-eabihf: core and adapters without std, with and without defmt"
 cargo build -p posecoach-core -p posecoach-adapters --target thumbv7em-none-eabihf

@@ -500,7 +500,7 @@ pub fn align(
         // Costs are computed for whole vectors of columns, shifted left at the matrix's end.
         let padded = w.next_multiple_of(VECTOR).min(m);
         let first = lo.min(m - padded);
-        cell.row(a, i, b, first, &mut here[..padded]);
+        row_costs(&cell, a, i, b, first, &mut here[..padded]);
         let cells = &here[lo - first..][..w];
         // prev[k] holds column prev_lo + k - 1, so the cells above this row's columns
         // lo - 1 ..= hi start at prev[lo - prev_lo].
@@ -593,14 +593,34 @@ const ONES: [f32; MAX_JOINTS] = [1.0; MAX_JOINTS];
 /// Columns whose costs [`CellCost::row`] sums at a time.
 const BLOCK: usize = 64;
 
-/// Floats in a SIMD vector of the target: costs are computed for whole vectors of columns.
-const VECTOR: usize = if cfg!(target_feature = "avx") {
+/// Floats in the widest SIMD vector [`row_costs`] is compiled for on the target: costs are
+/// computed for whole vectors of columns (AVX-512's 16 lanes take two of them).
+const VECTOR: usize = if cfg!(target_arch = "x86_64") {
     8
 } else if cfg!(any(target_feature = "sse", target_feature = "neon")) {
     4
 } else {
     1
 };
+
+/// [`CellCost::row`], compiled for each x86-64 vector width and chosen when first called for
+/// the CPU it runs on (with `std`; `multiversion` checks the CPU's features once and calls the
+/// widest clone it has): AVX-512 (16 square roots an instruction), AVX2 with FMA (8), or the
+/// baseline SSE2 (4). Elsewhere (aarch64's NEON, the Cortex-M4F) the one version the target
+/// compiles. Every clone computes the same bits: the same operations in the same order. The
+/// macro's call of the clone it checked the CPU for is the one `unsafe` this brings, in the
+/// `multiversion` crate's expansion rather than this crate's code.
+#[multiversion::multiversion(targets("x86_64+avx512f", "x86_64+avx2+fma"))]
+fn row_costs<'w, 'a, 'b>(
+    cell: &CellCost<'w>,
+    a: &Sequence<'a>,
+    i: usize,
+    b: &Sequence<'b>,
+    first: usize,
+    out: &mut [f32],
+) {
+    cell.row(a, i, b, first, out);
+}
 
 /// The per-cell cost: weighted mean joint distance.
 struct CellCost<'w> {
@@ -613,7 +633,9 @@ struct CellCost<'w> {
 }
 
 impl CellCost<'_> {
-    /// Costs of frame `i` of `a` against frames `first..first + out.len()` of `b`, into `out`.
+    /// Costs of frame `i` of `a` against frames `first..first + out.len()` of `b`, into `out`;
+    /// inlined into each of [`row_costs`]'s clones.
+    #[inline(always)]
     fn row(&self, a: &Sequence<'_>, i: usize, b: &Sequence<'_>, first: usize, out: &mut [f32]) {
         if self.unit {
             self.sum(a, i, b, first, out, |_, d| d);
@@ -701,20 +723,12 @@ impl CellCost<'_> {
 }
 
 /// Adds `weigh` of the distance from `at` to each point of `bs` (x, y, z channels) to `out`.
+#[inline(always)]
 fn add_distances(out: &mut [f32], at: [f32; 3], bs: [&[f32]; 3], weigh: impl Fn(f32) -> f32) {
     let [x, y, z] = at;
     let [bx, by, bz] = bs;
-    // Either difference squares to the same number: with AVX's three-operand subtraction
-    // `a - b` takes `b` straight from memory, with SSE `b - a` saves copying `a`.
-    let diff = |a: f32, b: f32| {
-        if cfg!(target_feature = "avx") {
-            a - b
-        } else {
-            b - a
-        }
-    };
     for (((o, &u), &v), &t) in out.iter_mut().zip(bx).zip(by).zip(bz) {
-        let (dx, dy, dz) = (diff(x, u), diff(y, v), diff(z, t));
+        let (dx, dy, dz) = (u - x, v - y, t - z);
         *o += weigh(sqrt(dx * dx + dy * dy + dz * dz));
     }
 }
