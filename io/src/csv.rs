@@ -1,8 +1,8 @@
 //! Keypoint CSV as spreadsheets, pandas and pose-estimator scripts write it.
 //!
-//! A header row, then one row per frame. The first column is the time if its name says so
-//! (`time`, `t`, `timestamp`, `time_ms`, `frame`, an empty name as pandas writes for its index:
-//! [`keypoints::clock_of`]); every other column is `<landmark><sep><axis>`, the separator one
+//! A header row, then one row per frame. The time is the column whose name says so (`time`,
+//! `t`, `timestamp`, `time_ms`, ...: [`keypoints::clock_of`]), else one that counts frames
+//! (`frame`, or the unnamed index pandas writes first); every other column is `<landmark><sep><axis>`, the separator one
 //! of `_ . : -` or a space and the axis `x`, `y`, `z` or a confidence (`visibility`,
 //! `presence`, `score`, `confidence`, `conf`, `c`, `likelihood`), in any case and order.
 //! Landmark names are those of any vocabulary [`crate::landmarks`] knows; columns of other
@@ -212,14 +212,30 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         .iter()
         .map(|c| String::from_utf8_lossy(c).into_owned())
         .collect();
-    let has_clock = cells
-        .first()
-        .is_some_and(|c| keypoints::clock_of(c).is_some());
+    // The time column: one whose name says time, before one that only counts frames (pandas
+    // writes its row index first, unnamed, before a file's own time column).
+    let clocks = || {
+        cells
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| column(c).is_none())
+            .filter_map(|(i, c)| keypoints::clock_of(c).map(|clock| (i, clock)))
+    };
+    let clock = clocks()
+        .find(|(_, clock)| *clock != Some(keypoints::Clock::Frames))
+        .or_else(|| clocks().next())
+        .map(|(i, _)| i);
     let mut landmarks: Vec<Columns> = Vec::new();
     let mut ignored = Vec::new();
-    for (i, cell) in cells.iter().enumerate().skip(usize::from(has_clock)) {
+    for (i, cell) in cells.iter().enumerate() {
+        if Some(i) == clock {
+            continue;
+        }
         let Some((name, sep, axis)) = column(cell) else {
-            ignored.push(cell.clone());
+            ignored.push(match cell.as_str() {
+                "" => format!("column {} (no name)", i + 1),
+                named => named.to_string(),
+            });
             continue;
         };
         let key = landmarks::key(name);
@@ -290,7 +306,7 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
 
     let mut out = Samples {
         names: read.iter().map(|c| c.name.clone()).collect(),
-        clock: has_clock.then(|| cells[0].clone()),
+        clock: clock.map(|i| cells[i].clone()),
         ignored,
         ..Samples::default()
     };
@@ -307,12 +323,12 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         let cell = |i: usize| String::from_utf8_lossy(&record[i]).into_owned();
         let bad = |i: usize| err(line, i + 1, CsvErrorKind::BadNumber(cell(i)));
         let coordinate = |i: usize| number::<f32>(&cell(i), sep).map_err(|()| bad(i));
-        if has_clock {
-            let t = number::<f64>(&cell(0), sep)
-                .map_err(|()| bad(0))?
-                .ok_or_else(|| bad(0))?;
+        if let Some(i) = clock {
+            let t = number::<f64>(&cell(i), sep)
+                .map_err(|()| bad(i))?
+                .ok_or_else(|| bad(i))?;
             if out.times.last().is_some_and(|&last| t <= last) {
-                return Err(err(line, 1, CsvErrorKind::TimeNotIncreasing));
+                return Err(err(line, i + 1, CsvErrorKind::TimeNotIncreasing));
             }
             out.times.push(t);
         }
@@ -632,6 +648,23 @@ right_wrist_x,right_wrist_y,right_wrist_z\n\
             e.to_string().contains("give the frame rate with --rate"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn pandas_index_before_the_time_column_is_set_aside() {
+        let original = read(DRIVER).unwrap();
+        let mut lines = DRIVER.lines();
+        let mut text = format!(",{}\n", lines.next().unwrap());
+        for (k, line) in lines.enumerate() {
+            text.push_str(&format!("{k},{line}\n"));
+        }
+        let (motion, reading) = read_with(text.as_bytes(), &Hints::default()).unwrap();
+        assert_eq!(
+            reading.clock,
+            (keypoints::Clock::Seconds, Some("time".into()))
+        );
+        assert_eq!(reading.ignored, ["column 1 (no name)"]);
+        assert_eq!(motion.positions, original.positions);
     }
 
     #[test]
