@@ -83,6 +83,7 @@ impl core::error::Error for LogError {}
 #[derive(Clone, Debug)]
 pub struct LogReader<'a> {
     bytes: &'a [u8],
+    cut: bool,
     decoder: Decoder,
 }
 
@@ -110,8 +111,15 @@ impl<'a> LogReader<'a> {
         }
         Ok(LogReader {
             bytes,
+            cut: bytes.last().is_some_and(|&b| b != 0),
             decoder: Decoder::new(),
         })
+    }
+
+    /// Whether the log ends inside a frame: a whole log ends with a frame's delimiter (0), so
+    /// one that does not was cut short and its last frame is lost.
+    pub fn cut(&self) -> bool {
+        self.cut
     }
 
     /// Frames read and dropped so far.
@@ -153,6 +161,17 @@ mod tests {
             out.extend_from_slice(&frame[..n]);
         }
         out
+    }
+
+    #[test]
+    fn a_log_cut_inside_a_frame_says_so() {
+        let whole = log(&[Message::Ack { seq: 7 }, Message::Ack { seq: 8 }]);
+        assert!(!LogReader::new(&whole).unwrap().cut());
+        let cut = &whole[..whole.len() - 2];
+        let reader = LogReader::new(cut).unwrap();
+        assert!(reader.cut());
+        assert_eq!(reader.count(), 1);
+        assert!(!LogReader::new(&whole[..HEADER_LEN]).unwrap().cut());
     }
 
     #[test]

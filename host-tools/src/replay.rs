@@ -89,10 +89,14 @@ pub fn run(args: &Args) -> Result<String> {
     if replay.swings.is_empty() {
         return Err(NothingFound {
             message: format!(
-                "{}: no swing found in {} frames read ({} messages refused)",
+                "{}: no swing found in {} frames read ({} messages refused){}",
                 args.log.display(),
                 replay.counters["frames_ok"],
-                replay.refused.len()
+                replay.refused.len(),
+                match replay.counters["cut_short"].as_bool() {
+                    Some(true) => "; the log ends inside a frame: it was cut short",
+                    _ => "",
+                }
             ),
             output: out,
         }
@@ -116,6 +120,7 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
         .map(|c| c.name().to_string())
         .collect();
     let mut reader = LogReader::new(log)?;
+    let cut = reader.cut();
     let (mut swings, mut text, mut refused) = (Vec::new(), String::new(), Vec::new());
     let (mut pages, mut sent) = (Vec::new(), Vec::new());
     for message in reader.by_ref() {
@@ -173,9 +178,15 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
         "pose_out_of_order": stream.out_of_order, "pose_gaps": stream.gaps,
         "pose_masked": stream.masked, "frames_at_model_rate": stream.emitted,
         "imu_stale": session.stale_samples(),
+        "cut_short": cut,
     });
     if swings.is_empty() {
         text.push_str("no swing found\n");
+    }
+    if cut {
+        text.push_str(
+            "the log ends inside a frame: it was cut short, and its last frame is lost\n",
+        );
     }
     Ok(Replay {
         swings,

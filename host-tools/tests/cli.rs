@@ -257,13 +257,18 @@ fn failures_have_a_kind_and_an_exit_status() {
     // A recording cut short: its usual output all the same, and 3.
     let log = std::fs::read(fixture("../logs/short_cmu_30hz.pclog")).unwrap();
     let cut = dir.join("cut.pclog");
-    std::fs::write(&cut, &log[..3000]).unwrap();
+    let end = (2000..3000).rev().find(|&k| log[k - 1] != 0).unwrap();
+    std::fs::write(&cut, &log[..end]).unwrap();
     let (status, out, err) = posecoach_status(&["replay", cut.to_str().unwrap(), "--json"]);
     assert_eq!(status, 3, "{err}");
     let v: Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["swings"].as_array().unwrap().len(), 0);
     assert!(v["counters"]["frames_ok"].as_u64().unwrap() > 0);
-    assert!(err.contains("no swing found"), "{err}");
+    assert_eq!(v["counters"]["cut_short"], true);
+    assert!(
+        err.contains("no swing found") && err.contains("cut short"),
+        "{err}"
+    );
     // One flag per thing across commands: the coach is --coach for `reference` too; an
     // output a command cannot write is refused before any work; float weights where a device's
     // int8 ones belong are named as such, with the command that makes the right ones.
