@@ -10,6 +10,7 @@ use posecoach_io::{self as io, Hints, Motion, Reading};
 use std::path::Path;
 
 #[derive(clap::Args, Clone, Debug, Default)]
+#[group(id = "input")]
 pub struct Args {
     /// Length unit of the input files (m, cm, mm, in; cmu for BVH). Keypoint files: found
     /// from the body's stature when not given.

@@ -139,3 +139,16 @@ fn main() -> ExitCode {
         _ => status,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// clap's own checks of every command's flags (names, groups, conflicts), which otherwise
+    /// run only when a debug build parses that command.
+    #[test]
+    fn every_command_is_well_formed() {
+        Cli::command().debug_assert();
+    }
+}
