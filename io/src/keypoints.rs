@@ -294,8 +294,8 @@ pub fn motion(samples: &Samples, hints: &Hints) -> Result<(Motion, Reading), Key
     Ok((motion, reading))
 }
 
-/// The clock, the rate and each row's frame: rows at `round(t · rate)`, each at least one
-/// frame after the one before, so a skipped frame stays a gap in time.
+/// The clock, the rate and each row's frame ([`place`]). The rate is the median step's, or
+/// for unevenly stepped times the frames filled over their span.
 fn timing(
     samples: &Samples,
     rows: usize,
@@ -347,8 +347,34 @@ fn timing(
     if clock == Clock::Rows {
         return Ok((clock, rate_hz, (0..rows).collect()));
     }
-    let t0 = times[0];
-    let mut slots = Vec::with_capacity(rows);
+    let slots = place(times, seconds_per_unit, rate_hz);
+    // Times stepped unevenly (rounded to the millisecond, jittered) give the rate of the
+    // frames they fill over their span: integer milliseconds at 60 Hz step 16, 17, 17, and
+    // the median step alone would say 58.8 Hz. Even steps keep their own.
+    let (low, high) = steps
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &s| {
+            (l.min(s), h.max(s))
+        });
+    let span = (times[rows - 1] - times[0]) * seconds_per_unit;
+    let last = slots.last().copied().unwrap_or(0);
+    if matches!(clock, Clock::Seconds | Clock::Milliseconds)
+        && high - low > 1e-6 * median
+        && span > 0.0
+    {
+        let rate_hz = (last as f64 / span) as f32;
+        if (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz) {
+            return Ok((clock, rate_hz, place(times, seconds_per_unit, rate_hz)));
+        }
+    }
+    Ok((clock, rate_hz, slots))
+}
+
+/// Each time's frame at `rate_hz`: the nearest, and at least one after the one before, so a
+/// skipped frame stays a gap in time.
+fn place(times: &[f64], seconds_per_unit: f64, rate_hz: f32) -> Vec<usize> {
+    let t0 = times.first().copied().unwrap_or(0.0);
+    let mut slots = Vec::with_capacity(times.len());
     let mut next = 0usize;
     for &t in times {
         let at = ((t - t0) * seconds_per_unit * f64::from(rate_hz)).round();
@@ -357,7 +383,7 @@ fn timing(
         slots.push(slot);
         next = slot + 1;
     }
-    Ok((clock, rate_hz, slots))
+    slots
 }
 
 /// The body's mean feet-to-head vector over the frames, in the file's axes: the mean of the
@@ -480,6 +506,18 @@ mod tests {
         let seconds = samples(10, 1.0, |v| v, Some(("t", 0.01)));
         // A file with its own times keeps them.
         assert!((motion(&seconds, &hints).unwrap().0.rate_hz - 100.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn millisecond_timestamps_give_the_rate_of_their_span() {
+        // 60 Hz written as whole milliseconds (16, 17, 17, ...), one frame dropped.
+        let mut s = samples(40, 1.0, |v| v, Some(("timestamp_ms", 1.0)));
+        s.times = (0..40)
+            .map(|f| ((f + usize::from(f >= 20)) as f64 * 1000.0 / 60.0).round())
+            .collect();
+        let (m, r) = motion(&s, &Hints::default()).unwrap();
+        assert!((m.rate_hz - 60.0).abs() < 0.05, "{}", m.rate_hz);
+        assert_eq!((m.frames(), r.skipped), (41, 1));
     }
 
     #[test]

@@ -70,7 +70,7 @@ impl fmt::Display for FileError {
         match &self.kind {
             FileErrorKind::Io(e) => e.fmt(f),
             FileErrorKind::UnknownExtension => {
-                f.write_str("unknown extension: expected .bvh, .c3d, .csv, .json or .pcr")
+                f.write_str("unknown extension: expected .bvh, .c3d, .csv, .json (.jsonl) or .pcr")
             }
             FileErrorKind::Csv(e) => e.fmt(f),
             FileErrorKind::Json(e) => e.fmt(f),
@@ -172,7 +172,7 @@ fn read(path: &Path, hints: &Hints) -> Result<(Motion, Option<Reading>), FileErr
                 .map(read)
                 .map_err(|e| fail(FileErrorKind::Csv(e)))
         }
-        "json" => {
+        "json" | "jsonl" | "ndjson" => {
             return json::read_with(&bytes()?, hints)
                 .map(read)
                 .map_err(|e| fail(FileErrorKind::Json(e)))
