@@ -459,3 +459,66 @@ fn input_files_say_how_they_were_read() {
     assert!(!ok && err.contains("m tall in m"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn every_bring_your_own_data_example_reads_as_its_tool_writes_it() {
+    // (file, vocabulary, units, up, time) as the README's table says.
+    let cases = [
+        (
+            "mediapipe_iron.jsonl",
+            "MediaPipe BlazePose-33 landmarks",
+            "m",
+            "-y",
+            "milliseconds",
+        ),
+        (
+            "openpose_iron.csv",
+            "OpenPose BODY_25 keypoints",
+            "mm",
+            "-y",
+            "frame numbers",
+        ),
+        ("kinect_iron.json", "Kinect joints", "mm", "-y", "seconds"),
+        (
+            "spreadsheet_iron.csv",
+            "posecoach joint names",
+            "cm",
+            "+z",
+            "seconds",
+        ),
+    ];
+    let iron = score_json("golf_iron_60hz.csv", "golf_iron_60hz.csv", &[]);
+    for (name, landmarks, units, up, time) in cases {
+        let file = fixture(&format!("byod/{name}"));
+        let file = file.to_str().unwrap();
+        let (ok, out, err) = posecoach(&["inspect", file, "--rate", "60", "--json"]);
+        assert!(ok, "{name}: {err}");
+        let v: Value = serde_json::from_str(&out).unwrap();
+        let r = &v["reading"];
+        let found = (
+            r["landmarks"].as_str(),
+            r["units"].as_str(),
+            r["up"].as_str(),
+            r["time"].as_str(),
+        );
+        assert_eq!(
+            found,
+            (Some(landmarks), Some(units), Some(up), Some(time)),
+            "{name}"
+        );
+        assert!(
+            (v["rate_hz"].as_f64().unwrap() - 60.0).abs() < 0.05,
+            "{name}: {}",
+            v["rate_hz"]
+        );
+        let scored = score_json(
+            "golf_iron_60hz.csv",
+            &format!("byod/{name}"),
+            &["--rate", "60"],
+        );
+        // Where the tool gives every joint the iron has, the score is the iron's own.
+        if name.starts_with("kinect") || name.starts_with("spreadsheet") {
+            assert_eq!(scored["score"], iron["score"], "{name}");
+        }
+    }
+}
