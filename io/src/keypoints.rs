@@ -96,8 +96,6 @@ pub struct Reading {
     pub rate_hz: f32,
     /// Frames the clock skips, kept as missing samples.
     pub skipped: usize,
-    /// The body's stature, metres.
-    pub stature_m: f32,
     /// Columns or keys not read.
     pub ignored: Vec<String>,
 }
@@ -281,7 +279,6 @@ pub fn motion(samples: &Samples, hints: &Hints) -> Result<(Motion, Reading), Key
         clock: (clock, samples.clock.clone()),
         rate_hz,
         skipped: frames - rows,
-        stature_m: skeleton.height(),
         ignored,
     };
     let motion = Motion {
