@@ -103,6 +103,9 @@ pub struct Reading {
 /// Why keypoint samples are not a motion.
 #[derive(Clone, Debug, PartialEq)]
 pub enum KeypointError {
+    /// Samples whose lengths disagree (positions, missing flags and times for the names):
+    /// built by hand, as the readers never make them.
+    Shape,
     /// No pelvis, and no hips to place it between; the columns or keys not read are listed.
     NoPelvis(Landmarks, Vec<String>),
     /// Frame numbers or no time column, and no `--rate`.
@@ -124,6 +127,9 @@ pub enum KeypointError {
 impl fmt::Display for KeypointError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            KeypointError::Shape => f.write_str(
+                "the samples' positions, missing flags and times do not match their landmarks",
+            ),
             KeypointError::NoPelvis(landmarks, ignored) => {
                 write!(
                     f,
@@ -160,7 +166,9 @@ impl fmt::Display for KeypointError {
 
 impl std::error::Error for KeypointError {}
 
-/// The clock a time column's name says, if it says one (names compared as [`landmarks::key`]).
+/// Whether a column's name says it is time (names compared as [`landmarks::key`]): `None`
+/// for another column, `Some(None)` for time whose unit the values must tell (`time`, `t`,
+/// `timestamp`), `Some(Some(clock))` where the name says the unit.
 pub fn clock_of(name: &str) -> Option<Option<Clock>> {
     let k = landmarks::key(name);
     let clock = match k.as_str() {
@@ -198,6 +206,13 @@ pub fn motion(samples: &Samples, hints: &Hints) -> Result<(Motion, Reading), Key
 
     let width = samples.names.len();
     let rows = samples.positions.len().checked_div(width).unwrap_or(0);
+    let timed = samples.clock.is_none() || samples.times.len() == rows;
+    if rows * width != samples.positions.len()
+        || samples.missing.len() != samples.positions.len()
+        || !timed
+    {
+        return Err(KeypointError::Shape);
+    }
     let (clock, rate_hz, slots) = timing(samples, rows, hints)?;
     let frames = slots.last().map_or(0, |&s| s + 1);
     check_limits(frames, n, rate_hz).map_err(KeypointError::Limit)?;
@@ -353,7 +368,10 @@ fn timing(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &s| {
             (l.min(s), h.max(s))
         });
-    let span = (times[rows - 1] - times[0]) * seconds_per_unit;
+    let span = match (times.first(), times.last()) {
+        (Some(first), Some(last)) => (last - first) * seconds_per_unit,
+        _ => 0.0,
+    };
     let last = slots.last().copied().unwrap_or(0);
     if matches!(clock, Clock::Seconds | Clock::Milliseconds)
         && high - low > 1e-6 * median
@@ -503,6 +521,25 @@ mod tests {
         let seconds = samples(10, 1.0, |v| v, Some(("t", 0.01)));
         // A file with its own times keeps them.
         assert!((motion(&seconds, &hints).unwrap().0.rate_hz - 100.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn samples_whose_lengths_disagree_are_refused() {
+        let whole = samples(3, 1.0, |v| v, Some(("t", 0.01)));
+        let mut short_times = whole.clone();
+        short_times.times.pop();
+        let mut short_missing = whole.clone();
+        short_missing.missing.pop();
+        let mut ragged = whole.clone();
+        ragged.positions.pop();
+        ragged.missing.pop();
+        for s in [short_times, short_missing, ragged] {
+            assert_eq!(
+                motion(&s, &Hints::default()).unwrap_err(),
+                KeypointError::Shape
+            );
+        }
+        assert!(motion(&whole, &Hints::default()).is_ok());
     }
 
     #[test]

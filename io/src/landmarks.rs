@@ -63,8 +63,9 @@ const OPENPOSE: [&str; 25] = [
     "RHeel",
 ];
 
-/// Azure Kinect's 32 joints in its output order, then Kinect v2's names that differ.
-const KINECT: [&str; 41] = [
+/// Azure Kinect's 32 joints in its output order, then Kinect v2's names that differ once
+/// compared as [`key`]s (`HipLeft` and `HIP_LEFT` are one name).
+const KINECT: [&str; 35] = [
     "PELVIS",
     "SPINE_NAVAL",
     "SPINE_CHEST",
@@ -101,12 +102,6 @@ const KINECT: [&str; 41] = [
     "SpineBase",
     "SpineMid",
     "SpineShoulder",
-    "HipLeft",
-    "HipRight",
-    "KneeLeft",
-    "KneeRight",
-    "AnkleLeft",
-    "AnkleRight",
 ];
 
 /// Where a canonical joint comes from: one landmark, or the midpoint of two.
@@ -381,6 +376,37 @@ mod tests {
         let openpose = keys(&["MidHip", "LHip", "RHip"]);
         assert_eq!(make(Landmarks::OpenPose25, &openpose)[0].from, [0, 0]);
         assert_eq!(Landmarks::detect(&openpose), Landmarks::OpenPose25);
+    }
+
+    #[test]
+    fn kinect_v2_names_read_as_azure_ones() {
+        let v2 = keys(&[
+            "SpineBase",
+            "SpineMid",
+            "SpineShoulder",
+            "HipLeft",
+            "HipRight",
+            "KneeLeft",
+            "AnkleLeft",
+            "FootLeft",
+            "ShoulderLeft",
+            "WristRight",
+        ]);
+        assert_eq!(Landmarks::detect(&v2), Landmarks::Kinect32);
+        let joints: Vec<Joint> = make(Landmarks::Kinect32, &v2)
+            .iter()
+            .map(|m| m.joint)
+            .collect();
+        for j in [
+            Joint::Pelvis,
+            Joint::Spine,
+            Joint::Thorax,
+            Joint::LeftHip,
+            Joint::LeftToe,
+            Joint::RightWrist,
+        ] {
+            assert!(joints.contains(&j), "{j}");
+        }
     }
 
     #[test]
