@@ -79,6 +79,12 @@ pub const TEMPO_POINTS: f32 = 1.0;
 pub const SPATIAL_SOFTNESS_M: f32 = 0.01;
 /// Softness of the excess of a tempo change over its tolerance, in `|ln ratio|`.
 pub const TEMPO_SOFTNESS: f32 = 0.03;
+/// A student's root (the skeleton's first joint, the pelvis) that stays within this many
+/// metres of where it was in the swing's first frame all through it is held by the input, not
+/// the golfer: landmarks centred on the hips (MediaPipe's world landmarks) or a root the IMU
+/// adapter fixes. No golfer's pelvis stays within 5 mm through a swing (a tour pelvis sways,
+/// thrusts and lifts 5 to 15 cm), and a keypoint noise of a millimetre moves it farther.
+pub const HELD_ROOT_M: f32 = 0.005;
 
 /// How far a non-negative `value` is past `threshold`, softly: `s · ln(1 + e^((value −
 /// threshold) / s))` less its value at 0 (`s` the softness), which is 0 at 0, grows strictly
@@ -372,6 +378,10 @@ pub struct Report {
     pub gaps: HVec<Gap, { GAPS.len() }>,
     /// The most important advice first.
     pub advice: HVec<Advice, MAX_ADVICE>,
+    /// The input held the student's root still ([`HELD_ROOT_M`]): the coach was compared with
+    /// its root held where it was at address too, and the pelvis's sway and thrust were not
+    /// judged.
+    pub root_held: bool,
 }
 
 impl Report {
@@ -787,6 +797,19 @@ pub fn compare(
         let _ = path.push(p);
     }
 
+    // An input that holds the root still shows the body about its pelvis: the coach is then
+    // compared the same way, its root held at address.
+    let root_held = (0..n).all(|f| norm(&(student[f * joints] - student[0])) < HELD_ROOT_M);
+    let coach_at = |k: usize, x: f32, half: usize| {
+        let p = smoothed(coach, joints, x, k, half);
+        if root_held {
+            let root = smoothed(coach, joints, x, 0, half);
+            p - (root - coach[coach_events.address() * joints])
+        } else {
+            p
+        }
+    };
+
     // Spatial deviations at each event, in each swing's stance frame, the student's pose at its
     // event time against the coach's at its own (a pure offset keeps its direction), both
     // smoothed over ±SPATIAL_SMOOTHING_S.
@@ -807,8 +830,7 @@ pub fn compare(
     );
     let offset = |k: usize, x: f32, (hs, hc): (usize, usize)| {
         let c = coach_frame(x, &student_events, &coach_events, ratio);
-        stance_s.local(smoothed(student, joints, x, k, hs))
-            - stance_c.local(smoothed(coach, joints, c, k, hc))
+        stance_s.local(smoothed(student, joints, x, k, hs)) - stance_c.local(coach_at(k, c, hc))
     };
     // Each joint's usual offset from the coach over the swing, takeaway to finish (per axis the
     // median: a keypoint's constant bias, or a joint another format places elsewhere), and how
@@ -1028,8 +1050,8 @@ pub fn compare(
             // The uncertainty along the offset: the wander in that direction (a camera's depth
             // axis is noisier than the two across it) and, along the joint's path, how far it
             // moves in the event's timing uncertainty.
-            let along = (stance_c.local(smoothed(coach, joints, c + h, k, half_c))
-                - stance_c.local(smoothed(coach, joints, c - h, k, half_c)))
+            let along = (stance_c.local(coach_at(k, c + h, half_c))
+                - stance_c.local(coach_at(k, c - h, half_c)))
                 * 0.5;
             let uncertainty_m = match o.try_normalize(f32::MIN_POSITIVE) {
                 Some(u) => libm::hypotf(norm(&sigma.component_mul(&u)), along.dot(&u)),
@@ -1085,16 +1107,16 @@ pub fn compare(
     let body = body_checks(
         skeleton,
         &Swing {
-            positions: student,
+            at: &|k, x| smoothed(student, joints, x, k, half_s),
             events: &student_events,
             stance: &stance_s,
-            half: half_s,
+            root_held,
         },
         &Swing {
-            positions: coach,
+            at: &|k, x| coach_at(k, x, half_c),
             events: &coach_events,
             stance: &stance_c,
-            half: half_c,
+            root_held: false,
         },
         &|x| coach_frame(x, &student_events, &coach_events, ratio),
         &|k, x| unsure_near(k, x, half_s),
@@ -1162,23 +1184,24 @@ pub fn compare(
         body,
         gaps,
         advice,
+        root_held,
     })
 }
 
-/// One swing as the body checks read it: frames × skeleton joints, its events, its stance and
-/// the half-width of the average its poses are taken over, frames.
+/// One swing as the body checks read it: joint `k` at frame `x` as the joint comparison
+/// reads it, its events, its stance, and whether the input held its root still.
 struct Swing<'a> {
-    positions: &'a [Vec3],
+    at: &'a dyn Fn(usize, f32) -> Vec3,
     events: &'a SwingEvents,
     stance: &'a Stance,
-    half: usize,
+    root_held: bool,
 }
 
 impl Swing<'_> {
-    /// Every joint at frame `x`, averaged as the joint comparison does.
+    /// Every joint at frame `x`.
     fn pose(&self, joints: usize, x: f32, out: &mut [Vec3; MAX_JOINTS]) {
         for (k, p) in out.iter_mut().enumerate().take(joints) {
-            *p = smoothed(self.positions, joints, x, k, self.half);
+            *p = (self.at)(k, x);
         }
     }
 }
@@ -1187,8 +1210,9 @@ impl Swing<'_> {
 /// coach's frame matching a student's frame is `coach_frame`'s, a joint the stream was unsure
 /// of near a frame is `unsure` there (a check is not made at a position where a joint it is
 /// measured from is), the input's noise per stance axis is `noise`, each event's timing
-/// uncertainty in coach frames `timing`. None for a skeleton that lacks a joint the metrics
-/// need.
+/// uncertainty in coach frames `timing`; where the input held the student's root the pelvis's
+/// sway and thrust are not checked. None for a skeleton that lacks a joint the
+/// metrics need.
 fn body_checks(
     skeleton: &Skeleton,
     student: &Swing<'_>,
@@ -1224,7 +1248,12 @@ fn body_checks(
     ];
     let mut at: Option<Position> = None;
     for check in CHECKS {
-        let Some(event) = check.position.event() else {
+        let shift = matches!(check.measure, Measure::PelvisSway | Measure::PelvisThrust);
+        let Some(event) = check
+            .position
+            .event()
+            .filter(|_| !(student.root_held && shift))
+        else {
             continue;
         };
         let Some(x) = student.events.time(event) else {

@@ -198,6 +198,12 @@ text{font-family:sans-serif}.wide{overflow-x:auto}table{border-collapse:collapse
 td,th{border-bottom:1px solid #ddd;padding:3px 6px;text-align:right;white-space:nowrap}\
 svg.key{border:none;background:none}tbody th{white-space:normal;text-align:left;min-width:9em}";
 
+/// What a report says of a swing whose input held the root still
+/// ([`posecoach_core::score::Report::root_held`]).
+pub const ROOT_HELD: &str = "The input holds your hips still (landmarks centred on the hips, or a \
+     root the sensors fix): the coach is compared about its hips too, and the hips' sway and \
+     thrust are not judged.";
+
 fn section(out: &mut String, n: usize, s: &Scored) {
     let r = &s.report;
     let _ = writeln!(
@@ -209,6 +215,13 @@ fn section(out: &mut String, n: usize, s: &Scored) {
         r.student_tempo_ratio,
         r.coach_tempo_ratio
     );
+    if r.root_held {
+        let _ = writeln!(
+            out,
+            "<p class=\"note\" id=\"root-held-{n}\">{}</p>",
+            escape(ROOT_HELD)
+        );
+    }
     let _ = writeln!(out, "<h3>Advice</h3><ol id=\"advice-{n}\">");
     for advice in &r.advice {
         let _ = writeln!(out, "<li>{}</li>", escape(&advice.to_string()));

@@ -323,6 +323,7 @@ pub fn to_json(s: &html::Scored) -> Value {
             })
         }).collect::<Vec<_>>(),
         "advice": r.advice.iter().map(Advice::to_string).collect::<Vec<_>>(),
+        "root_held": r.root_held,
         "kinematic_sequence": {"student": sequence_json(&student), "coach": sequence_json(&coach),
             "gaps": r.gaps.iter().map(|g| {
                 let ms = |v: f32| (f64::from(v) * 1000.0).round();
@@ -436,6 +437,9 @@ pub fn to_text(s: &html::Scored) -> String {
                 if Advice::is_clear(g) { "  past it" } else { "" }
             );
         }
+    }
+    if r.root_held {
+        let _ = writeln!(out, "{}", html::ROOT_HELD);
     }
     if !r.body.is_empty() {
         let _ = writeln!(

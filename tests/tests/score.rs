@@ -438,3 +438,34 @@ fn a_tempo_verdict_waits_for_the_ratio_to_be_clear_of_its_noise() {
         "{jittered:?}"
     );
 }
+
+#[test]
+fn a_student_whose_input_holds_the_hips_is_compared_about_them() {
+    // MediaPipe's world landmarks are centred on the hips: the same swing with its root held
+    // where it was in the first frame.
+    let coach = driver();
+    let n = coach.skeleton.len();
+    let mut held = coach.clone();
+    let root = coach.positions[0];
+    for frame in held.positions.chunks_mut(n) {
+        let travel = frame[0] - root;
+        frame.iter_mut().for_each(|p| *p -= travel);
+    }
+    let report = run(&held, &coach);
+    assert!(report.root_held);
+    assert!(report.score > 99.0, "{}", report.score);
+    assert!(report.advice.is_empty(), "{:?}", report.advice);
+    let shifts = |r: &Report| {
+        r.body
+            .iter()
+            .filter(|b| {
+                b.check.measure.name().starts_with("pelvis_") && !b.check.measure.in_degrees()
+            })
+            .count()
+    };
+    assert_eq!(shifts(&report), 0);
+    // The swing as captured moves its hips, and they are judged.
+    let free = run(&coach, &coach);
+    assert!(!free.root_held);
+    assert_eq!(shifts(&free), 3);
+}
