@@ -310,7 +310,7 @@ pub fn run(args: &Args) -> Result<String> {
 fn cases(cleans: &[Clean], args: &Args) -> Vec<Case> {
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
     let mut cases = Vec::new();
-    let (unflawed, tempos, offsets) = if args.quick { (1, 1, 2) } else { (3, 4, 10) };
+    let (unflawed, tempos, offsets) = if args.quick { (1, 1, 2) } else { (12, 4, 10) };
     let joints = [
         Joint::LeftWrist,
         Joint::RightWrist,
