@@ -6,7 +6,9 @@
 //! the one unmistakable moment of a swing, the fastest hands of the downswing:
 //!
 //! - **top**: walking back from the fastest hands, the first minimum of hand speed (the club
-//!   and hands reverse);
+//!   and hands reverse); where the hands pause there, as still as in the set-up, the pause's
+//!   end: the backswing lasts until the downswing starts ([`SwingEvents::arrival`] is the
+//!   pause's start);
 //! - **lead side**: the backswing takes the hands toward the trail foot;
 //! - **address**: walking back from the top, the last frame of the still set-up (the club head,
 //!   else the hands, slower than [`STILL_FRACTION`] of their backswing peak for [`STILL_S`]),
@@ -52,6 +54,9 @@ pub const STILL_FRACTION: f32 = 0.1;
 /// Still hands may seem to move up to this many times as fast as in the quietest stretch of
 /// the set-up (pose noise).
 pub const NOISE_MARGIN: f32 = 1.2;
+/// The least speed a golfer's hands are taken to sway at when still, m/s (a standing body
+/// sways at about 1 cm/s): the floor of the noise still hands are judged against.
+pub const STILL_SWAY_M_S: f32 = 0.01;
 /// Lead-arm elevation at toe-up when no club is tracked (the shaft is horizontal there in the
 /// two tour swings of the test data: -54° and -50°).
 pub const TOE_UP_ARM_DEG: f32 = -52.0;
@@ -261,6 +266,9 @@ pub struct SwingEvents {
     /// Per position, its time in frames (between frames: see [`SwingEvents::time`]); 0 where
     /// the swing has none.
     times: [f32; 10],
+    /// When the hands arrived at the top, frames: the top's time, or the start of a pause
+    /// there.
+    arrival: f32,
 }
 
 const ABSENT: u16 = u16::MAX;
@@ -276,6 +284,7 @@ impl SwingEvents {
             club: false,
             frames: times.map(|t| t.map_or(ABSENT, |t| t as u16)),
             times: times.map(|t| t.unwrap_or(0.0)),
+            arrival: times[Position::P4 as usize].unwrap_or(0.0),
         }
     }
 }
@@ -323,8 +332,15 @@ impl SwingEvents {
                 f => f.saturating_sub(start),
             }),
             times: self.times.map(|t| (t - f32::from(start)).max(0.0)),
+            arrival: (self.arrival - f32::from(start)).max(0.0),
             ..*self
         }
+    }
+
+    /// When the hands arrived at the top, frames (between frames): the top's time, or where
+    /// they paused there, the pause's start (the top is its end).
+    pub fn arrival(&self) -> f32 {
+        self.arrival
     }
 
     /// Frame of the address (every swing has one).
@@ -623,13 +639,19 @@ pub fn takeaway_against(
         let w = (x - f as f32).clamp(0.0, 1.0);
         arms.map(|k| t.at(k, f) * (1.0 - w) + t.at(k, g) * w)
     };
+    // Each backswing runs from the takeaway to the hands' arrival at the top (a pause there
+    // is no part of the coach's pace).
     let (c0, c_top) = (
         coach_events.time(Event::Address)?,
-        coach_events.time(Event::Top)?,
+        coach_events
+            .time(Event::Top)
+            .map(|_| coach_events.arrival())?,
     );
     let (s0, s_top) = (
         student_events.time(Event::Address)?,
-        student_events.time(Event::Top)?,
+        student_events
+            .time(Event::Top)
+            .map(|_| student_events.arrival())?,
     );
     if c_top <= c0 || s_top <= s0 {
         return None;
@@ -876,6 +898,32 @@ pub fn detect(
     };
     let trail_arm = |t: usize| elevation(track.at(trail_wrist, t) - track.at(trail_shoulder, t));
 
+    // A pause at the top: the hands as still as in the quietest stretch of the set-up (or a
+    // standing body's sway) for more frames than the smoothing's half-width, where that
+    // stillness can be told from the hands' turn (under STILL_FRACTION of their fastest in
+    // the backswing, as the set-up's is). The backswing lasts until the downswing starts, so the top is the pause's
+    // end; the hands arrived at its start. Speeds are taken over ±2 × half frames of
+    // smoothing, so still speeds run that far inside either end of the still frames.
+    let quiet = (NOISE_MARGIN * quietest).max(STILL_SWAY_M_S);
+    let backswing = (address..top).map(hand_speed).fold(0.0, f32::max);
+    let inset = 2 * track.half.max(1);
+    let (mut begin, mut end) = (top, top);
+    if quiet < STILL_FRACTION * backswing && hand_speed(top) <= quiet {
+        while begin > address + 1 && hand_speed(begin - 1) <= quiet {
+            begin -= 1;
+        }
+        while end + 2 < frames && hand_speed(end + 1) <= quiet {
+            end += 1;
+        }
+    }
+    let pause = (end - begin >= track.half.max(1)).then(|| {
+        (
+            (begin.saturating_sub(inset)).max(address + 1),
+            (end + inset).min(frames - 2),
+        )
+    });
+    let top = pause.map_or(top, |(_, end)| end);
+
     // Impact: after the top, where the club head (or the hands) comes closest to where it was
     // at address.
     let home = match club {
@@ -900,7 +948,13 @@ pub fn detect(
             t as f32 + vertex(f(t - 1), f(t), f(t + 1))
         }
     };
-    let top_time = turning(&hand_speed, top);
+    let (top_time, arrival) = match pause {
+        Some((begin, end)) => (end as f32, begin as f32),
+        None => {
+            let time = turning(&hand_speed, top);
+            (time, time)
+        }
+    };
     let impact_time = match club {
         // The hands lead the club head through impact (shaft lean).
         None if !putt => turning(&away, impact) + IMPACT_LAG_S * rate_hz,
@@ -944,6 +998,7 @@ pub fn detect(
             club: club.is_some(),
             frames,
             times,
+            arrival,
         });
     }
 
@@ -1040,6 +1095,7 @@ pub fn detect(
         club: club.is_some(),
         frames: [ABSENT; 10],
         times: [0.0; 10],
+        arrival,
     };
     for (k, event) in Event::ALL.into_iter().enumerate() {
         events.frames[event.position() as usize] = frames[k];

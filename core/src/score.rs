@@ -56,9 +56,6 @@ pub const NOISE_FACTOR: f32 = 5.0;
 /// The least an event's timing uncertainty is taken to be, seconds (one standard deviation;
 /// a joint's deviation along its own path is uncertain by its speed times it).
 pub const EVENT_TIMING_S: f32 = 0.005;
-/// The least speed a golfer's hands are taken to sway at in a still set-up, m/s (a standing
-/// body sways at about 1 cm/s): the floor of the velocity noise events are timed against.
-pub const STILL_SWAY_M_S: f32 = 0.01;
 /// The most an event's timing uncertainty is taken to be, seconds.
 pub const MAX_EVENT_TIMING_S: f32 = 0.2;
 /// A tempo verdict needs the ratio past its tolerance by this many times its uncertainty
@@ -931,7 +928,7 @@ pub fn compare(
                 .sum::<f32>()
                 / (still + 1) as f32,
         )
-        .max(STILL_SWAY_M_S);
+        .max(events::STILL_SWAY_M_S);
         let reach = libm::ceilf(MAX_EVENT_TIMING_S * student_hz) as usize;
         for (event, spread) in Event::ALL.into_iter().zip(timing.iter_mut()) {
             let Some(x) = student_events.time(event) else {
@@ -958,10 +955,11 @@ pub fn compare(
             });
             // A turn may lie anywhere the motion stays within its noise of it: the top, the
             // longer way (a slow backswing turning into a quick downswing); a start or a
-            // crossing, the shorter.
-            *spread = match event {
-                Event::Top => ways[0].max(ways[1]),
-                _ => ways[0].min(ways[1]),
+            // crossing, the shorter, and so the end of a pause at the top.
+            let turn = event == Event::Top && student_events.arrival() >= x;
+            *spread = match turn {
+                true => ways[0].max(ways[1]),
+                false => ways[0].min(ways[1]),
             }
             .max(EVENT_TIMING_S);
         }

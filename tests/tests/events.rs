@@ -283,3 +283,54 @@ fn someone_walking_makes_no_stroke() {
         assert!(found.is_err(), "{name}: {found:?}");
     }
 }
+
+#[test]
+fn a_pause_at_the_top_belongs_to_the_backswing() {
+    let (swing, _) = driver();
+    let plain = detected(&swing);
+    let top = plain.top();
+    // The arrival is the top where the hands do not pause.
+    assert_eq!(plain.arrival(), plain.time(Event::Top).unwrap());
+    // The same swing held still at its top for 0.25 s.
+    let n = swing.skeleton.len();
+    let held = (0.25 * swing.rate_hz).round() as usize;
+    let mut paused = swing.clone();
+    paused.positions = swing.positions[..top * n]
+        .iter()
+        .chain((0..held).flat_map(|_| &swing.positions[top * n..(top + 1) * n]))
+        .chain(&swing.positions[top * n..])
+        .copied()
+        .collect();
+    paused.missing = vec![false; paused.positions.len()];
+    let events = detected(&paused);
+    // The top is the pause's end, where the downswing starts; the hands arrived at its start.
+    let (start, end) = (top as f32, (top + held) as f32);
+    let found = events.time(Event::Top).unwrap();
+    assert!(
+        (found - end).abs() <= 1.5,
+        "top {found}, pause {start}..{end}"
+    );
+    assert!(
+        (events.arrival() - start).abs() <= 1.5,
+        "arrival {}",
+        events.arrival()
+    );
+    // Its takeaway is the unpaused swing's, timed against the unpaused coach, to the arrival's
+    // frame times the takeaway's gain on it (1.5 to 3); timed from the pause's end it came 6
+    // to 12 frames early.
+    let against = |e: &posecoach_core::events::SwingEvents, m: &io::Motion| {
+        posecoach_core::events::takeaway_against(
+            &m.skeleton,
+            &m.positions,
+            e,
+            m.rate_hz,
+            &swing.positions,
+            &plain,
+            swing.rate_hz,
+        )
+        .unwrap()
+        .time
+    };
+    let (a, b) = (against(&plain, &swing), against(&events, &paused));
+    assert!((a - b).abs() <= 2.0, "takeaway {a} unpaused, {b} paused");
+}
