@@ -312,10 +312,8 @@ impl SwingEvents {
         let mut events = *self;
         let a = Position::P1 as usize;
         if events.frames[a] != ABSENT && time.is_finite() {
-            let time = time.clamp(
-                0.0,
-                (f32::from(events.frames[Position::P4 as usize]) - 1.0).max(0.0),
-            );
+            let top = f32::from(events.frames[Position::P4 as usize]).min(events.arrival);
+            let time = time.clamp(0.0, (top - 1.0).max(0.0));
             events.times[a] = time;
             events.frames[a] = time as u16;
         }
@@ -593,8 +591,9 @@ const PROGRESS_SHARES: (f32, f32, usize) = (0.1, 0.05, 13);
 pub struct Takeaway {
     /// The takeaway, frames (between frames).
     pub time: f32,
-    /// How much earlier it comes for each frame later the top is found: the backswing's length
-    /// moves by `1 + top_gain` times the top's error.
+    /// How much earlier it comes for each frame later the hands' arrival at the top is found
+    /// (the top, where they do not pause there): without a pause the backswing's length moves
+    /// by `1 + top_gain` times the top's error.
     pub top_gain: f32,
     /// Its standard deviation from the crossings' scatter about the fit alone, frames.
     pub spread: f32,
@@ -602,8 +601,9 @@ pub struct Takeaway {
 
 /// The student's takeaway (frames, between frames) timed against the coach's: the arms'
 /// (wrists and elbows) progress along the line from their set-up to their top pose passes 10 %
-/// to 70 % of the way at moments that, were the student's backswing the coach's run at its own pace, would
-/// lie at the same shares of the time from the takeaway to the top; the takeaway that fits
+/// to 70 % of the way at moments that, were the student's backswing the coach's run at its own
+/// pace, would lie at the same shares of the time from the takeaway to the hands' arrival at
+/// the top ([`SwingEvents::arrival`]: a pause there is no part of the pace); the takeaway that fits
 /// them best (least squares, each crossing weighted by how sharply the progress passes it) is
 /// the student's. It uses half a second of the backswing where
 /// [`detect`] uses a fifth, so pose noise moves it less. `None` when a swing lacks the joints,
@@ -898,15 +898,16 @@ pub fn detect(
     };
     let trail_arm = |t: usize| elevation(track.at(trail_wrist, t) - track.at(trail_shoulder, t));
 
-    // A pause at the top: the hands as still as in the quietest stretch of the set-up (or a
-    // standing body's sway) for more frames than the smoothing's half-width, where that
-    // stillness can be told from the hands' turn (under STILL_FRACTION of their fastest in
-    // the backswing, as the set-up's is). The backswing lasts until the downswing starts, so the top is the pause's
-    // end; the hands arrived at its start. Speeds are taken over ±2 × half frames of
-    // smoothing, so still speeds run that far inside either end of the still frames.
+    // A pause at the top: the hands as still as the set-up's quietest stretch (the club
+    // head's where it is tracked, else the hands'; at least a standing body's sway) for more
+    // frames than the smoothing's half-width, where that stillness can be told from the hands'
+    // turn (under STILL_FRACTION of their fastest in the backswing, as the set-up's is). The
+    // backswing lasts until the downswing starts, so the top is the pause's end; the hands
+    // arrived at its start. A speed reads positions smoothed over ±half frames, `half.max(1)`
+    // frames either side, so still speeds run that far inside either end of the still frames.
     let quiet = (NOISE_MARGIN * quietest).max(STILL_SWAY_M_S);
     let backswing = (address..top).map(hand_speed).fold(0.0, f32::max);
-    let inset = 2 * track.half.max(1);
+    let inset = track.half + track.half.max(1);
     let (mut begin, mut end) = (top, top);
     if quiet < STILL_FRACTION * backswing && hand_speed(top) <= quiet {
         while begin > address + 1 && hand_speed(begin - 1) <= quiet {

@@ -578,11 +578,18 @@ fn smoothed(swing: &[Vec3], joints: usize, x: f32, k: usize, half: usize) -> Vec
 }
 
 /// The coach's frame matching the student's frame `x`: linear between the events both swings
-/// have (their times), the coach's rate beyond them.
+/// have (their times, and the hands' arrivals at the top where either pauses there), the
+/// coach's rate beyond them.
 fn coach_frame(x: f32, student: &SwingEvents, coach: &SwingEvents, ratio: f32) -> f32 {
-    let mut pairs = Event::ALL
-        .into_iter()
-        .filter_map(|e| Some((student.time(e)?, coach.time(e)?)));
+    // Where either swing pauses at the top, the hands' arrivals there match too.
+    let paused = |e: &SwingEvents| e.time(Event::Top).is_some_and(|t| e.arrival() < t);
+    let arrival = (paused(student) || paused(coach)).then(|| (student.arrival(), coach.arrival()));
+    let mut pairs = Event::ALL.into_iter().flat_map(|e| {
+        let before_top = arrival.filter(|_| e == Event::Top);
+        before_top
+            .into_iter()
+            .chain(student.time(e).zip(coach.time(e)))
+    });
     let Some(mut before) = pairs.next() else {
         return x * ratio;
     };
@@ -797,11 +804,12 @@ pub fn compare(
     // An input that holds the root still shows the body about its pelvis: the coach is then
     // compared the same way, its root held at address.
     let root_held = (0..n).all(|f| norm(&(student[f * joints] - student[0])) < HELD_ROOT_M);
+    let coach_address = coach_events.time(Event::Address).unwrap_or(0.0);
     let coach_at = |k: usize, x: f32, half: usize| {
         let p = smoothed(coach, joints, x, k, half);
         if root_held {
             let root = smoothed(coach, joints, x, 0, half);
-            p - (root - coach[coach_events.address() * joints])
+            p - (root - smoothed(coach, joints, coach_address, 0, half))
         } else {
             p
         }
@@ -912,6 +920,12 @@ pub fn compare(
     // part at the finish, which their height defines), the shorter way; the noise is the
     // velocity the still set-up shows, before the takeaway.
     let mut timing = [MAX_EVENT_TIMING_S; 8];
+    // Where the hands paused at the top, the takeaway is fitted up to their arrival there
+    // ([`SwingEvents::arrival`]): how early or late that may be found.
+    let paused = student_events
+        .time(Event::Top)
+        .is_some_and(|top| student_events.arrival() < top);
+    let mut arrival = MAX_EVENT_TIMING_S;
     let hands = skeleton
         .find(&[Joint::LeftWrist, Joint::LeftHand])
         .zip(skeleton.find(&[Joint::RightWrist, Joint::RightHand]));
@@ -930,18 +944,17 @@ pub fn compare(
         )
         .max(events::STILL_SWAY_M_S);
         let reach = libm::ceilf(MAX_EVENT_TIMING_S * student_hz) as usize;
-        for (event, spread) in Event::ALL.into_iter().zip(timing.iter_mut()) {
-            let Some(x) = student_events.time(event) else {
-                continue;
-            };
+        // How long the velocity at `x` takes to change by its noise (its vertical part only,
+        // counted against a third of the noise, where `vertical`), back and forth, seconds.
+        let ways = |x: f32, vertical: bool| {
             let here = velocity(x);
-            let (noise, changed): (f32, &dyn Fn(Vec3) -> f32) = match event {
-                Event::Finish => (noise / libm::sqrtf(3.0), &|v: Vec3| {
+            let (noise, changed): (f32, &dyn Fn(Vec3) -> f32) = match vertical {
+                true => (noise / libm::sqrtf(3.0), &|v: Vec3| {
                     libm::fabsf(v.y - here.y)
                 }),
-                _ => (noise, &|v: Vec3| norm(&(v - here))),
+                false => (noise, &|v: Vec3| norm(&(v - here))),
             };
-            let ways = [-1.0f32, 1.0].map(|way| {
+            [-1.0f32, 1.0].map(|way| {
                 let mut before = 0.0;
                 for k in 1..=reach {
                     let now = changed(velocity(x + way * k as f32));
@@ -952,26 +965,39 @@ pub fn compare(
                     before = now;
                 }
                 MAX_EVENT_TIMING_S
-            });
+            })
+        };
+        for (event, spread) in Event::ALL.into_iter().zip(timing.iter_mut()) {
+            let Some(x) = student_events.time(event) else {
+                continue;
+            };
+            let ways = ways(x, event == Event::Finish);
             // A turn may lie anywhere the motion stays within its noise of it: the top, the
-            // longer way (a slow backswing turning into a quick downswing); a start or a
-            // crossing, the shorter, and so the end of a pause at the top.
-            let turn = event == Event::Top && student_events.arrival() >= x;
-            *spread = match turn {
+            // longer way (a slow backswing turning into a quick downswing); a start, a stop or
+            // a crossing, the shorter, and so either end of a pause at the top.
+            *spread = match event == Event::Top && !paused {
                 true => ways[0].max(ways[1]),
                 false => ways[0].min(ways[1]),
             }
             .max(EVENT_TIMING_S);
         }
+        if paused {
+            let ways = ways(student_events.arrival(), false);
+            arrival = ways[0].min(ways[1]).max(EVENT_TIMING_S);
+        }
     }
-    // The takeaway is timed from the top and the crossings of the arms' progress
-    // ([`events::takeaway_against`]): it moves with the top's error, scaled, and with the
-    // crossings' scatter.
+    // The takeaway is timed from the hands' arrival at the top (the top, without a pause) and
+    // the crossings of the arms' progress ([`events::takeaway_against`]): it moves with the
+    // arrival's error, scaled, and with the crossings' scatter.
     let top_gain = takeaway.map_or(0.0, |t| t.top_gain);
     if let Some(t) = takeaway {
-        let (a, top) = (Event::Address as usize, timing[Event::Top as usize]);
+        let a = Event::Address as usize;
+        let arrival = match paused {
+            true => arrival,
+            false => timing[Event::Top as usize],
+        };
         timing[a] = libm::hypotf(
-            libm::hypotf(timing[a], t.top_gain * top),
+            libm::hypotf(timing[a], t.top_gain * arrival),
             t.spread / student_hz,
         )
         .clamp(EVENT_TIMING_S, MAX_EVENT_TIMING_S);
@@ -993,11 +1019,11 @@ pub fn compare(
         let (from, to) = phase.events();
         // The ratio's relative uncertainty (the coach's events are taken as exact), and a
         // verdict only when the whole interval is past the tolerance.
-        // The backswing's ends move together: a top found late by δ moves the takeaway
-        // earlier by top_gain × δ.
+        // The backswing's ends move together where the hands did not pause at the top: a top
+        // found late by δ moves the takeaway earlier by top_gain × δ.
         let (a, b) = (timing[from as usize], timing[to as usize]);
         let together = match phase {
-            Phase::Backswing => 2.0 * top_gain * b * b,
+            Phase::Backswing if !paused => 2.0 * top_gain * b * b,
             _ => 0.0,
         };
         let relative = libm::sqrtf(a * a + b * b + together) / student_s.max(f32::MIN_POSITIVE);
@@ -1108,18 +1134,19 @@ pub fn compare(
             at: &|k, x| smoothed(student, joints, x, k, half_s),
             events: &student_events,
             stance: &stance_s,
-            root_held,
         },
         &Swing {
             at: &|k, x| coach_at(k, x, half_c),
             events: &coach_events,
             stance: &stance_c,
-            root_held: false,
         },
         &|x| coach_frame(x, &student_events, &coach_events, ratio),
         &|k, x| unsure_near(k, x, half_s),
-        noise,
-        &timing.map(|t| t * coach_hz),
+        &Input {
+            noise,
+            timing: timing.map(|t| t * coach_hz),
+            root_held,
+        },
     );
 
     let gaps = match (
@@ -1187,11 +1214,19 @@ pub fn compare(
 }
 
 /// One swing as the body checks read it: joint `k` at frame `x` as the joint comparison
-/// reads it, its events, its stance, and whether the input held its root still.
+/// reads it, its events and its stance.
 struct Swing<'a> {
     at: &'a dyn Fn(usize, f32) -> Vec3,
     events: &'a SwingEvents,
     stance: &'a Stance,
+}
+
+/// What the student's input allows the body checks: its noise per stance axis, each event's
+/// timing uncertainty in coach frames, and whether it held the root still (then the pelvis's
+/// sway and thrust are not checked).
+struct Input {
+    noise: Vec3,
+    timing: [f32; 8],
     root_held: bool,
 }
 
@@ -1207,18 +1242,15 @@ impl Swing<'_> {
 /// The body checks ([`CHECKS`], see [`crate::checks`]) of `student` against `coach`: the
 /// coach's frame matching a student's frame is `coach_frame`'s, a joint the stream was unsure
 /// of near a frame is `unsure` there (a check is not made at a position where a joint it is
-/// measured from is), the input's noise per stance axis is `noise`, each event's timing
-/// uncertainty in coach frames `timing`; where the input held the student's root the pelvis's
-/// sway and thrust are not checked. None for a skeleton that lacks a joint the
-/// metrics need.
+/// measured from is), what the student's input allows is `input`. None for a skeleton that
+/// lacks a joint the metrics need.
 fn body_checks(
     skeleton: &Skeleton,
     student: &Swing<'_>,
     coach: &Swing<'_>,
     coach_frame: &dyn Fn(f32) -> f32,
     unsure: &dyn Fn(usize, f32) -> bool,
-    noise: Vec3,
-    timing: &[f32; 8],
+    input: &Input,
 ) -> HVec<BodyDeviation, { CHECKS.len() }> {
     let mut out = HVec::new();
     let joints = skeleton.len();
@@ -1250,7 +1282,7 @@ fn body_checks(
         let Some(event) = check
             .position
             .event()
-            .filter(|_| !(student.root_held && shift))
+            .filter(|_| !(input.root_held && shift))
         else {
             continue;
         };
@@ -1260,7 +1292,7 @@ fn body_checks(
         let c = coach_frame(x);
         // Each position's poses once: the student's, the coach's and the coach's within the
         // event's timing uncertainty.
-        let h = timing[event as usize].max(0.5);
+        let h = input.timing[event as usize].max(0.5);
         if at != Some(check.position) {
             at = Some(check.position);
             student.pose(joints, x, &mut at_s);
@@ -1288,7 +1320,7 @@ fn body_checks(
         for &k in &moved_by {
             for (axis, direction) in axes.iter().enumerate() {
                 let kept = at_s[k];
-                at_s[k] = kept + direction * noise[axis].max(LEAST_NOISE_M);
+                at_s[k] = kept + direction * input.noise[axis].max(LEAST_NOISE_M);
                 let moved = value_s(&at_s[..joints]);
                 at_s[k] = kept;
                 let d = moved.map_or(0.0, |m| m - here_s);

@@ -41,6 +41,23 @@ pub fn left_handed(swing: &posecoach_io::Motion) -> posecoach_io::Motion {
     }
 }
 
+/// `swing` held still at frame `frame` for `frames` more frames: a pause there.
+pub fn paused(swing: &posecoach_io::Motion, frame: usize, frames: usize) -> posecoach_io::Motion {
+    let n = swing.skeleton.len();
+    let held = &swing.positions[frame * n..(frame + 1) * n];
+    let positions: Vec<_> = swing.positions[..frame * n]
+        .iter()
+        .chain((0..frames).flat_map(|_| held))
+        .chain(&swing.positions[frame * n..])
+        .copied()
+        .collect();
+    posecoach_io::Motion {
+        missing: vec![false; positions.len()],
+        positions,
+        ..swing.clone()
+    }
+}
+
 /// A committed fixture in `tests/fixtures`.
 pub fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

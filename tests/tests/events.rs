@@ -12,7 +12,7 @@
 
 use posecoach_core::events::{detect, Event, Position, Side};
 use posecoach_io as io;
-use posecoach_tests::{fixture, jitter, Warp};
+use posecoach_tests::{fixture, jitter, paused, Warp};
 
 /// Allowed distance from a hand label, in frames at 60 Hz.
 const TOLERANCE_FRAMES: i32 = 2;
@@ -292,17 +292,16 @@ fn a_pause_at_the_top_belongs_to_the_backswing() {
     // The arrival is the top where the hands do not pause.
     assert_eq!(plain.arrival(), plain.time(Event::Top).unwrap());
     // The same swing held still at its top for 0.25 s.
-    let n = swing.skeleton.len();
     let held = (0.25 * swing.rate_hz).round() as usize;
-    let mut paused = swing.clone();
-    paused.positions = swing.positions[..top * n]
-        .iter()
-        .chain((0..held).flat_map(|_| &swing.positions[top * n..(top + 1) * n]))
-        .chain(&swing.positions[top * n..])
-        .copied()
-        .collect();
-    paused.missing = vec![false; paused.positions.len()];
+    let paused = paused(&swing, top, held);
     let events = detected(&paused);
+    // Counted from a later frame, the arrival moves with the other events.
+    let later = events.from_frame(3);
+    assert_eq!(later.arrival(), events.arrival() - 3.0);
+    assert_eq!(
+        later.time(Event::Top),
+        events.time(Event::Top).map(|t| t - 3.0)
+    );
     // The top is the pause's end, where the downswing starts; the hands arrived at its start.
     let (start, end) = (top as f32, (top + held) as f32);
     let found = events.time(Event::Top).unwrap();

@@ -10,7 +10,7 @@ use posecoach_core::joint::Joint;
 use posecoach_core::score::{score, scratch_len, Advice, Direction, Phase, Report, Verdict};
 use posecoach_core::Vec3;
 use posecoach_io::{self as io, Motion};
-use posecoach_tests::{fixture, jitter, Warp};
+use posecoach_tests::{fixture, jitter, paused, Warp};
 
 /// The default band: 10 frames at 60 Hz around the event-anchored guide.
 const BAND: Band = Band::DEFAULT;
@@ -468,4 +468,30 @@ fn a_student_whose_input_holds_the_hips_is_compared_about_them() {
     let free = run(&coach, &coach);
     assert!(!free.root_held);
     assert_eq!(shifts(&free), 3);
+}
+
+#[test]
+fn a_pause_at_the_top_makes_the_backswing_slow_and_nothing_else() {
+    // The driver held still at its top for 0.3 s, against itself: the backswing is slow by
+    // the pause, the downswing is the coach's, and nothing else is off.
+    let coach = driver();
+    let top = posecoach_core::events::detect(&coach.skeleton, &coach.positions, coach.rate_hz)
+        .unwrap()
+        .top();
+    let report = run(&paused(&coach, top, (0.3 * coach.rate_hz) as usize), &coach);
+    let [backswing, downswing, _] = report.tempo;
+    let expected = (backswing.coach_s + 0.3) / backswing.coach_s;
+    assert!(
+        (backswing.ratio - expected).abs() < 0.05,
+        "backswing x{:.3}, paused x{expected:.3}",
+        backswing.ratio
+    );
+    assert_eq!(backswing.verdict, Verdict::Slow);
+    assert_eq!(downswing.verdict, Verdict::Ok, "{downswing:?}");
+    assert!(
+        matches!(report.advice.first(), Some(Advice::Tempo(t)) if t.phase == Phase::Backswing),
+        "{:?}",
+        report.advice
+    );
+    assert!(report.spatial.is_empty(), "{:?}", report.spatial);
 }
