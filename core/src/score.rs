@@ -577,38 +577,55 @@ fn smoothed(swing: &[Vec3], joints: usize, x: f32, k: usize, half: usize) -> Vec
     sum / (2 * half + 1) as f32
 }
 
-/// The coach's frame matching the student's frame `x`: linear between the events both swings
+/// The coach's frame matching each of the student's: linear between the events both swings
 /// have (their times, and the hands' arrivals at the top where either pauses there), the
 /// coach's rate beyond them.
-fn coach_frame(x: f32, student: &SwingEvents, coach: &SwingEvents, ratio: f32) -> f32 {
-    // Where either swing pauses at the top, the hands' arrivals there match too.
-    let paused = |e: &SwingEvents| e.time(Event::Top).is_some_and(|t| e.arrival() < t);
-    let arrival = (paused(student) || paused(coach)).then(|| (student.arrival(), coach.arrival()));
-    let mut pairs = Event::ALL.into_iter().flat_map(|e| {
-        let before_top = arrival.filter(|_| e == Event::Top);
-        before_top
-            .into_iter()
-            .chain(student.time(e).zip(coach.time(e)))
-    });
-    let Some(mut before) = pairs.next() else {
-        return x * ratio;
-    };
-    if x <= before.0 {
-        return before.1 + (x - before.0) * ratio;
-    }
-    for after in pairs {
-        if x <= after.0 {
-            let span = after.0 - before.0;
-            let w = if span > 0.0 {
-                (x - before.0) / span
-            } else {
-                0.0
-            };
-            return before.1 + (after.1 - before.1) * w;
+struct TimeMap {
+    /// (student, coach) times, in order.
+    knots: HVec<(f32, f32), 9>,
+    /// Coach frames per student frame beyond the knots.
+    ratio: f32,
+}
+
+impl TimeMap {
+    fn new(student: &SwingEvents, coach: &SwingEvents, ratio: f32) -> TimeMap {
+        let paused = |e: &SwingEvents| e.time(Event::Top).is_some_and(|t| e.arrival() < t);
+        let mut knots = HVec::new();
+        for e in Event::ALL {
+            if e == Event::Top && (paused(student) || paused(coach)) {
+                // Eight events and one arrival fit the nine slots.
+                let _ = knots.push((student.arrival(), coach.arrival()));
+            }
+            if let Some(pair) = student.time(e).zip(coach.time(e)) {
+                let _ = knots.push(pair);
+            }
         }
-        before = after;
+        TimeMap { knots, ratio }
     }
-    before.1 + (x - before.0) * ratio
+
+    /// The coach's frame matching the student's frame `x`.
+    fn at(&self, x: f32) -> f32 {
+        let Some((&first, rest)) = self.knots.split_first() else {
+            return x * self.ratio;
+        };
+        if x <= first.0 {
+            return first.1 + (x - first.0) * self.ratio;
+        }
+        let mut before = first;
+        for &after in rest {
+            if x <= after.0 {
+                let span = after.0 - before.0;
+                let w = if span > 0.0 {
+                    (x - before.0) / span
+                } else {
+                    0.0
+                };
+                return before.1 + (after.1 - before.1) * w;
+            }
+            before = after;
+        }
+        before.1 + (x - before.0) * self.ratio
+    }
 }
 
 /// Scores `student` (frames × skeleton joints at `student_hz`) against the coach's virtual
@@ -829,12 +846,13 @@ pub fn compare(
         coach_events.lead,
     );
     let ratio = coach_hz / student_hz;
+    let time_map = TimeMap::new(&student_events, &coach_events, ratio);
     let (half_s, half_c) = (
         libm::roundf(SPATIAL_SMOOTHING_S * student_hz) as usize,
         libm::roundf(SPATIAL_SMOOTHING_S * coach_hz) as usize,
     );
     let offset = |k: usize, x: f32, (hs, hc): (usize, usize)| {
-        let c = coach_frame(x, &student_events, &coach_events, ratio);
+        let c = time_map.at(x);
         stance_s.local(smoothed(student, joints, x, k, hs)) - stance_c.local(coach_at(k, c, hc))
     };
     // Each joint's usual offset from the coach over the swing, takeaway to finish (per axis the
@@ -1058,7 +1076,7 @@ pub fn compare(
         let mut event_excess = 0.0f32;
         // The coach's frame at this event, and the coach frames the event's timing
         // uncertainty spans.
-        let c = coach_frame(x, &student_events, &coach_events, ratio);
+        let c = time_map.at(x);
         let h = (timing[event as usize] * coach_hz).max(0.5);
         for (k, sigma) in wander.iter().enumerate().take(joints) {
             let Some(joint) = skeleton.joint(k).filter(|_| judged(k)) else {
@@ -1140,7 +1158,7 @@ pub fn compare(
             events: &coach_events,
             stance: &stance_c,
         },
-        &|x| coach_frame(x, &student_events, &coach_events, ratio),
+        &|x| time_map.at(x),
         &|k, x| unsure_near(k, x, half_s),
         &Input {
             noise,
