@@ -341,6 +341,12 @@ impl SwingEvents {
         self.arrival
     }
 
+    /// How long the hands paused at the top, frames (0 without a pause, or without a top).
+    pub fn pause(&self) -> f32 {
+        self.time(Event::Top)
+            .map_or(0.0, |top| (top - self.arrival).max(0.0))
+    }
+
     /// Frame of the address (every swing has one).
     pub fn address(&self) -> usize {
         self.frames[Position::P1 as usize] as usize

@@ -302,6 +302,8 @@ pub fn to_json(s: &html::Scored) -> Value {
         "tempo": {
             "student_ratio": decimal(r.student_tempo_ratio, 2),
             "coach_ratio": decimal(r.coach_tempo_ratio, 2),
+            "student_pause_s": decimal(r.student_events.pause() / s.student_hz, 3),
+            "coach_pause_s": decimal(r.coach_events.pause() / s.coach_hz, 3),
             "phases": r.tempo.iter().map(|t| json!({
                 "phase": t.phase.name(), "student_s": decimal(t.student_s, 3), "coach_s": decimal(t.coach_s, 3),
                 "ratio": decimal(t.ratio, 3), "ratio_uncertainty": decimal(t.ratio_uncertainty, 3),
@@ -374,6 +376,17 @@ pub fn to_text(s: &html::Scored) -> String {
             t.ratio,
             t.ratio_uncertainty,
             t.verdict.name()
+        );
+    }
+    let pauses = (
+        r.student_events.pause() / s.student_hz,
+        r.coach_events.pause() / s.coach_hz,
+    );
+    if pauses.0 > 0.0 || pauses.1 > 0.0 {
+        let _ = writeln!(
+            out,
+            "  pause at the top: you {:.2} s, coach {:.2} s (part of the backswing)",
+            pauses.0, pauses.1
         );
     }
     let _ = writeln!(out, "events (frame: you / coach):");

@@ -531,3 +531,46 @@ fn every_bring_your_own_data_example_reads_as_its_tool_writes_it() {
         );
     }
 }
+
+#[test]
+fn a_pause_at_the_top_is_reported_with_the_backswing() {
+    // The driver held still at its top for 0.3 s (18 frames at 60 Hz).
+    let plain = score_json("golf_driver_60hz.csv", "golf_driver_60hz.csv", &[]);
+    assert_eq!(plain["tempo"]["student_pause_s"], 0.0);
+    let top = plain["events"]["student"]["top"].as_u64().unwrap() as usize;
+    let text = std::fs::read_to_string(fixture("golf_driver_60hz.csv")).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let rows: Vec<&str> = lines.collect();
+    let mut frames: Vec<&str> = rows[..top].to_vec();
+    frames.extend(std::iter::repeat_n(rows[top], 18));
+    frames.extend(&rows[top..]);
+    let mut csv = format!("{header}\n");
+    for (i, row) in frames.iter().enumerate() {
+        let rest = row.split_once(',').unwrap().1;
+        csv.push_str(&format!("{},{rest}\n", i as f64 / 60.0));
+    }
+    let dir = std::env::temp_dir().join(format!("posecoach-pause-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let paused = dir.join("paused.csv");
+    std::fs::write(&paused, csv).unwrap();
+    let coach = fixture("golf_driver_60hz.csv");
+    let args = [
+        "score",
+        "--coach",
+        coach.to_str().unwrap(),
+        "--student",
+        paused.to_str().unwrap(),
+    ];
+    let (ok, out, err) = posecoach(&[&args[..], &["--json"]].concat());
+    assert!(ok, "{err}");
+    let json: Value = serde_json::from_str(&out).unwrap();
+    let pause = json["tempo"]["student_pause_s"].as_f64().unwrap();
+    assert!((pause - 0.3).abs() < 0.05, "pause {pause} s");
+    assert_eq!(json["tempo"]["coach_pause_s"], 0.0);
+    assert_eq!(json["tempo"]["phases"][0]["verdict"], "slow");
+    let (ok, out, err) = posecoach(&args);
+    assert!(ok, "{err}");
+    assert!(out.contains("pause at the top: you 0.3"), "{out}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
