@@ -905,8 +905,8 @@ pub fn detect(
     let trail_arm = |t: usize| elevation(track.at(trail_wrist, t) - track.at(trail_shoulder, t));
 
     // A pause at the top: the hands as still as the set-up's quietest stretch (the club
-    // head's where it is tracked, else the hands'; at least a standing body's sway) for more
-    // frames than the smoothing's half-width, where that stillness can be told from the hands'
+    // head's where it is tracked, else the hands'; at least a standing body's sway) for longer
+    // than a speed's smoothing reaches, where that stillness can be told from the hands'
     // turn (under STILL_FRACTION of their fastest in the backswing, as the set-up's is). The
     // backswing lasts until the downswing starts, so the top is the pause's end; the hands
     // arrived at its start. A speed reads positions smoothed over ±half frames, `half.max(1)`
@@ -923,7 +923,7 @@ pub fn detect(
             end += 1;
         }
     }
-    let pause = (end - begin >= track.half.max(1)).then(|| {
+    let pause = (end - begin >= inset).then(|| {
         (
             (begin.saturating_sub(inset)).max(address + 1),
             (end + inset).min(frames - 2),
