@@ -589,10 +589,9 @@ struct TimeMap {
 
 impl TimeMap {
     fn new(student: &SwingEvents, coach: &SwingEvents, ratio: f32) -> TimeMap {
-        let paused = |e: &SwingEvents| e.time(Event::Top).is_some_and(|t| e.arrival() < t);
         let mut knots = HVec::new();
         for e in Event::ALL {
-            if e == Event::Top && (paused(student) || paused(coach)) {
+            if e == Event::Top && (student.pause() > 0.0 || coach.pause() > 0.0) {
                 // Eight events and one arrival fit the nine slots.
                 let _ = knots.push((student.arrival(), coach.arrival()));
             }
@@ -818,20 +817,6 @@ pub fn compare(
         let _ = path.push(p);
     }
 
-    // An input that holds the root still shows the body about its pelvis: the coach is then
-    // compared the same way, its root held at address.
-    let root_held = (0..n).all(|f| norm(&(student[f * joints] - student[0])) < HELD_ROOT_M);
-    let coach_address = coach_events.time(Event::Address).unwrap_or(0.0);
-    let coach_at = |k: usize, x: f32, half: usize| {
-        let p = smoothed(coach, joints, x, k, half);
-        if root_held {
-            let root = smoothed(coach, joints, x, 0, half);
-            p - (root - smoothed(coach, joints, coach_address, 0, half))
-        } else {
-            p
-        }
-    };
-
     // Spatial deviations at each event, in each swing's stance frame, the student's pose at its
     // event time against the coach's at its own (a pure offset keeps its direction), both
     // smoothed over ±SPATIAL_SMOOTHING_S.
@@ -851,6 +836,23 @@ pub fn compare(
         libm::roundf(SPATIAL_SMOOTHING_S * student_hz) as usize,
         libm::roundf(SPATIAL_SMOOTHING_S * coach_hz) as usize,
     );
+
+    // An input that holds the root still shows the body about its pelvis: the coach is then
+    // compared the same way, its root held at address.
+    let root_held = (0..n).all(|f| norm(&(student[f * joints] - student[0])) < HELD_ROOT_M);
+    let coach_address = coach_events.time(Event::Address).unwrap_or(0.0);
+    // The coach's root at address, once for each smoothing it is read with (single frames,
+    // and ±SPATIAL_SMOOTHING_S).
+    let anchors = [0, half_c].map(|half| smoothed(coach, joints, coach_address, 0, half));
+    let coach_at = |k: usize, x: f32, half: usize| {
+        let p = smoothed(coach, joints, x, k, half);
+        if root_held {
+            let anchor = anchors[usize::from(half == half_c)];
+            p - (smoothed(coach, joints, x, 0, half) - anchor)
+        } else {
+            p
+        }
+    };
     let offset = |k: usize, x: f32, (hs, hc): (usize, usize)| {
         let c = time_map.at(x);
         stance_s.local(smoothed(student, joints, x, k, hs)) - stance_c.local(coach_at(k, c, hc))
@@ -940,9 +942,7 @@ pub fn compare(
     let mut timing = [MAX_EVENT_TIMING_S; 8];
     // Where the hands paused at the top, the takeaway is fitted up to their arrival there
     // ([`SwingEvents::arrival`]): how early or late that may be found.
-    let paused = student_events
-        .time(Event::Top)
-        .is_some_and(|top| student_events.arrival() < top);
+    let paused = student_events.pause() > 0.0;
     let mut arrival = MAX_EVENT_TIMING_S;
     let hands = skeleton
         .find(&[Joint::LeftWrist, Joint::LeftHand])
