@@ -78,6 +78,9 @@ pub struct Tally {
     pub total: u64,
     /// Instructions of the longest call.
     pub max: u64,
+    /// Bytes of stack the deepest call reached, the harness's frames included (0 where not
+    /// measured).
+    pub stack: usize,
 }
 
 impl Tally {
@@ -86,6 +89,11 @@ impl Tally {
         self.calls += 1;
         self.total += instructions;
         self.max = self.max.max(instructions);
+    }
+
+    /// Notes a call that reached `stack` bytes of stack.
+    pub fn reached(&mut self, stack: usize) {
+        self.stack = self.stack.max(stack);
     }
 
     /// Mean instructions per call.

@@ -15,7 +15,7 @@ pub static WEIGHTS: &Aligned<[u8]> =
 static GOLDEN_IN: &Aligned<[u8]> = &Aligned(*include_bytes!(
     "../../../weights/distilled-int8.golden-in.pcr"
 ));
-static GOLDEN_OUT: &Aligned<[u8]> = &Aligned(*include_bytes!(
+pub static GOLDEN_OUT: &Aligned<[u8]> = &Aligned(*include_bytes!(
     "../../../weights/distilled-int8.golden-out.pcr"
 ));
 
@@ -27,6 +27,7 @@ pub fn golden_bytes() -> usize {
 /// Retargets the golden input onto the golden student with `scratch` and `out` (borrowed from
 /// the session's ring and virtual coach before the session starts) and compares every bit
 /// with the host's output; returns the instructions it took.
+#[inline(never)]
 pub fn check_golden(
     weights: &Weights<'_>,
     scratch: &mut [Vec3],
