@@ -356,6 +356,8 @@ pub struct Report {
     pub normalized: f32,
     /// Frame correspondence `(student, coach)`.
     pub path: HVec<(u16, u16), MAX_PATH>,
+    /// Cells of the DTW's band: the alignment's work.
+    pub cells: u32,
     /// The student's events.
     pub student_events: SwingEvents,
     /// The coach's events.
@@ -802,7 +804,9 @@ pub fn compare(
     let len = dtw::scratch_len(n, m, &window)?;
     let cost = &mut floats[..len.cost];
     let steps = &mut bytes[..len.path_bytes];
-    let mut path_buf = [(0u16, 0u16); MAX_PATH];
+    // The path is written where the report keeps it (no copy on the stack).
+    let mut path = HVec::new();
+    let _ = path.resize((n + m - 1).min(MAX_PATH), (0, 0));
     let alignment = dtw::align(
         &Sequence::rooted(student, joints)?,
         &Sequence::rooted(coach, joints)?,
@@ -810,12 +814,9 @@ pub fn compare(
         &window,
         cost,
         steps,
-        &mut path_buf[..(n + m - 1).min(MAX_PATH)],
+        &mut path,
     )?;
-    let mut path = HVec::new();
-    for &p in &path_buf[..alignment.path_len] {
-        let _ = path.push(p);
-    }
+    path.truncate(alignment.path_len);
 
     // Spatial deviations at each event, in each swing's stance frame, the student's pose at its
     // event time against the coach's at its own (a pure offset keeps its direction), both
@@ -1218,6 +1219,7 @@ pub fn compare(
         distance: alignment.distance,
         normalized: alignment.normalized,
         path,
+        cells: len.cells as u32,
         student_events,
         coach_events,
         tempo,
