@@ -1,8 +1,11 @@
 //! `posecoach bench`: speed of the core's hot paths, measured against a reference in the same run.
 
-use anyhow::{bail, Result};
+use crate::score::score_swings;
+use anyhow::{anyhow, bail, Result};
 use posecoach_core::dtw::{align, scratch_len, Band, Sequence, Window};
-use serde_json::json;
+use posecoach_core::format::Format;
+use posecoach_io::Motion;
+use serde_json::{json, Value};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -16,6 +19,10 @@ pub struct Args {
 enum What {
     /// Banded DTW with the path on random-walk data.
     Dtw(DtwArgs),
+    /// Scoring one swing (events, DTW, report) on the host: the bundled iron against the
+    /// bundled driver, both retarget onto a format's standard body, across rates, formats and
+    /// band radii.
+    Score(ScoreArgs),
     /// Whether the advice is true: planted flaws in real swings on other bodies, filmed by a
     /// noisy phone, through the device's session.
     Coaching(crate::coaching::Args),
@@ -35,9 +42,14 @@ struct DtwArgs {
     /// Seed of the random walk.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Minimum measuring time in seconds.
+    /// Minimum measuring time in seconds (per point with `--sweep`).
     #[arg(long, default_value_t = 2.0)]
     seconds: f64,
+    /// Measure how the cost grows instead of one point: N from 100 to 5 000 frames (at D = 51,
+    /// R = 20), D from 3 to 99 (at N = 200, R = 20) and R from 5 to 50 (at N = 200, D = 51);
+    /// `--n`, `--dims` and `--band` are then not used.
+    #[arg(long)]
+    sweep: bool,
     /// Also write both sequences as little-endian f64, frame-major (n × dims each, `a` then
     /// `b`), for a reference implementation to run on the same data.
     #[arg(long)]
@@ -47,9 +59,36 @@ struct DtwArgs {
     json: bool,
 }
 
+#[derive(clap::Args)]
+struct ScoreArgs {
+    /// Student formats (their joints make D = 3 × joints): h36m17 (51), canonical (66),
+    /// cmu31 (93), blazepose33 (99), ...
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "h36m17,canonical,cmu31,blazepose33"
+    )]
+    formats: Vec<String>,
+    /// Rates to score at, Hz (frames per swing grow with them; a swing may have at most
+    /// `config::MAX_SWING_FRAMES` frames, 256).
+    #[arg(long, value_delimiter = ',', default_value = "30,60,120")]
+    rates: Vec<f32>,
+    /// DTW band radii, frames.
+    #[arg(long, value_delimiter = ',', default_value = "5,10,20,50")]
+    bands: Vec<u16>,
+    /// Minimum measuring time per point, seconds.
+    #[arg(long, default_value_t = 0.5)]
+    seconds: f64,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
 pub fn run(args: &Args) -> Result<String> {
     match &args.what {
+        What::Dtw(a) if a.sweep => dtw_sweep(a),
         What::Dtw(a) => dtw(a),
+        What::Score(a) => score(a),
         What::Coaching(a) => crate::coaching::run(a),
     }
 }
@@ -83,17 +122,77 @@ fn to_channels(frame_major: &[f32], dims: usize) -> Vec<f32> {
 }
 
 fn dtw(args: &DtwArgs) -> Result<String> {
-    if args.dims == 0 || !args.dims.is_multiple_of(3) {
-        bail!(
-            "--dims {} must be a positive multiple of 3 (x, y, z per joint)",
-            args.dims
+    let point = dtw_point(args, args.n, args.dims, args.band)?;
+    Ok(if args.json {
+        format!("{point}\n")
+    } else {
+        format!(
+            "banded DTW, n = {}, dims = {}, band = {}: {} cells, {:.1} us per call with the path, {:.2} ns per cell ({} calls); scratch {} bytes\n",
+            point["n"], point["dims"], point["band"], point["cells"], number(&point, "us_per_call"),
+            number(&point, "ns_per_cell"), point["calls"], point["scratch_bytes"],
+        )
+    })
+}
+
+/// The points `bench dtw --sweep` measures: `(n, dims, band)`, each axis moved alone from
+/// the benchmark's point (200, 51, 20).
+pub const SWEEP: [(usize, usize, u16); 14] = [
+    (100, 51, 20),
+    (200, 51, 20),
+    (500, 51, 20),
+    (1000, 51, 20),
+    (2000, 51, 20),
+    (5000, 51, 20),
+    (200, 3, 20),
+    (200, 15, 20),
+    (200, 33, 20),
+    (200, 99, 20),
+    (200, 51, 5),
+    (200, 51, 10),
+    (200, 51, 30),
+    (200, 51, 50),
+];
+
+fn dtw_sweep(args: &DtwArgs) -> Result<String> {
+    let mut points = Vec::with_capacity(SWEEP.len());
+    for (k, &(n, dims, band)) in SWEEP.iter().enumerate() {
+        eprintln!(
+            "bench dtw: point {} of {}: n = {n}, dims = {dims}, band = {band}",
+            k + 1,
+            SWEEP.len()
+        );
+        points.push(dtw_point(args, n, dims, band)?);
+    }
+    if args.json {
+        return Ok(format!("{}\n", json!({ "points": points })));
+    }
+    let mut out = String::from("| n | dims | band | cells | ns per cell | us per call | calls per second |\n| --- | --- | --- | --- | --- | --- | --- |\n");
+    for p in &points {
+        out += &format!(
+            "| {} | {} | {} | {} | {:.2} | {:.1} | {:.0} |\n",
+            p["n"],
+            p["dims"],
+            p["band"],
+            p["cells"],
+            number(p, "ns_per_cell"),
+            number(p, "us_per_call"),
+            1e6 / number(p, "us_per_call"),
         );
     }
-    if args.n < 2 || args.n > u16::MAX as usize {
-        bail!("--n {} must be between 2 and {}", args.n, u16::MAX);
+    Ok(out)
+}
+
+/// One banded DTW with the path on random walks of `n` frames of `dims` values, timed for at
+/// least `args.seconds`.
+fn dtw_point(args: &DtwArgs, n: usize, dims: usize, band: u16) -> Result<Value> {
+    if dims == 0 || !dims.is_multiple_of(3) {
+        bail!("--dims {dims} must be a positive multiple of 3 (x, y, z per joint)");
     }
-    let a = random_walk(args.n, args.dims, args.seed);
-    let b = random_walk(args.n, args.dims, args.seed + 1);
+    if n < 2 || n > u16::MAX as usize {
+        bail!("--n {n} must be between 2 and {}", u16::MAX);
+    }
+    let a = random_walk(n, dims, args.seed);
+    let b = random_walk(n, dims, args.seed + 1);
     if let Some(path) = &args.data_out {
         let bytes: Vec<u8> = a
             .iter()
@@ -102,37 +201,107 @@ fn dtw(args: &DtwArgs) -> Result<String> {
             .collect();
         std::fs::write(path, bytes)?;
     }
-    let (ab, bb) = (to_channels(&a, args.dims), to_channels(&b, args.dims));
-    let joints = args.dims / 3;
+    let (ab, bb) = (to_channels(&a, dims), to_channels(&b, dims));
+    let joints = dims / 3;
     let (sa, sb) = (Sequence::new(&ab, joints)?, Sequence::new(&bb, joints)?);
-    let window = Window::new(Band::global(args.band), &[])?;
-    let len = scratch_len(args.n, args.n, &window)?;
+    let window = Window::new(Band::global(band), &[])?;
+    let len = scratch_len(n, n, &window)?;
     let mut cost = vec![0.0; len.cost];
     let mut steps = vec![0u8; len.path_bytes];
-    let mut path = vec![(0u16, 0u16); 2 * args.n - 1];
+    let mut path = vec![(0u16, 0u16); 2 * n - 1];
 
-    let mut calls = 0u32;
     let mut result = align(&sa, &sb, &[], &window, &mut cost, &mut steps, &mut path)?;
-    let budget = Duration::from_secs_f64(args.seconds);
-    let start = Instant::now();
-    while start.elapsed() < budget || calls < 10 {
+    let (calls, per_call) = timed(args.seconds, || {
         result = align(&sa, &sb, &[], &window, &mut cost, &mut steps, &mut path)?;
-        calls += 1;
-    }
-    let per_call = start.elapsed().as_secs_f64() / f64::from(calls);
-    let report = json!({
-        "n": args.n, "dims": args.dims, "band": args.band, "cells": len.cells,
+        Ok(())
+    })?;
+    Ok(json!({
+        "n": n, "dims": dims, "band": band, "cells": len.cells,
         "calls": calls, "us_per_call": per_call * 1e6, "ns_per_cell": per_call * 1e9 / len.cells as f64,
         "distance": result.distance, "path_len": result.path_len,
         "scratch_bytes": len.cost * 4 + len.path_bytes,
-    });
-    Ok(if args.json {
-        format!("{report}\n")
-    } else {
-        format!(
-            "banded DTW, n = {}, dims = {}, band = {}: {} cells, {:.1} us per call with the path, {:.2} ns per cell ({} calls); scratch {} bytes\n",
-            args.n, args.dims, args.band, len.cells, per_call * 1e6, per_call * 1e9 / len.cells as f64, calls,
-            len.cost * 4 + len.path_bytes,
-        )
-    })
+    }))
+}
+
+/// Runs `call` at least ten times and for at least `seconds`: the calls and the seconds per
+/// call.
+fn timed(seconds: f64, mut call: impl FnMut() -> Result<()>) -> Result<(u32, f64)> {
+    let budget = Duration::from_secs_f64(seconds);
+    let mut calls = 0u32;
+    let start = Instant::now();
+    while start.elapsed() < budget || calls < 10 {
+        call()?;
+        calls += 1;
+    }
+    Ok((calls, start.elapsed().as_secs_f64() / f64::from(calls)))
+}
+
+/// `point[key]` as a number (0 if it is none).
+fn number(point: &Value, key: &str) -> f64 {
+    point[key].as_f64().unwrap_or(0.0)
+}
+
+fn score(args: &ScoreArgs) -> Result<String> {
+    let [driver, iron] = [0, 1].map(crate::coaches::motion);
+    let (driver, iron) = (driver?, iron?);
+    let total = args.formats.len() * args.rates.len() * args.bands.len();
+    let mut points = Vec::with_capacity(total);
+    for name in &args.formats {
+        let format = Format::from_name(name)
+            .filter(|&f| f != Format::Custom)
+            .ok_or_else(|| anyhow!("unknown format `{name}`"))?;
+        let body = crate::tpose::standard(format, 1.75)?;
+        let onto = |m: &Motion| {
+            m.retarget_analytic(&body)
+                .map_err(|(f, e)| anyhow!("frame {f} onto a {format} body: {e}"))
+        };
+        let (student, coach) = (onto(&iron)?, onto(&driver)?);
+        for &rate in &args.rates {
+            let (student, coach) = (student.resampled(rate)?, coach.resampled(rate)?);
+            for &radius in &args.bands {
+                eprintln!(
+                    "bench score: point {} of {total}: {format}, {rate} Hz, band {radius}",
+                    points.len() + 1
+                );
+                let band = Band {
+                    radius,
+                    anchored: true,
+                };
+                let mut report = score_swings(&student, &coach, band)?;
+                let (calls, per_swing) = timed(args.seconds, || {
+                    report = score_swings(&student, &coach, band)?;
+                    Ok(())
+                })?;
+                let (n, m) = report.path.last().map_or((0, 0), |&(i, j)| (i + 1, j + 1));
+                points.push(json!({
+                    "format": format.to_string(), "dims": 3 * body.skeleton.len(), "rate_hz": rate,
+                    "band": radius, "student_frames": n, "coach_frames": m, "cells": report.cells,
+                    "calls": calls, "us_per_swing": per_swing * 1e6,
+                    "swings_per_second": 1.0 / per_swing,
+                    "ns_per_cell": per_swing * 1e9 / f64::from(report.cells.max(1)),
+                    "score": report.score,
+                }));
+            }
+        }
+    }
+    if args.json {
+        return Ok(format!("{}\n", json!({ "points": points })));
+    }
+    let mut out = String::from("| format | dims | rate, Hz | band | frames, student x coach | cells | us per swing | swings per second | ns per cell |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+    for p in &points {
+        out += &format!(
+            "| {} | {} | {} | {} | {} x {} | {} | {:.0} | {:.0} | {:.0} |\n",
+            p["format"].as_str().unwrap_or(""),
+            p["dims"],
+            p["rate_hz"],
+            p["band"],
+            p["student_frames"],
+            p["coach_frames"],
+            p["cells"],
+            number(p, "us_per_swing"),
+            number(p, "swings_per_second"),
+            number(p, "ns_per_cell"),
+        );
+    }
+    Ok(out)
 }

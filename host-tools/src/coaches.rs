@@ -30,6 +30,17 @@ pub fn all() -> Result<Vec<Reference<'static>>> {
         .collect()
 }
 
+/// Bundled reference `n` as a motion (the coach's swing on its own skeleton, at its rate).
+///
+/// # Errors
+/// For no such reference, or if a bundled file were damaged.
+pub fn motion(n: usize) -> Result<posecoach_io::Motion> {
+    let blob = BUNDLED
+        .get(n)
+        .with_context(|| format!("no bundled coach {n}"))?;
+    posecoach_io::Motion::from_reference(&blob.0).with_context(|| format!("bundled coach {n}"))
+}
+
 /// A weights blob read from a file, kept aligned for the core's in-place view.
 #[derive(Clone, Debug)]
 pub struct Network {

@@ -22,15 +22,13 @@ pub struct Args {
     json: bool,
 }
 
-pub fn run(args: &Args) -> Result<String> {
-    let Some(format) = Format::from_name(&args.format).filter(|&f| f != Format::Custom) else {
-        bail!("unknown format `{}`: expected one of cmu31, bandai22, h36m17, coco17, blazepose33, smpl24, golf, canonical", args.format);
-    };
-    if !(0.5..=2.5).contains(&args.height) {
-        bail!("height {} m is outside 0.5..2.5 m", args.height);
-    }
+/// `format`'s standard T-pose scaled to `height` metres, as a one-row motion (rate 0).
+///
+/// # Errors
+/// If the format's standard skeleton cannot be built at that size.
+pub fn standard(format: Format, height: f32) -> Result<Motion> {
     let standard = Skeleton::standard(format)?;
-    let scale = args.height / standard.height();
+    let scale = height / standard.height();
     let mut positions = vec![posecoach_core::Vec3::zeros(); standard.len()];
     standard.rest_positions(&mut positions);
     positions.iter_mut().for_each(|p| *p *= scale);
@@ -42,13 +40,23 @@ pub fn run(args: &Args) -> Result<String> {
             .collect(),
         _ => format.joints().iter().map(|j| j.name.to_string()).collect(),
     };
-    let motion = Motion {
+    Ok(Motion {
         missing: vec![false; positions.len()],
         skeleton,
         names,
         rate_hz: 0.0,
         positions,
+    })
+}
+
+pub fn run(args: &Args) -> Result<String> {
+    let Some(format) = Format::from_name(&args.format).filter(|&f| f != Format::Custom) else {
+        bail!("unknown format `{}`: expected one of cmu31, bandai22, h36m17, coco17, blazepose33, smpl24, golf, canonical", args.format);
     };
+    if !(0.5..=2.5).contains(&args.height) {
+        bail!("height {} m is outside 0.5..2.5 m", args.height);
+    }
+    let motion = standard(format, args.height)?;
     io::save(&motion, &args.out)?;
     if args.json {
         let doc = serde_json::json!({

@@ -574,3 +574,88 @@ fn a_pause_at_the_top_is_reported_with_the_backswing() {
     assert!(out.contains("pause at the top: you 0.3"), "{out}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Cells of a global band of radius `r` over `n × n` frames: the full rows less the two
+/// corners' triangles.
+fn band_cells(n: u64, r: u64) -> u64 {
+    n * (2 * r + 1) - r * (r + 1)
+}
+
+#[test]
+fn the_dtw_sweep_moves_one_axis_at_a_time_and_costs_what_one_point_costs() {
+    let (ok, out, err) = posecoach(&["bench", "dtw", "--sweep", "--seconds", "0", "--json"]);
+    assert!(ok, "{err}");
+    assert!(err.contains("point 14 of 14"), "progress on stderr: {err}");
+    let sweep: Value = serde_json::from_str(&out).unwrap();
+    let points = sweep["points"].as_array().unwrap();
+    assert_eq!(points.len(), 14);
+    let at = |p: &Value, key: &str| p[key].as_u64().unwrap();
+    let ns: Vec<u64> = points.iter().map(|p| at(p, "n")).collect();
+    assert_eq!(ns.iter().min(), Some(&100));
+    assert_eq!(ns.iter().max(), Some(&5000));
+    for p in points {
+        // Each point moves one of n, dims and band away from (200, 51, 20).
+        let moved = [at(p, "n") != 200, at(p, "dims") != 51, at(p, "band") != 20];
+        assert!(moved.iter().filter(|&&m| m).count() <= 1, "{p}");
+        let (cells, exact) = (at(p, "cells"), band_cells(at(p, "n"), at(p, "band")));
+        if at(p, "n") <= 4096 {
+            assert_eq!(cells, exact, "{p}");
+        } else {
+            // The guide's columns are f32: past 2^24 / n rows a row's end may round up one.
+            assert!((exact..exact + exact / 200).contains(&cells), "{p}");
+        }
+        assert!(p["ns_per_cell"].as_f64().unwrap() > 0.0);
+    }
+    // The benchmark's own point gives the same alignment as a single run of it.
+    let (ok, one, err) = posecoach(&["bench", "dtw", "--seconds", "0", "--json"]);
+    assert!(ok, "{err}");
+    let one: Value = serde_json::from_str(&one).unwrap();
+    let same = points
+        .iter()
+        .find(|p| (at(p, "n"), at(p, "dims"), at(p, "band")) == (200, 51, 20))
+        .unwrap();
+    assert_eq!(same["distance"], one["distance"]);
+    assert_eq!(same["path_len"], one["path_len"]);
+}
+
+#[test]
+fn the_score_bench_scores_the_bundled_swings_at_every_point() {
+    let args = [
+        "bench",
+        "score",
+        "--formats",
+        "h36m17,cmu31",
+        "--rates",
+        "30,60",
+        "--bands",
+        "5,20",
+        "--seconds",
+        "0",
+        "--json",
+    ];
+    let (ok, out, err) = posecoach(&args);
+    assert!(ok, "{err}");
+    let bench: Value = serde_json::from_str(&out).unwrap();
+    let points = bench["points"].as_array().unwrap();
+    assert_eq!(points.len(), 8);
+    for pair in points.chunks(2) {
+        let cells: Vec<u64> = pair.iter().map(|p| p["cells"].as_u64().unwrap()).collect();
+        assert!(
+            cells[0] < cells[1],
+            "a wider band costs more cells: {pair:?}"
+        );
+    }
+    for p in points {
+        let frames = p["student_frames"].as_u64().unwrap();
+        let expected = if p["rate_hz"].as_f64().unwrap() == 30.0 {
+            55
+        } else {
+            110
+        };
+        assert!(frames.abs_diff(expected) <= 2, "{p}");
+        assert!(p["swings_per_second"].as_f64().unwrap() > 0.0);
+        assert!((0.0..=100.0).contains(&p["score"].as_f64().unwrap()));
+    }
+    assert_eq!(points[0]["dims"], 51);
+    assert_eq!(points[4]["dims"], 93);
+}
