@@ -590,9 +590,6 @@ fn from_left(row: &mut [f32], cells: &[f32], above: &[f32], left: &mut f32) -> u
 /// Weights used when the caller gives none.
 const ONES: [f32; MAX_JOINTS] = [1.0; MAX_JOINTS];
 
-/// Columns whose costs [`CellCost::row`] sums at a time.
-const BLOCK: usize = 64;
-
 /// Floats in the widest SIMD vector [`row_costs`] is compiled for on the target: costs are
 /// computed for whole vectors of columns (AVX-512's 16 lanes take two of them).
 const VECTOR: usize = if cfg!(target_arch = "x86_64") {
@@ -645,8 +642,7 @@ impl CellCost<'_> {
     }
 
     /// [`CellCost::row`] with `weigh(w, d)` the part of a joint of weight `w` at distance `d`:
-    /// joint by joint, each a loop across the columns (vectorized), summed in joint order in a
-    /// block on the stack (where the compiler knows that nothing else aliases it).
+    /// blocks of `2 · VECTOR` columns, then of `VECTOR`, then single ones ([`CellCost::block`]).
     #[inline(always)]
     fn sum(
         &self,
@@ -660,23 +656,60 @@ impl CellCost<'_> {
         if let (Layout::Rooted(fa), Layout::Rooted(fb)) = (a.layout, b.layout) {
             return self.sum_rooted(fa, i, fb, a.joints, first, out, weigh);
         }
-        for (q, out) in out.chunks_mut(BLOCK).enumerate() {
-            let columns = first + q * BLOCK..first + q * BLOCK + out.len();
-            let mut sums = [0.0; BLOCK];
-            let sums = &mut sums[..out.len()];
-            let joints = a.joint_channels().zip(b.joint_channels());
-            for (&w, ([ax, ay, az], [bx, by, bz])) in self.weights.iter().zip(joints) {
-                let at = [ax[i], ay[i], az[i]];
-                let bs = [
-                    &bx[columns.clone()],
-                    &by[columns.clone()],
-                    &bz[columns.clone()],
-                ];
-                add_distances(sums, at, bs, |d| weigh(w, d));
+        let mut column = first;
+        // Without vectors (the Cortex-M4F), column after column: no blocks to compile.
+        let rest = if VECTOR > 1 {
+            let (wide, rest) = out.as_chunks_mut::<{ 2 * VECTOR }>();
+            for out in wide {
+                self.block(a, i, b, column, out, &weigh);
+                column += 2 * VECTOR;
             }
-            for (o, &sum) in out.iter_mut().zip(&*sums) {
-                *o = sum * self.scale;
+            let (narrow, rest) = rest.as_chunks_mut::<VECTOR>();
+            for out in narrow {
+                self.block(a, i, b, column, out, &weigh);
+                column += VECTOR;
             }
+            rest
+        } else {
+            out
+        };
+        for out in rest.as_chunks_mut::<1>().0 {
+            self.block(a, i, b, column, out, &weigh);
+            column += 1;
+        }
+    }
+
+    /// The costs of frame `i` of `a` against frames `first..first + L` of `b`, into `out`:
+    /// joint after joint, each joint's distances added to `L` sums kept in registers (a loop
+    /// across the columns that the compiler vectorizes), then scaled.
+    #[inline(always)]
+    fn block<const L: usize>(
+        &self,
+        a: &Sequence<'_>,
+        i: usize,
+        b: &Sequence<'_>,
+        first: usize,
+        out: &mut [f32; L],
+        weigh: &impl Fn(f32, f32) -> f32,
+    ) {
+        let mut sums = [0.0f32; L];
+        let joints = a.joint_channels().zip(b.joint_channels());
+        for (&w, ([ax, ay, az], [bx, by, bz])) in self.weights.iter().zip(joints) {
+            let (x, y, z) = (ax[i], ay[i], az[i]);
+            let (Some(bx), Some(by), Some(bz)) = (
+                bx.get(first..first + L),
+                by.get(first..first + L),
+                bz.get(first..first + L),
+            ) else {
+                return;
+            };
+            for l in 0..L {
+                let (dx, dy, dz) = (bx[l] - x, by[l] - y, bz[l] - z);
+                sums[l] += weigh(w, sqrt(dx * dx + dy * dy + dz * dz));
+            }
+        }
+        for (o, sum) in out.iter_mut().zip(sums) {
+            *o = sum * self.scale;
         }
     }
 }
@@ -719,17 +752,6 @@ impl CellCost<'_> {
             };
             *o = sum * self.scale;
         }
-    }
-}
-
-/// Adds `weigh` of the distance from `at` to each point of `bs` (x, y, z channels) to `out`.
-#[inline(always)]
-fn add_distances(out: &mut [f32], at: [f32; 3], bs: [&[f32]; 3], weigh: impl Fn(f32) -> f32) {
-    let [x, y, z] = at;
-    let [bx, by, bz] = bs;
-    for (((o, &u), &v), &t) in out.iter_mut().zip(bx).zip(by).zip(bz) {
-        let (dx, dy, dz) = (u - x, v - y, t - z);
-        *o += weigh(sqrt(dx * dx + dy * dy + dz * dz));
     }
 }
 
@@ -952,14 +974,16 @@ mod tests {
     }
 
     #[test]
-    fn rows_wider_than_a_block_are_classic_dtw() {
+    fn rows_of_whole_and_partial_vector_blocks_are_classic_dtw() {
         const JOINTS: usize = 2;
         let walk = |frames: usize, seed: usize| -> Vec<f32> {
             (0..3 * JOINTS * frames)
                 .map(|k| ((k * 7919 + seed) % 1013) as f32 / 506.5 - 1.0)
                 .collect()
         };
-        let (a, b) = (walk(70, 1), walk(3 * BLOCK + 5, 2));
+        // 197 columns: whole blocks of 2 · VECTOR columns, then one of VECTOR and single ones
+        // wherever VECTOR > 1.
+        let (a, b) = (walk(70, 1), walk(197, 2));
         let (a, b) = (
             Sequence::new(&a, JOINTS).unwrap(),
             Sequence::new(&b, JOINTS).unwrap(),
