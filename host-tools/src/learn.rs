@@ -432,6 +432,10 @@ pub struct EvalArgs {
     /// Include the rotation copy from the format's standard T-pose.
     #[arg(long)]
     copy: bool,
+    /// Include the ground truth itself: no joint error by definition, but its own foot slide,
+    /// foot height and club head, which its convention gives.
+    #[arg(long)]
+    truth: bool,
     #[command(flatten)]
     data: Data,
     /// Seeds the evaluation characters.
@@ -455,8 +459,11 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
     if args.copy {
         methods.push(Method::Baseline(Baseline::RotationCopy));
     }
+    if args.truth {
+        methods.push(Method::Baseline(Baseline::GroundTruth));
+    }
     if methods.is_empty() {
-        bail!("nothing to evaluate: pass --weights FILE, --analytic or --copy");
+        bail!("nothing to evaluate: pass --weights FILE, --analytic, --copy or --truth");
     }
     let pool = args.data.pool(args.seed)?;
     let bar = Progress::new(0, "pairs");
@@ -464,16 +471,48 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     })?;
+    bar.set_message("posture error");
+    let posture = metrics::posture_error(&pool, args.seed, &methods, |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
     bar.finish_and_clear();
     Ok(match args.json {
-        true => format!("{}\n", table_json(&table, &args.weights, &teachers)),
+        true => {
+            let mut doc = table_json(&table, &args.weights, &teachers);
+            doc["posture_error"] = posture_json(&posture);
+            format!("{doc}\n")
+        }
         false => {
             let mut text = String::new();
             for (path, t) in args.weights.iter().zip(&teachers) {
                 text += &format!("teacher {}: {} steps\n", path.display(), t.steps);
             }
-            text + &table.to_string()
+            let (lo, hi) = metrics::POSTURE_ERROR_DEG;
+            text += &table.to_string();
+            text += &format!(
+                "-- golf swings onto a T-pose with each body bone turned {lo}-{hi} degrees: how far the output moves\n{:<6} {:<14} {:>5} {:>13} {:>12}\n",
+                "pairs", "method", "n", "mean cm", "largest cm"
+            );
+            for row in &posture {
+                text += &format!("{row}\n");
+            }
+            text
         }
+    })
+}
+
+fn posture_json(rows: &[metrics::PostureRow]) -> Value {
+    let (lo, hi) = metrics::POSTURE_ERROR_DEG;
+    json!({
+        "turn_deg": [lo, hi],
+        "rows": rows.iter().map(|r| json!({
+            "structure": format!("{:?}", r.structure).to_lowercase(),
+            "method": r.method,
+            "pairs": r.pairs,
+            "mean_cm": r.mean * 100.0,
+            "max_cm": r.max * 100.0,
+        })).collect::<Vec<_>>(),
     })
 }
 
@@ -493,6 +532,9 @@ fn table_json(table: &Table, paths: &[PathBuf], teachers: &[Retargeter]) -> Valu
                 "golf_pairs": r.golf,
                 "hand_gap_error_cm": r.hand_gap.map(|g| [g[0] * 100.0, g[1] * 100.0]),
                 "foot_slide_cm_s": r.foot_slide.map(|s| s * 100.0),
+                "foot_height_error_cm": r.foot_height.map(|h| h * 100.0),
+                "club_pairs": r.clubs,
+                "club_head_height_cm": r.club_head.map(|h| [h[0] * 100.0, h[1] * 100.0]),
             })
         })
         .collect();

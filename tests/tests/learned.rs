@@ -161,6 +161,28 @@ fn eval_compares_a_teacher_with_the_analytic_baseline() {
         "cross-format pairs differ from their ground truth: {analytic}"
     );
     assert!((tiny - analytic).abs() < 1e-3, "{tiny} against {analytic}");
+    // Golf's convention-free measures: planted feet everywhere, the club head where the target
+    // carries a club, and how far a noisy T-pose moves each method's swing (the chords, which
+    // take only bone lengths from the T-pose, hardly at all).
+    assert!(rows.iter().all(|r| r["foot_height_error_cm"].is_number()));
+    assert!(rows
+        .iter()
+        .any(|r| r["club_pairs"].as_u64().unwrap() > 0 && r["club_head_height_cm"].is_array()));
+    let posture = table["posture_error"]["rows"].as_array().unwrap();
+    assert_eq!(
+        table["posture_error"]["turn_deg"],
+        serde_json::json!([3.0, 8.0])
+    );
+    for method in ["tiny", "analytic"] {
+        for structure in ["intra", "cross"] {
+            let row = posture
+                .iter()
+                .find(|r| r["method"] == method && r["structure"] == structure)
+                .unwrap();
+            assert!(row["pairs"].as_u64().unwrap() > 0, "{row}");
+            assert!(row["mean_cm"].as_f64().unwrap() < 1.0, "{row}");
+        }
+    }
     std::fs::remove_dir_all(dir).unwrap();
 }
 

@@ -192,6 +192,24 @@ impl Body {
         }
     }
 
+    /// The same body, bones and stature, with every body bone's rest direction turned by a
+    /// uniform angle in `min_deg..=max_deg` about a random axis across it: a T-pose measured
+    /// with error in its posture (what a phone's pose estimate gives), not in its proportions.
+    /// The club, which a T-pose does not show, keeps its direction.
+    pub fn with_posture_error(&self, min_deg: f32, max_deg: f32, rng: &mut impl Rng) -> Body {
+        let mut offsets = self.offsets;
+        for joint in Joint::ALL.into_iter().skip(1).filter(|j| !j.is_club()) {
+            let bone = offsets[joint.index()];
+            offsets[joint.index()] = turn(bone, min_deg, max_deg, rng) * bone.norm();
+        }
+        let mut body = Body {
+            stature: self.stature,
+            offsets,
+        };
+        body.stand_on_floor();
+        body
+    }
+
     /// Puts the pelvis at the height that sets the lower ankle at [`ANKLE_HEIGHT`].
     fn stand_on_floor(&mut self) {
         self.offsets[0] = Vec3::zeros();
@@ -223,13 +241,19 @@ fn template_bone(joint: Joint) -> Vec3 {
 /// `bone`'s unit direction turned by a uniform angle of up to `max_deg` about a random axis
 /// perpendicular to it.
 fn jitter(bone: Vec3, max_deg: f32, rng: &mut impl Rng) -> Vec3 {
+    turn(bone, 0.0, max_deg, rng)
+}
+
+/// `bone`'s unit direction turned by a uniform angle in `min_deg..=max_deg` about a random
+/// axis perpendicular to it (not turned for `max_deg` ≤ 0).
+fn turn(bone: Vec3, min_deg: f32, max_deg: f32, rng: &mut impl Rng) -> Vec3 {
     let direction = bone.normalize();
     if max_deg <= 0.0 {
         return direction;
     }
     let random = Vec3::from_fn(|_, _| rng.sample::<f32, _>(StandardNormal));
     let axis = random - direction * direction.dot(&random);
-    let angle = rng.random_range(0.0..=max_deg).to_radians();
+    let angle = rng.random_range(min_deg..=max_deg).to_radians();
     match axis.try_normalize(f32::EPSILON) {
         Some(axis) => Quat::from_scaled_axis(axis * angle) * direction,
         None => direction,
@@ -382,6 +406,23 @@ mod tests {
             );
             let most = (1.0 + TRUNCATE_SD * ASYMMETRY_SD) / (1.0 - TRUNCATE_SD * ASYMMETRY_SD);
             assert!(l / r <= most && r / l <= most, "{l} vs {r}");
+        }
+    }
+
+    #[test]
+    fn posture_error_turns_every_body_bone_within_its_range_and_keeps_lengths() {
+        let mut rng = rng(7);
+        let body = Body::sample(&Variation::STANDARD_REST, &mut rng);
+        let noisy = body.with_posture_error(3.0, 8.0, &mut rng);
+        assert_eq!(noisy.stature, body.stature);
+        for joint in Joint::ALL.into_iter().skip(1) {
+            let (a, b) = (body.offsets[joint.index()], noisy.offsets[joint.index()]);
+            assert!((a.norm() - b.norm()).abs() < LENGTH_TOLERANCE_M, "{joint}");
+            let degrees = a.angle(&b).to_degrees();
+            match joint.is_club() {
+                true => assert!(degrees < 1e-3, "{joint}: {degrees}"),
+                false => assert!((2.99..=8.01).contains(&degrees), "{joint}: {degrees}"),
+            }
         }
     }
 

@@ -11,13 +11,23 @@
 //! - **Foot slide**: the mean horizontal speed (m/s) of each foot (toe, else ankle) over the
 //!   frames where it is planted in the ground truth: within [`CONTACT_HEIGHT_M`] of its lowest
 //!   point and slower than [`CONTACT_SPEED_M_S`] there.
+//! - **Foot height**: over the same frames, the mean distance (m) between each foot's height
+//!   and the ground truth's: a planted foot off the ground or in it.
+//! - **Club head** (golf, targets that carry a club): the club head's height (m) above the
+//!   floor (`y = 0`, where every clip and character stands) at the ground truth's address and
+//!   impact, where the club is at the ball. It needs no ground truth: a right answer has it at
+//!   the ground for the target's own club.
+//! - **Posture error** ([`posture_error`]): how far the output moves (mean joint distance, m)
+//!   when the target's T-pose has each body bone turned by 3-8°, as a phone's estimate of a
+//!   student's T-pose has: a right answer takes the target's bone lengths from its T-pose, not
+//!   the posture noise, and does not move.
 
-use crate::bodies::Variation;
+use crate::bodies::{Character, Variation};
 use crate::clip::{motion, standard_rest, Clip};
 use crate::dataset::{pair_on, Pair, Pool, Split, SplitRng, Structure};
 use crate::error::Error;
 use crate::infer::Retargeter;
-use posecoach_core::events;
+use posecoach_core::events::{self, SwingEvents};
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
@@ -39,6 +49,11 @@ pub struct Metrics {
     pub hand_gap: Option<[f32; 2]>,
     /// Mean horizontal speed of the feet where the ground truth plants them (m/s).
     pub foot_slide: Option<f32>,
+    /// Mean distance of those feet's heights from the ground truth's there (metres).
+    pub foot_height: Option<f32>,
+    /// The club head's height above the floor at address and impact (metres), for golf
+    /// swings onto a target with a club.
+    pub club_head: Option<[f32; 2]>,
 }
 
 /// Compares `retargeted` (on the pair's target skeleton) with the pair's ground truth.
@@ -56,14 +71,25 @@ pub fn evaluate(pair: &Pair, retargeted: &Motion) -> Result<Metrics, Error> {
     }
     let joints = scored_joints(&pair.source.skeleton, &truth.skeleton);
     let height = truth.skeleton.height();
+    let swing = match pair.golf {
+        true => Some(events::detect(
+            &truth.skeleton,
+            &truth.positions,
+            truth.rate_hz,
+        )?),
+        false => None,
+    };
+    let (foot_slide, foot_height) = planted_feet(truth, retargeted);
     Ok(Metrics {
         global: joint_error(truth, retargeted, &joints, false) / height,
         local: joint_error(truth, retargeted, &joints, true) / height,
-        hand_gap: match pair.golf {
-            true => Some(hand_gap_error(truth, retargeted)?),
-            false => None,
-        },
-        foot_slide: foot_slide(truth, retargeted),
+        hand_gap: swing
+            .as_ref()
+            .map(|s| hand_gap_error(truth, retargeted, s))
+            .transpose()?,
+        foot_slide,
+        foot_height,
+        club_head: swing.as_ref().and_then(|s| club_head(retargeted, s)),
     })
 }
 
@@ -108,9 +134,8 @@ fn hands(skeleton: &Skeleton) -> Option<[usize; 2]> {
     ])
 }
 
-/// Hand-gap errors at the ground truth's address and impact.
-fn hand_gap_error(truth: &Motion, other: &Motion) -> Result<[f32; 2], Error> {
-    let swing = events::detect(&truth.skeleton, &truth.positions, truth.rate_hz)?;
+/// Hand-gap errors at the ground truth's address and impact (`swing`, its events).
+fn hand_gap_error(truth: &Motion, other: &Motion, swing: &SwingEvents) -> Result<[f32; 2], Error> {
     let [l, r] = hands(&truth.skeleton).ok_or(Error::Events(events::EventError::MissingJoint(
         Joint::LeftWrist,
     )))?;
@@ -132,20 +157,35 @@ fn horizontal_speed(m: &Motion, k: usize, f: usize) -> f32 {
     (d.x * d.x + d.z * d.z).sqrt() * m.rate_hz
 }
 
-/// Mean horizontal speed of `other`'s feet over the frames where `truth` plants them.
-fn foot_slide(truth: &Motion, other: &Motion) -> Option<f32> {
-    let mut speeds = Vec::new();
-    for foot in feet(&truth.skeleton)? {
+/// Over the frames where `truth` plants a foot: the mean horizontal speed of `other`'s foot
+/// there, and the mean distance of its height from `truth`'s.
+fn planted_feet(truth: &Motion, other: &Motion) -> (Option<f32>, Option<f32>) {
+    let Some(feet) = feet(&truth.skeleton) else {
+        return (None, None);
+    };
+    let (mut speeds, mut heights) = (Vec::new(), Vec::new());
+    for foot in feet {
         let lowest = (0..truth.frames())
             .map(|f| truth.frame(f)[foot].y)
             .fold(f32::INFINITY, f32::min);
-        speeds.extend((1..truth.frames()).filter_map(|f| {
-            let planted = truth.frame(f)[foot].y <= lowest + CONTACT_HEIGHT_M
-                && horizontal_speed(truth, foot, f) < CONTACT_SPEED_M_S;
-            planted.then(|| horizontal_speed(other, foot, f))
-        }));
+        for f in 1..truth.frames() {
+            if truth.frame(f)[foot].y <= lowest + CONTACT_HEIGHT_M
+                && horizontal_speed(truth, foot, f) < CONTACT_SPEED_M_S
+            {
+                speeds.push(horizontal_speed(other, foot, f));
+                heights.push((other.frame(f)[foot].y - truth.frame(f)[foot].y).abs());
+            }
+        }
     }
-    (!speeds.is_empty()).then(|| speeds.iter().sum::<f32>() / speeds.len() as f32)
+    let mean = |v: &[f32]| (!v.is_empty()).then(|| v.iter().sum::<f32>() / v.len() as f32);
+    (mean(&speeds), mean(&heights))
+}
+
+/// The club head's height above the floor in `m` at `swing`'s address and impact, if `m`
+/// carries a club.
+fn club_head(m: &Motion, swing: &SwingEvents) -> Option<[f32; 2]> {
+    let head = m.skeleton.index_of(Joint::ClubHead)?;
+    Some([swing.address(), swing.impact()].map(|f| m.frame(f)[head].y))
 }
 
 /// A way of retargeting a pair's source onto its target.
@@ -252,6 +292,12 @@ pub struct Row {
     pub hand_gap: Option<[f32; 2]>,
     /// Mean foot slide, metres per second.
     pub foot_slide: Option<f32>,
+    /// Mean foot height error where the ground truth plants a foot, metres.
+    pub foot_height: Option<f32>,
+    /// Golf pairs whose target carries a club.
+    pub clubs: usize,
+    /// The club head's mean distance from the floor at address and impact, metres.
+    pub club_head: Option<[f32; 2]>,
 }
 
 /// The evaluation table: every method's means per cell.
@@ -272,7 +318,10 @@ struct Sums {
     gap: [f32; 2],
     golf: usize,
     slide: f32,
+    height: f32,
     slid: usize,
+    head: [f32; 2],
+    clubs: usize,
 }
 
 impl Sums {
@@ -285,9 +334,15 @@ impl Sums {
             self.gap[0] += a;
             self.gap[1] += i;
         }
-        if let Some(s) = m.foot_slide {
+        if let (Some(s), Some(h)) = (m.foot_slide, m.foot_height) {
             self.slid += 1;
             self.slide += s;
+            self.height += h;
+        }
+        if let Some([a, i]) = m.club_head {
+            self.clubs += 1;
+            self.head[0] += a.abs();
+            self.head[1] += i.abs();
         }
     }
 }
@@ -352,6 +407,9 @@ pub fn table(
                     golf: s.golf,
                     hand_gap: (s.golf > 0).then(|| s.gap.map(|g| g / s.golf as f32)),
                     foot_slide: (s.slid > 0).then(|| s.slide / s.slid as f32),
+                    foot_height: (s.slid > 0).then(|| s.height / s.slid as f32),
+                    clubs: s.clubs,
+                    club_head: (s.clubs > 0).then(|| s.head.map(|h| h / s.clubs as f32)),
                 }));
             }
         }
@@ -364,6 +422,96 @@ pub fn table(
     Ok(Table { clips, rows })
 }
 
+/// The range of the turn [`posture_error`] gives each bone of the target's T-pose, degrees.
+pub const POSTURE_ERROR_DEG: (f32, f32) = (3.0, 8.0);
+
+/// How far one method's output moves under posture error in the target's T-pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PostureRow {
+    /// Same or different formats.
+    pub structure: Structure,
+    /// The method's name.
+    pub method: String,
+    /// Pairs.
+    pub pairs: usize,
+    /// Mean over the pairs of the output's mean joint movement, metres.
+    pub mean: f32,
+    /// The largest pair's mean joint movement, metres.
+    pub max: f32,
+}
+
+/// For [`GOLF_PAIRS`] pairs per golf clip in each structure (targets on their standard rest
+/// pose), every method's output onto the target against its output onto the same body whose
+/// T-pose has each body bone turned by [`POSTURE_ERROR_DEG`]: the mean distance between the
+/// two, over frames and the target's body joints. Every method sees the same pairs and the
+/// same turned T-poses; the ground truth, which is no retargeting of the source, is left out.
+/// `progress` is called after each pair.
+///
+/// # Errors
+/// [`Error::NoClips`] without evaluation golf clips, else the first pair that fails.
+pub fn posture_error(
+    pool: &Pool,
+    seed: u64,
+    methods: &[Method],
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<PostureRow>, Error> {
+    let methods: Vec<Method> = methods
+        .iter()
+        .copied()
+        .filter(|m| !matches!(m, Method::Baseline(Baseline::GroundTruth)))
+        .collect();
+    let golf: Vec<&Clip> = pool.eval.iter().filter(|c| c.has_club()).collect();
+    if golf.is_empty() {
+        return Err(Error::NoClips);
+    }
+    let mut rng = SplitRng::new(Split::Eval, seed);
+    let total = 2 * golf.len() * GOLF_PAIRS;
+    let (mut done, mut rows) = (0, Vec::new());
+    for structure in [Structure::Intra, Structure::Cross] {
+        let mut moved = vec![Vec::new(); methods.len()];
+        for clip in golf.iter().cycle().take(golf.len() * GOLF_PAIRS) {
+            let pair = pair_on(clip, &mut rng, structure, &Variation::STANDARD_REST)?;
+            let (lo, hi) = POSTURE_ERROR_DEG;
+            let body = pair.target.body.with_posture_error(lo, hi, rng.rng());
+            let noisy = Pair {
+                target: Character::new(body, pair.target.format, pair.golf)?,
+                ..pair.clone()
+            };
+            let joints: Vec<usize> = (0..pair.target.skeleton.len())
+                .filter(|&k| pair.target.skeleton.joint(k).is_none_or(|j| !j.is_club()))
+                .collect();
+            for (moved, method) in moved.iter_mut().zip(&methods) {
+                let (clean, turned) = (method.retarget(&pair)?, method.retarget(&noisy)?);
+                moved.push(joint_error(&clean, &turned, &joints, false));
+            }
+            done += 1;
+            progress(done, total);
+        }
+        rows.extend(moved.iter().zip(&methods).map(|(m, method)| PostureRow {
+            structure,
+            method: method.name(),
+            pairs: m.len(),
+            mean: m.iter().sum::<f32>() / m.len().max(1) as f32,
+            max: m.iter().copied().fold(0.0, f32::max),
+        }));
+    }
+    Ok(rows)
+}
+
+impl std::fmt::Display for PostureRow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:<6} {:<14} {:>5} {:>13.2} {:>12.2}",
+            format!("{:?}", self.structure).to_lowercase(),
+            self.method,
+            self.pairs,
+            self.mean * 100.0,
+            self.max * 100.0
+        )
+    }
+}
+
 impl std::fmt::Display for Table {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(f, "{} eval clips (frames at 60 Hz):", self.clips.len())?;
@@ -372,7 +520,7 @@ impl std::fmt::Display for Table {
         }
         writeln!(
             f,
-            "{:<6} {:<14} {:<14} {:>5} {:>9} {:>9} {:>5} {:>11} {:>10} {:>11}",
+            "{:<6} {:<14} {:<14} {:>5} {:>9} {:>9} {:>5} {:>11} {:>10} {:>11} {:>10} {:>5} {:>12} {:>11}",
             "pairs",
             "rest poses",
             "method",
@@ -382,7 +530,11 @@ impl std::fmt::Display for Table {
             "golf",
             "gap@addr cm",
             "gap@imp cm",
-            "slide cm/s"
+            "slide cm/s",
+            "foot y cm",
+            "clubs",
+            "head@addr cm",
+            "head@imp cm"
         )?;
         let mut block = "";
         for row in &self.rows {
@@ -393,7 +545,7 @@ impl std::fmt::Display for Table {
             let cm = |v: Option<f32>| v.map_or("-".to_string(), |v| format!("{:.2}", v * 100.0));
             writeln!(
                 f,
-                "{:<6} {:<14} {:<14} {:>5} {:>9.2} {:>9.2} {:>5} {:>11} {:>10} {:>11}",
+                "{:<6} {:<14} {:<14} {:>5} {:>9.2} {:>9.2} {:>5} {:>11} {:>10} {:>11} {:>10} {:>5} {:>12} {:>11}",
                 format!("{:?}", row.structure).to_lowercase(),
                 row.rest,
                 row.method,
@@ -404,6 +556,10 @@ impl std::fmt::Display for Table {
                 cm(row.hand_gap.map(|g| g[0])),
                 cm(row.hand_gap.map(|g| g[1])),
                 cm(row.foot_slide),
+                cm(row.foot_height),
+                row.clubs,
+                cm(row.club_head.map(|h| h[0])),
+                cm(row.club_head.map(|h| h[1])),
             )?;
         }
         Ok(())
@@ -440,6 +596,79 @@ mod tests {
             evaluate(&pair, &shifted),
             Err(Error::Mismatch { .. })
         ));
+    }
+
+    /// A pool of `count` synthetic swings and putts per split (each tracks a club).
+    fn synthetic_pool(count: usize) -> Pool {
+        let mut pool = Pool::default();
+        pool.add_synthetic_golf(count, 3).unwrap();
+        pool
+    }
+
+    #[test]
+    fn posture_error_moves_the_rotation_copy_and_not_the_analytic_retargeter() {
+        // The analytic retargeter copies each bone's direction and takes only its length from
+        // the T-pose; the rotation copy turns the T-pose's own bones, posture error and all.
+        let pool = synthetic_pool(2);
+        let methods = [
+            Baseline::Analytic,
+            Baseline::RotationCopy,
+            Baseline::GroundTruth,
+        ]
+        .map(Method::Baseline);
+        let rows = posture_error(&pool, 1, &methods, |_, _| {}).unwrap();
+        assert_eq!(
+            rows.len(),
+            4,
+            "two structures, the ground truth left out: {rows:?}"
+        );
+        for row in &rows {
+            assert_eq!(row.pairs, 2 * GOLF_PAIRS);
+            assert!(row.max >= row.mean);
+            match row.method.as_str() {
+                "analytic" => assert!(row.mean < 0.005, "{row:?}"),
+                _ => assert!(row.mean > 0.01, "{row:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn a_club_head_on_the_floor_at_address_and_impact_reads_zero() {
+        let pool = synthetic_pool(1);
+        let clip = &pool.eval[0];
+        let mut rng = SplitRng::new(Split::Eval, 4);
+        let mut pair =
+            pair_on(clip, &mut rng, Structure::Intra, &Variation::STANDARD_REST).unwrap();
+        // Onto a canonical character with a club.
+        let body = crate::bodies::Body::sample(&Variation::STANDARD_REST, rng.rng());
+        pair.target =
+            Character::new(body, posecoach_core::format::Format::Canonical, true).unwrap();
+        pair.ground_truth = clip.on(&pair.target).unwrap();
+        let truth = &pair.ground_truth;
+        let swing = events::detect(&truth.skeleton, &truth.positions, truth.rate_hz).unwrap();
+        let head = truth.skeleton.index_of(Joint::ClubHead).unwrap();
+        let mut grounded = truth.clone();
+        let n = grounded.skeleton.len();
+        for f in [swing.address(), swing.impact()] {
+            grounded.positions[f * n + head].y = 0.0;
+        }
+        assert_eq!(
+            evaluate(&pair, &grounded).unwrap().club_head,
+            Some([0.0, 0.0])
+        );
+        // Raised 5 cm at address, the head reads 5 cm there.
+        grounded.positions[swing.address() * n + head].y = 0.05;
+        let raised = evaluate(&pair, &grounded).unwrap().club_head.unwrap();
+        assert!(
+            (raised[0] - 0.05).abs() < 1e-6 && raised[1] == 0.0,
+            "{raised:?}"
+        );
+        // The ground truth's feet are where they are; lifted 2 cm, they read 2 cm.
+        assert_eq!(evaluate(&pair, truth).unwrap().foot_height, Some(0.0));
+        let mut lifted = truth.clone();
+        lifted.positions.iter_mut().for_each(|p| p.y += 0.02);
+        let height = evaluate(&pair, &lifted).unwrap().foot_height.unwrap();
+        assert!((height - 0.02).abs() < 1e-5, "{height}");
     }
 
     #[test]
