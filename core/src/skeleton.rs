@@ -269,6 +269,47 @@ impl Skeleton {
         Skeleton::from_rest_positions(format, &parents[..n], &positions[..n], &joints[..n])
     }
 
+    /// This skeleton with each bone turned to its format's standard T-pose direction, keeping
+    /// its length: the rest pose a motion's rotations are measured from wherever they must mean
+    /// the same on every skeleton. A file's own rest pose is its zero pose (CMU's BVH hangs the
+    /// arms), which says nothing of the motion; a bone the standard pose gives no direction
+    /// (zero length there, or a joint without a standard place) keeps its own offset.
+    ///
+    /// # Errors
+    /// As [`Skeleton::new`] (not expected: the tree and joints are this skeleton's).
+    pub fn standard_rest(&self) -> Result<Skeleton, SkeletonError> {
+        let n = self.len();
+        let mut offsets = [Vec3::zeros(); MAX_JOINTS];
+        let mut parents = [None; MAX_JOINTS];
+        for k in 0..n {
+            parents[k] = self.parent(k);
+            offsets[k] = self.offsets()[k];
+            let parent = self.parent(k).unwrap_or(0);
+            let standard = self
+                .standard_position(k)
+                .zip(self.standard_position(parent))
+                .and_then(|(a, b)| {
+                    let (bone, length) = (a - b, norm(&(a - b)));
+                    (length > 0.0).then(|| bone / length)
+                });
+            if let (true, Some(direction)) = (k > 0, standard) {
+                offsets[k] = direction * norm(&offsets[k]);
+            }
+        }
+        Skeleton::new(self.format, &parents[..n], &offsets[..n], self.joints())
+    }
+
+    /// The standard T-pose position of joint `k`: its format table's place, or the canonical
+    /// T-pose for canonical joints; `None` where neither applies.
+    fn standard_position(&self, k: usize) -> Option<Vec3> {
+        let table = self.format.joints();
+        match table.get(k) {
+            Some(j) if table.len() == self.len() => Some(j.place.position()),
+            _ if self.format == Format::Canonical || table.is_empty() => self.joint(k).map(t_pose),
+            _ => None,
+        }
+    }
+
     /// Builds a skeleton from rest (T-pose) joint positions instead of offsets.
     ///
     /// # Errors
@@ -560,6 +601,58 @@ mod tests {
         match Skeleton::standard(Format::H36m17) {
             Ok(s) => s,
             Err(e) => unreachable!("{e}"),
+        }
+    }
+
+    #[test]
+    fn a_rest_pose_with_hanging_arms_is_re_rested_on_the_t_pose_with_its_own_bone_lengths() {
+        let standard = h36m();
+        let n = standard.len();
+        // Every bone longer by its index in mm; the arms hang (their bones point down).
+        let mut offsets = [Vec3::zeros(); MAX_JOINTS];
+        let mut parents = [None; MAX_JOINTS];
+        for k in 0..n {
+            parents[k] = standard.parent(k);
+            let o = standard.offsets()[k];
+            let length = norm(&o) + 0.001 * k as f32;
+            let arm = matches!(
+                standard.joint(k),
+                Some(Joint::LeftElbow | Joint::LeftWrist | Joint::RightElbow | Joint::RightWrist)
+            );
+            offsets[k] = match (k, arm) {
+                (0, _) => o,
+                (_, true) => Vec3::new(0.0, -length, 0.0),
+                _ => o / norm(&o) * length,
+            };
+        }
+        let hanging = Skeleton::new(
+            Format::H36m17,
+            &parents[..n],
+            &offsets[..n],
+            standard.joints(),
+        )
+        .unwrap_or_else(|e| unreachable!("{e}"));
+        let rested = hanging
+            .standard_rest()
+            .unwrap_or_else(|e| unreachable!("{e}"));
+        let bones = rested
+            .offsets()
+            .iter()
+            .zip(standard.offsets())
+            .zip(&offsets);
+        for (k, ((a, b), own)) in bones.enumerate().skip(1) {
+            assert!((norm(a) - norm(own)).abs() < 1e-6, "joint {k}: length");
+            assert!(
+                (a / norm(a) - b / norm(b)).norm() < 1e-6,
+                "joint {k}: direction"
+            );
+        }
+        // The standard pose is its own re-resting.
+        let again = standard
+            .standard_rest()
+            .unwrap_or_else(|e| unreachable!("{e}"));
+        for (a, b) in again.offsets().iter().zip(standard.offsets()) {
+            assert!((a - b).norm() < 1e-6);
         }
     }
 

@@ -66,6 +66,7 @@ impl Data {
             let more = Pool::load(dir).with_context(|| format!("loading {}", dir.display()))?;
             pool.train.extend(more.train);
             pool.eval.extend(more.eval);
+            pool.raw_eval.extend(more.raw_eval);
         }
         pool.add_synthetic_golf(self.synthetic, seed)?;
         Ok(pool)
@@ -476,11 +477,20 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     })?;
+    bar.set_message("coach files' own rest poses");
+    let raw = match pool.raw_eval.is_empty() {
+        true => Vec::new(),
+        false => metrics::raw_rests(&pool, args.seed, &methods, |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        })?,
+    };
     bar.finish_and_clear();
     Ok(match args.json {
         true => {
             let mut doc = table_json(&table, &args.weights, &teachers);
             doc["posture_error"] = posture_json(&posture);
+            doc["raw_rests"] = raw_json(&raw);
             format!("{doc}\n")
         }
         false => {
@@ -497,9 +507,34 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
             for row in &posture {
                 text += &format!("{row}\n");
             }
+            if !raw.is_empty() {
+                text += &format!(
+                    "-- BVH files on their own rest poses, and re-rested on the standard T-pose (the same positions)\n{:<6} {:<14} {:>5} {:>15} {:>15}\n",
+                    "pairs", "method", "n", "own rest %h", "standard %h"
+                );
+                for row in &raw {
+                    text += &format!("{row}\n");
+                }
+            }
             text
         }
     })
+}
+
+fn raw_json(rows: &[metrics::RawRow]) -> Value {
+    Value::Array(
+        rows.iter()
+            .map(|r| {
+                json!({
+                    "structure": format!("{:?}", r.structure).to_lowercase(),
+                    "method": r.method,
+                    "pairs": r.pairs,
+                    "own_rest_pct_height": r.raw * 100.0,
+                    "standard_rest_pct_height": r.standard * 100.0,
+                })
+            })
+            .collect(),
+    )
 }
 
 fn posture_json(rows: &[metrics::PostureRow]) -> Value {

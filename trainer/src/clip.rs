@@ -28,7 +28,6 @@
 use crate::bodies::Character;
 use crate::error::Error;
 use posecoach_core::config::MAX_JOINTS;
-use posecoach_core::format::{t_pose, Format};
 use posecoach_core::joint::Joint;
 use posecoach_core::kinematics::{self, inverse, LengthError};
 use posecoach_core::retarget::RetargetError;
@@ -238,53 +237,13 @@ pub fn joint_names(skeleton: &Skeleton) -> Vec<String> {
         .collect()
 }
 
-/// The standard T-pose position of joint `k` of `skeleton`: its format table's place, or the
-/// canonical T-pose for canonical joints; `None` where neither applies.
-fn standard_position(skeleton: &Skeleton, k: usize) -> Option<Vec3> {
-    let table = skeleton.format().joints();
-    match table.get(k) {
-        Some(j) if table.len() == skeleton.len() => Some(j.place.position()),
-        _ if skeleton.format() == Format::Canonical || table.is_empty() => {
-            skeleton.joint(k).map(t_pose)
-        }
-        _ => None,
-    }
-}
-
-/// `skeleton` with each bone turned to the standard T-pose direction, keeping its length;
-/// bones the standard pose gives no direction (zero-length there, or joints without a standard
-/// place) keep their own rest offset.
+/// `motion` with its skeleton re-rested ([`Skeleton::standard_rest`]); positions unchanged.
 ///
 /// # Errors
-/// As [`Skeleton::new`] (not expected: the tree and names are `skeleton`'s).
-pub fn standard_skeleton(skeleton: &Skeleton) -> Result<Skeleton, Error> {
-    let n = skeleton.len();
-    let mut offsets = skeleton.offsets().to_vec();
-    for (k, offset) in offsets.iter_mut().enumerate().skip(1) {
-        let parent = skeleton.parent(k).unwrap_or(0);
-        let standard = standard_position(skeleton, k)
-            .zip(standard_position(skeleton, parent))
-            .and_then(|(a, b)| (a - b).try_normalize(kinematics::MIN_BONE));
-        if let Some(direction) = standard {
-            *offset = direction * offset.norm();
-        }
-    }
-    let parents: Vec<Option<usize>> = (0..n).map(|k| skeleton.parent(k)).collect();
-    Ok(Skeleton::new(
-        skeleton.format(),
-        &parents,
-        &offsets,
-        skeleton.joints(),
-    )?)
-}
-
-/// `motion` with its skeleton re-rested by [`standard_skeleton`]; positions unchanged.
-///
-/// # Errors
-/// As [`standard_skeleton`].
+/// As [`Skeleton::standard_rest`].
 pub fn standard_rest(motion: &Motion) -> Result<Motion, Error> {
     Ok(Motion {
-        skeleton: standard_skeleton(&motion.skeleton)?,
+        skeleton: motion.skeleton.standard_rest()?,
         ..motion.clone()
     })
 }
@@ -296,7 +255,7 @@ pub const CONVENTION_ROUNDS: usize = 2;
 /// The rotations of a motion on a skeleton whose rest pose is not its format's standard one,
 /// estimated as the clips define them: each bone's rotation turns its *own* rest offset onto
 /// its observed direction exactly, with the twist about itself that the standard rest pose
-/// would give ([`standard_skeleton`], as [`standard_rest`] and [`Clip::from_motion`] make
+/// would give ([`Skeleton::standard_rest`], as [`standard_rest`] and [`Clip::from_motion`] make
 /// every clip's rotations).
 ///
 /// Positions tell each bone's direction but not its twist. Inverse kinematics on the
@@ -316,10 +275,10 @@ impl Rotations {
     /// The estimator for motions on `skeleton`.
     ///
     /// # Errors
-    /// As [`standard_skeleton`].
+    /// As [`Skeleton::standard_rest`].
     pub fn new(skeleton: &Skeleton) -> Result<Rotations, Error> {
         Ok(Rotations {
-            standard: standard_skeleton(skeleton)?,
+            standard: skeleton.standard_rest()?,
             own: skeleton.clone(),
         })
     }
@@ -400,6 +359,7 @@ mod tests {
     use super::*;
     use crate::bodies::{sample_character_with, Body, Variation};
     use crate::dataset::FORMATS;
+    use posecoach_core::format::Format;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

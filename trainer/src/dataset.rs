@@ -179,16 +179,6 @@ pub fn motion_files(data_dir: &Path) -> Vec<MotionFile> {
     files
 }
 
-/// A motion file as a clip: read, resampled to [`CLIP_RATE_HZ`], re-rested on its format's
-/// standard T-pose ([`standard_rest`]) and turned into rotations.
-///
-/// # Errors
-/// A [`Error::File`] if it cannot be read, else as [`Clip::from_motion`].
-pub fn load_clip(file: &MotionFile) -> Result<Clip, Error> {
-    let motion = io::load(&file.path)?.resampled(CLIP_RATE_HZ)?;
-    Clip::from_motion(file.stem(), &standard_rest(&motion)?)
-}
-
 /// Same or different skeleton formats on both sides of a pair.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Structure {
@@ -205,9 +195,7 @@ pub struct Pair {
     pub clip: String,
     /// Whether the clip is a golf swing (its source tracks a club).
     pub golf: bool,
-    /// The source character `A` (format `X`).
-    pub source_character: Character,
-    /// The clip on `A`.
+    /// The clip on a source character `A` (format `X`).
     pub source: Motion,
     /// The target character `B` (format `Y`).
     pub target: Character,
@@ -240,20 +228,32 @@ pub struct Pool {
     pub train: Vec<Clip>,
     /// Evaluation clips.
     pub eval: Vec<Clip>,
+    /// The evaluation BVH files as read, on their own rest poses (CMU's arms hang, Bandai's
+    /// are its own), at [`CLIP_RATE_HZ`], with their names: what a coach file hands over
+    /// before any re-resting.
+    pub raw_eval: Vec<(String, Motion)>,
 }
 
 impl Pool {
-    /// Every motion file under `data_dir` as a clip, in its split.
+    /// Every motion file under `data_dir` as a clip, in its split: read, resampled to
+    /// [`CLIP_RATE_HZ`], re-rested on its format's standard T-pose ([`standard_rest`]) and
+    /// turned into rotations ([`Clip::from_motion`]).
     ///
     /// # Errors
     /// The first file that cannot be loaded.
     pub fn load(data_dir: &Path) -> Result<Pool, Error> {
         let mut pool = Pool::default();
         for file in motion_files(data_dir) {
-            let clip = load_clip(&file)?;
+            let motion = io::load(&file.path)?.resampled(CLIP_RATE_HZ)?;
+            let clip = Clip::from_motion(file.stem(), &standard_rest(&motion)?)?;
             match file.split {
                 Split::Train => pool.train.push(clip),
-                Split::Eval => pool.eval.push(clip),
+                Split::Eval => {
+                    pool.eval.push(clip);
+                    if file.dataset != Dataset::Golf {
+                        pool.raw_eval.push((file.stem().to_string(), motion));
+                    }
+                }
             }
         }
         Ok(pool)
@@ -364,14 +364,13 @@ pub fn pair_on(
 ) -> Result<Pair, Error> {
     let (from, onto) = formats(structure, rng.rng());
     let club = clip.has_club();
-    let source_character = Character::new(Body::sample(variation, rng.rng()), from, club)?;
+    let source = Character::new(Body::sample(variation, rng.rng()), from, club)?;
     let target = Character::new(Body::sample(variation, rng.rng()), onto, club)?;
     Ok(Pair {
         clip: clip.name.clone(),
         golf: club,
-        source: clip.on(&source_character)?,
+        source: clip.on(&source)?,
         ground_truth: clip.on(&target)?,
-        source_character,
         target,
     })
 }
@@ -471,8 +470,8 @@ mod tests {
         let clip =
             Clip::from_motion("wave", &crate::clip::testing::wave(&source.skeleton)).unwrap();
         let pool = Pool {
-            train: Vec::new(),
             eval: vec![clip],
+            ..Pool::default()
         };
         let draw = |seed, structure| {
             let mut rng = SplitRng::new(Split::Eval, seed);
@@ -481,9 +480,9 @@ mod tests {
         };
         for seed in 0..20 {
             let intra = draw(seed, Structure::Intra);
-            assert_eq!(intra.source_character.format, intra.target.format);
+            assert_eq!(intra.source.skeleton.format(), intra.target.format);
             let cross = draw(seed, Structure::Cross);
-            assert_ne!(cross.source_character.format, cross.target.format);
+            assert_ne!(cross.source.skeleton.format(), cross.target.format);
             assert_eq!(cross.ground_truth.skeleton, cross.target.skeleton);
             assert_eq!(
                 draw(seed, Structure::Cross).ground_truth.positions,

@@ -204,7 +204,7 @@ mod tests {
     use super::*;
     use crate::bodies::testing::character;
     use crate::clip::testing::wave_frames;
-    use crate::clip::{standard_skeleton, Clip};
+    use crate::clip::Clip;
     use crate::dataset::FORMATS;
     use crate::fk;
     use crate::prior::PriorKind;
@@ -354,7 +354,10 @@ mod tests {
         let mut truths = Vec::new();
         let mut bodies = Vec::new();
         for (i, &(from, onto)) in pairs.iter().enumerate() {
-            let standard = standard_skeleton(&character(from, 20 + i as u64).skeleton).unwrap();
+            let standard = character(from, 20 + i as u64)
+                .skeleton
+                .standard_rest()
+                .unwrap();
             let motion = wave_frames(&standard, 3 * WINDOW);
             let clip = Clip::from_motion("wave", &motion).unwrap();
             let source = character(from, i as u64);

@@ -14,7 +14,7 @@
 //! A weights blob ([`posecoach_core::weights`]) runs the same way through the core's int8
 //! network ([`posecoach_core::network`]), which cuts and holds windows as this module does.
 
-use crate::clip::motion;
+use crate::clip::{motion, standard_rest};
 use crate::error::Error;
 use crate::features::{Batch, Window, RATE_HZ, WINDOW};
 use crate::model::{Teacher, TeacherConfig};
@@ -116,10 +116,17 @@ impl Retargeter {
 
     /// `source` retargeted onto `target`, at the source's rate and length.
     ///
+    /// The source's motion is its positions: its skeleton's rest pose is the file's zero pose
+    /// (CMU's BVH hangs the arms, Bandai's has its own), which says nothing of the motion, so
+    /// the source is re-rested on its format's standard T-pose first ([`standard_rest`]: the
+    /// same positions and bone lengths). Without it, the rotation transfer read a hanging arm
+    /// at rest as a T-pose arm turned 90°.
+    ///
     /// # Errors
     /// [`Error::TooShort`] for a motion without frames, [`Error::Retarget`] for a source
     /// without legs, else as [`Batch::new`].
     pub fn retarget(&self, source: &Motion, target: &Skeleton) -> Result<Motion, Error> {
+        let source = &standard_rest(source)?;
         let frames = source.frames();
         if frames == 0 || !source.rate_hz.is_finite() || source.rate_hz <= 0.0 {
             return Err(Error::TooShort {

@@ -22,16 +22,18 @@
 //!   student's T-pose has: a right answer takes the target's bone lengths from its T-pose, not
 //!   the posture noise, and does not move.
 
-use crate::bodies::{Character, Variation};
+use crate::bodies::{Body, Character, Variation};
 use crate::clip::{motion, standard_rest, Clip};
-use crate::dataset::{pair_on, Pair, Pool, Split, SplitRng, Structure};
+use crate::dataset::{pair_on, Pair, Pool, Split, SplitRng, Structure, FORMATS};
 use crate::error::Error;
 use crate::infer::Retargeter;
 use posecoach_core::events::{self, SwingEvents};
+use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
 use posecoach_io::Motion;
+use rand::Rng;
 
 /// A foot counts as planted within this height above its lowest point (metres)...
 pub const CONTACT_HEIGHT_M: f32 = 0.03;
@@ -496,6 +498,121 @@ pub fn posture_error(
         }));
     }
     Ok(rows)
+}
+
+/// Pairs per raw evaluation BVH file and structure in [`raw_rests`].
+pub const RAW_PAIRS: usize = 5;
+
+/// One method's error on coach files as they are read, on their own rest poses, against the
+/// same positions on their format's standard T-pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RawRow {
+    /// Same or different formats.
+    pub structure: Structure,
+    /// The method's name.
+    pub method: String,
+    /// Pairs.
+    pub pairs: usize,
+    /// Mean global joint error, fraction of the target's height, from the file's own rest.
+    pub raw: f32,
+    /// The same from the standard rest (the same positions).
+    pub standard: f32,
+}
+
+/// The evaluation BVH files as read ([`Pool::raw_eval`]: CMU's rest pose has the arms
+/// hanging, Bandai's is its own), each retargeted as it is and re-rested on its format's
+/// standard T-pose (positions unchanged: a retargeter that reads positions should not tell
+/// them apart) onto [`RAW_PAIRS`] held-out characters per structure (standard rest poses),
+/// against the ground truth. The ground truth is left out. `progress` is called after each
+/// pair.
+///
+/// # Errors
+/// [`Error::NoClips`] without raw evaluation files, else the first pair that fails.
+pub fn raw_rests(
+    pool: &Pool,
+    seed: u64,
+    methods: &[Method],
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<RawRow>, Error> {
+    if pool.raw_eval.is_empty() {
+        return Err(Error::NoClips);
+    }
+    let methods: Vec<Method> = methods
+        .iter()
+        .copied()
+        .filter(|m| !matches!(m, Method::Baseline(Baseline::GroundTruth)))
+        .collect();
+    let mut rng = SplitRng::new(Split::Eval, seed);
+    let total = 2 * pool.raw_eval.len() * RAW_PAIRS;
+    let (mut done, mut rows) = (0, Vec::new());
+    for structure in [Structure::Intra, Structure::Cross] {
+        let mut sums = vec![(0usize, 0.0f32, 0.0f32); methods.len()];
+        for (name, raw) in &pool.raw_eval {
+            let standard = standard_rest(raw)?;
+            let clip = Clip::from_motion(name, &standard)?;
+            let from = raw.skeleton.format();
+            for _ in 0..RAW_PAIRS {
+                let onto = match structure {
+                    Structure::Intra => from,
+                    Structure::Cross => {
+                        let others: Vec<Format> =
+                            FORMATS.into_iter().filter(|&f| f != from).collect();
+                        others[rng.rng().random_range(0..others.len())]
+                    }
+                };
+                let body = Body::sample(&Variation::STANDARD_REST, rng.rng());
+                let target = Character::new(body, onto, false)?;
+                let re_rested = Pair {
+                    clip: name.clone(),
+                    golf: false,
+                    source: standard.clone(),
+                    ground_truth: clip.on(&target)?,
+                    target,
+                };
+                let as_read = Pair {
+                    source: raw.clone(),
+                    ..re_rested.clone()
+                };
+                let pair = &re_rested;
+                for (sum, method) in sums.iter_mut().zip(&methods) {
+                    let error = |p: &Pair| -> Result<f32, Error> {
+                        Ok(evaluate(pair, &method.retarget(p)?)?.global)
+                    };
+                    sum.0 += 1;
+                    sum.1 += error(&as_read)?;
+                    sum.2 += error(&re_rested)?;
+                }
+                done += 1;
+                progress(done, total);
+            }
+        }
+        rows.extend(
+            sums.iter()
+                .zip(&methods)
+                .map(|(&(n, raw, standard), m)| RawRow {
+                    structure,
+                    method: m.name(),
+                    pairs: n,
+                    raw: raw / n.max(1) as f32,
+                    standard: standard / n.max(1) as f32,
+                }),
+        );
+    }
+    Ok(rows)
+}
+
+impl std::fmt::Display for RawRow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:<6} {:<14} {:>5} {:>15.2} {:>15.2}",
+            format!("{:?}", self.structure).to_lowercase(),
+            self.method,
+            self.pairs,
+            self.raw * 100.0,
+            self.standard * 100.0
+        )
+    }
 }
 
 impl std::fmt::Display for PostureRow {

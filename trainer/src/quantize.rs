@@ -50,7 +50,7 @@ pub fn calibrate(
             .filter(|c| c.has_club())
             .cloned()
             .collect(),
-        eval: Vec::new(),
+        ..Pool::default()
     };
     let mut rng = SplitRng::new(Split::Train, seed);
     let mut calibration = Calibration::default();

@@ -832,7 +832,7 @@ mod tests {
             .collect();
         Pool {
             train,
-            eval: Vec::new(),
+            ..Pool::default()
         }
     }
 
