@@ -116,11 +116,15 @@ impl Retargeter {
 
     /// `source` retargeted onto `target`, at the source's rate and length.
     ///
-    /// The source's motion is its positions: its skeleton's rest pose is the file's zero pose
-    /// (CMU's BVH hangs the arms, Bandai's has its own), which says nothing of the motion, so
-    /// the source is re-rested on its format's standard T-pose first ([`standard_rest`]: the
-    /// same positions and bone lengths). Without it, the rotation transfer read a hanging arm
-    /// at rest as a T-pose arm turned 90°.
+    /// Rest poses are not motion. The source's motion is its positions: its skeleton's rest
+    /// pose is the file's zero pose (CMU's BVH hangs the arms, Bandai's has its own), so the
+    /// source is re-rested on its format's standard T-pose first ([`standard_rest`]: the same
+    /// positions and bone lengths); without it, the rotation transfer read a hanging arm at
+    /// rest as a T-pose arm turned 90°. The target's T-pose gives its bone lengths; its bones'
+    /// directions are a measurement with error (a phone's estimate of a student's T-pose is
+    /// several degrees off per bone), so the network works on the target re-rested too
+    /// ([`Skeleton::standard_rest`]) and the output, on `target`'s joints, has its bone
+    /// lengths and none of its posture.
     ///
     /// # Errors
     /// [`Error::TooShort`] for a motion without frames, [`Error::Retarget`] for a source
@@ -138,6 +142,8 @@ impl Retargeter {
             Model::Float { teacher, .. } => teacher.prior(),
             Model::Int8 { .. } => PriorKind::Chords,
         };
+        let output = target;
+        let target = &target.standard_rest()?;
         let scale = prior.trajectory_scale(&source.skeleton, target)?;
         let phases = ((source.rate_hz / RATE_HZ).round() as usize).clamp(1, MAX_PHASES);
         let fine = held(&source.resampled(RATE_HZ * phases as f32)?, WINDOW * phases);
@@ -154,7 +160,7 @@ impl Retargeter {
                 positions[(phase + i * phases) * m..][..m].copy_from_slice(pose);
             }
         }
-        let out = motion(target, RATE_HZ * phases as f32, positions).resampled(source.rate_hz)?;
+        let out = motion(output, RATE_HZ * phases as f32, positions).resampled(source.rate_hz)?;
         Ok(fitted(out, frames))
     }
 
@@ -253,7 +259,7 @@ mod tests {
     use posecoach_core::format::Format;
 
     #[test]
-    fn an_untrained_teacher_retargets_as_the_analytic_retargeter() {
+    fn an_untrained_teacher_retargets_as_the_analytic_retargeter_on_the_standard_rest_poses() {
         let device = Device::flex();
         device.seed(4);
         let retargeter = Retargeter {
@@ -271,8 +277,12 @@ mod tests {
             let mut m = wave_frames(&source, frames);
             m.rate_hz = rate_hz;
             let out = retargeter.retarget(&m, &target).unwrap();
-            let analytic = m
-                .retarget_analytic(&motion(&target, rate_hz, Vec::new()))
+            // Both skeletons re-rested, as the network sees them (the characters' rest poses
+            // are turned up to 5 degrees a bone).
+            let rested = motion(&target.standard_rest().unwrap(), rate_hz, Vec::new());
+            let analytic = standard_rest(&m)
+                .unwrap()
+                .retarget_analytic(&rested)
                 .unwrap();
             let gap = out
                 .positions
