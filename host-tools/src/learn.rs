@@ -468,10 +468,16 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
     }
     let pool = args.data.pool(args.seed)?;
     let bar = Progress::new(0, "pairs");
-    let table = metrics::table(&pool, args.seed, &methods, |done, total| {
+    let mut table = metrics::table(&pool, args.seed, &methods, |done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     })?;
+    bar.set_message("onto phone formats");
+    let phone = metrics::onto_phone_formats(&pool, args.seed, &methods, |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
+    table.rows.extend(phone);
     bar.set_message("posture error");
     let posture = metrics::posture_error(&pool, args.seed, &methods, |done, total| {
         bar.set_length(total as u64);

@@ -274,7 +274,7 @@ impl Method<'_> {
 /// are over the pairs that have them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Row {
-    /// `"every eval clip"` or `"golf swings only"`.
+    /// `"every eval clip"`, `"golf swings only"`, or `"onto FORMAT"` ([`onto_phone_formats`]).
     pub block: &'static str,
     /// Same or different formats.
     pub structure: Structure,
@@ -347,6 +347,53 @@ impl Sums {
             self.head[1] += i.abs();
         }
     }
+
+    /// The means as a table row.
+    fn row(
+        &self,
+        block: &'static str,
+        structure: Structure,
+        rest: &'static str,
+        method: String,
+    ) -> Row {
+        let mean = |sum: f32, n: usize| (n > 0).then(|| sum / n as f32);
+        Row {
+            block,
+            structure,
+            rest,
+            method,
+            pairs: self.pairs,
+            global: self.global / self.pairs.max(1) as f32,
+            local: self.local / self.pairs.max(1) as f32,
+            golf: self.golf,
+            hand_gap: (self.golf > 0).then(|| self.gap.map(|g| g / self.golf as f32)),
+            foot_slide: mean(self.slide, self.slid),
+            foot_height: mean(self.height, self.slid),
+            clubs: self.clubs,
+            club_head: (self.clubs > 0).then(|| self.head.map(|h| h / self.clubs as f32)),
+        }
+    }
+}
+
+/// Adds each method's metrics on `pair` to its sums.
+fn add_pair(sums: &mut [Sums], methods: &[Method], pair: &Pair) -> Result<(), Error> {
+    for (sum, method) in sums.iter_mut().zip(methods) {
+        sum.add(&evaluate(pair, &method.retarget(pair)?)?);
+    }
+    Ok(())
+}
+
+/// Each method's row of a table cell from its sums.
+fn means<'a>(
+    sums: &'a [Sums],
+    methods: &'a [Method],
+    block: &'static str,
+    structure: Structure,
+    rest: &'static str,
+) -> impl Iterator<Item = Row> + 'a {
+    sums.iter()
+        .zip(methods)
+        .map(move |(s, m)| s.row(block, structure, rest, m.name()))
 }
 
 /// The variations the table compares, with their names.
@@ -392,27 +439,11 @@ pub fn table(
                 let mut sums = vec![Sums::default(); methods.len()];
                 for clip in &clips {
                     let pair = pair_on(clip, &mut rng, structure, &variation)?;
-                    for (sum, method) in sums.iter_mut().zip(methods) {
-                        sum.add(&evaluate(&pair, &method.retarget(&pair)?)?);
-                    }
+                    add_pair(&mut sums, methods, &pair)?;
                     done += 1;
                     progress(done, total);
                 }
-                rows.extend(sums.iter().zip(methods).map(|(s, m)| Row {
-                    block,
-                    structure,
-                    rest,
-                    method: m.name(),
-                    pairs: s.pairs,
-                    global: s.global / s.pairs.max(1) as f32,
-                    local: s.local / s.pairs.max(1) as f32,
-                    golf: s.golf,
-                    hand_gap: (s.golf > 0).then(|| s.gap.map(|g| g / s.golf as f32)),
-                    foot_slide: (s.slid > 0).then(|| s.slide / s.slid as f32),
-                    foot_height: (s.slid > 0).then(|| s.height / s.slid as f32),
-                    clubs: s.clubs,
-                    club_head: (s.clubs > 0).then(|| s.head.map(|h| h / s.clubs as f32)),
-                }));
+                rows.extend(means(&sums, methods, block, structure, rest));
             }
         }
     }
@@ -422,6 +453,63 @@ pub fn table(
         .map(|c| (c.name.clone(), c.frames()))
         .collect();
     Ok(Table { clips, rows })
+}
+
+/// The keypoint formats phone pose estimators hand over, which [`onto_phone_formats`] targets:
+/// COCO-17 (its thorax directly on the pelvis) and MediaPipe's 33 landmarks.
+pub const PHONE_FORMATS: [Format; 2] = [Format::Coco17, Format::BlazePose33];
+
+/// For [`GOLF_PAIRS`] pairs per golf clip and each of [`PHONE_FORMATS`]: the clip from a
+/// character in another of the training [`FORMATS`] onto a character in that format (standard
+/// rest poses), every method's means, one row per format and method (block `"onto FORMAT"`).
+/// `progress` is called after each pair.
+///
+/// # Errors
+/// [`Error::NoClips`] without evaluation golf clips, else the first pair that fails.
+pub fn onto_phone_formats(
+    pool: &Pool,
+    seed: u64,
+    methods: &[Method],
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<Row>, Error> {
+    let golf: Vec<&Clip> = pool.eval.iter().filter(|c| c.has_club()).collect();
+    if golf.is_empty() {
+        return Err(Error::NoClips);
+    }
+    let mut rng = SplitRng::new(Split::Eval, seed);
+    let total = PHONE_FORMATS.len() * golf.len() * GOLF_PAIRS;
+    let (mut done, mut rows) = (0, Vec::new());
+    for (onto, block) in PHONE_FORMATS
+        .into_iter()
+        .zip(["onto COCO-17", "onto MediaPipe-33"])
+    {
+        let mut sums = vec![Sums::default(); methods.len()];
+        for clip in golf.iter().cycle().take(golf.len() * GOLF_PAIRS) {
+            let others: Vec<Format> = FORMATS.into_iter().filter(|&f| f != onto).collect();
+            let from = others[rng.rng().random_range(0..others.len())];
+            let variation = Variation::STANDARD_REST;
+            let source = Character::new(Body::sample(&variation, rng.rng()), from, true)?;
+            let target = Character::new(Body::sample(&variation, rng.rng()), onto, true)?;
+            let pair = Pair {
+                clip: clip.name.clone(),
+                golf: true,
+                source: clip.on(&source)?,
+                ground_truth: clip.on(&target)?,
+                target,
+            };
+            add_pair(&mut sums, methods, &pair)?;
+            done += 1;
+            progress(done, total);
+        }
+        rows.extend(means(
+            &sums,
+            methods,
+            block,
+            Structure::Cross,
+            "standard rest",
+        ));
+    }
+    Ok(rows)
 }
 
 /// The range of the turn [`posture_error`] gives each bone of the target's T-pose, degrees.
@@ -745,6 +833,30 @@ mod tests {
             match row.method.as_str() {
                 "analytic" => assert!(row.mean < 0.005, "{row:?}"),
                 _ => assert!(row.mean > 0.01, "{row:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn phone_formats_are_targets_of_their_own_block() {
+        let pool = synthetic_pool(1);
+        let methods = [Baseline::Analytic, Baseline::GroundTruth].map(Method::Baseline);
+        let rows = onto_phone_formats(&pool, 2, &methods, |_, _| {}).unwrap();
+        let blocks: Vec<&str> = rows.iter().map(|r| r.block).collect();
+        assert_eq!(
+            blocks,
+            [
+                "onto COCO-17",
+                "onto COCO-17",
+                "onto MediaPipe-33",
+                "onto MediaPipe-33"
+            ]
+        );
+        for row in &rows {
+            assert_eq!(row.pairs, GOLF_PAIRS);
+            match row.method.as_str() {
+                "ground truth" => assert_eq!(row.global, 0.0),
+                _ => assert!(row.global > 0.0, "{row:?}"),
             }
         }
     }
