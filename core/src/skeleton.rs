@@ -281,19 +281,13 @@ impl Skeleton {
         let n = self.len();
         let mut offsets = [Vec3::zeros(); MAX_JOINTS];
         let mut parents = [None; MAX_JOINTS];
-        for k in 0..n {
-            parents[k] = self.parent(k);
-            offsets[k] = self.offsets()[k];
-            let parent = self.parent(k).unwrap_or(0);
-            let standard = self
-                .standard_position(k)
-                .zip(self.standard_position(parent))
-                .and_then(|(a, b)| {
-                    let (bone, length) = (a - b, norm(&(a - b)));
-                    (length > 0.0).then(|| bone / length)
-                });
-            if let (true, Some(direction)) = (k > 0, standard) {
-                offsets[k] = direction * norm(&offsets[k]);
+        offsets[..n].copy_from_slice(self.offsets());
+        for (k, (parent, offset)) in parents.iter_mut().zip(&mut offsets).enumerate().take(n) {
+            *parent = self.parent(k);
+            let bone =
+                parent.and_then(|p| Some(self.standard_position(k)? - self.standard_position(p)?));
+            if let Some(bone) = bone.filter(|b| norm(b) > 0.0) {
+                *offset = bone / norm(&bone) * norm(offset);
             }
         }
         Skeleton::new(self.format, &parents[..n], &offsets[..n], self.joints())

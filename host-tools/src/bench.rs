@@ -51,8 +51,8 @@ struct DtwArgs {
     #[arg(long)]
     sweep: bool,
     /// Also write both sequences as little-endian f64, frame-major (n × dims each, `a` then
-    /// `b`), for a reference implementation to run on the same data.
-    #[arg(long)]
+    /// `b`), for a reference implementation to run on the same data (one point, not a sweep).
+    #[arg(long, conflicts_with = "sweep")]
     data_out: Option<PathBuf>,
     /// Print one JSON object instead of text.
     #[arg(long)]

@@ -468,29 +468,25 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
     }
     let pool = args.data.pool(args.seed)?;
     let bar = Progress::new(0, "pairs");
-    let mut table = metrics::table(&pool, args.seed, &methods, |done, total| {
+    let progress = |done: usize, total: usize| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
-    })?;
-    bar.set_message("onto phone formats");
-    let phone = metrics::onto_phone_formats(&pool, args.seed, &methods, |done, total| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    })?;
-    table.rows.extend(phone);
-    bar.set_message("posture error");
-    let posture = metrics::posture_error(&pool, args.seed, &methods, |done, total| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    })?;
-    bar.set_message("coach files' own rest poses");
-    let raw = match pool.raw_eval.is_empty() {
-        true => Vec::new(),
-        false => metrics::raw_rests(&pool, args.seed, &methods, |done, total| {
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
-        })?,
     };
+    let mut table = metrics::table(&pool, args.seed, &methods, progress)?;
+    // The golf blocks need golf swings, the rest-pose block BVH files: without them, left out.
+    let (mut posture, mut raw) = (Vec::new(), Vec::new());
+    if pool.eval.iter().any(|c| c.has_club()) {
+        bar.set_message("onto phone formats");
+        table.rows.extend(metrics::onto_phone_formats(
+            &pool, args.seed, &methods, progress,
+        )?);
+        bar.set_message("posture error");
+        posture = metrics::posture_error(&pool, args.seed, &methods, progress)?;
+    }
+    if !pool.raw_eval.is_empty() {
+        bar.set_message("coach files' own rest poses");
+        raw = metrics::raw_rests(&pool, args.seed, &methods, progress)?;
+    }
     bar.finish_and_clear();
     Ok(match args.json {
         true => {
@@ -506,12 +502,14 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
             }
             let (lo, hi) = metrics::POSTURE_ERROR_DEG;
             text += &table.to_string();
-            text += &format!(
-                "-- golf swings onto a T-pose with each body bone turned {lo}-{hi} degrees: how far the output moves\n{:<6} {:<14} {:>5} {:>13} {:>12}\n",
-                "pairs", "method", "n", "mean cm", "largest cm"
-            );
-            for row in &posture {
-                text += &format!("{row}\n");
+            if !posture.is_empty() {
+                text += &format!(
+                    "-- golf swings onto a T-pose with each body bone turned {lo}-{hi} degrees: how far the output moves\n{:<6} {:<14} {:>5} {:>13} {:>12}\n",
+                    "pairs", "method", "n", "mean cm", "largest cm"
+                );
+                for row in &posture {
+                    text += &format!("{row}\n");
+                }
             }
             if !raw.is_empty() {
                 text += &format!(
