@@ -48,6 +48,7 @@ pub mod blob;
 pub mod body;
 pub mod checks;
 pub mod config;
+pub mod contacts;
 pub mod detector;
 pub mod dtw;
 pub mod events;

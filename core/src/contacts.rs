@@ -1,0 +1,728 @@
+//! Golf's contacts kept on a retargeted swing: planted feet stay planted, both hands stay on
+//! one grip, the club head is at the ball at address and impact.
+//!
+//! A retargeter copies the coach's joint angles onto the student's bones; where the bodies
+//! differ, angles alone lift a planted foot, open a gap between the hands or leave the club
+//! head above the ball. [`Contacts::apply`] moves the retargeted swing back onto them, changing
+//! as few angles as it can, in three passes over the frames (in place, `O(frames · joints)`):
+//!
+//! - **Feet.** Where the coach plants a foot (its toe, else its ankle, within
+//!   [`CONTACT_HEIGHT_M`] of its lowest point over the swing and moving slower than
+//!   [`CONTACT_SPEED_M_S`] horizontally), the student's foot stays where it was at the first
+//!   frame of the contact; after a contact the correction fades out over [`RELEASE_S`], so the
+//!   foot leaves the ground without a jump. The leg reaches its goal by two-bone inverse
+//!   kinematics (hip fixed, knee in its current bend plane); the foot is carried along
+//!   unturned.
+//! - **Grip** (a golf swing: the coach's address and impact given). In every frame the two hands (the wrists where either skeleton lacks hands) are
+//!   set the coach's hand-to-hand vector apart (both hands on one grip, whatever the arms'
+//!   lengths), about the midpoint of the retargeted hands; each arm reaches by two-bone
+//!   inverse kinematics from the shoulder, and the hands, and the club on the lead hand, are
+//!   carried along unturned.
+//! - **Club** (a golf swing, onto a target that carries a club). The club is
+//!   turned about its grip, keeping its direction seen from above, so that its head is at the
+//!   coach's club head height at address and at impact (the head's centre
+//!   [`CLUB_HEAD_CLEARANCE_M`] above the floor where the coach tracks no club); the turn is
+//!   interpolated between the two, held before address and faded out over [`RELEASE_S`]
+//!   after impact.
+//!
+//! The floor is `y = 0` with `y` up, as in every reference the core retargets (the root's
+//! trajectory is scaled about the origin, so the coach's floor stays the student's). Bone
+//! lengths are kept exactly; a goal a limb cannot reach is approached as far as its length
+//! allows.
+//!
+//! ```
+//! use posecoach_core::contacts::{self, Contacts};
+//! use posecoach_core::format::Format;
+//! use posecoach_core::retarget::Analytic;
+//! use posecoach_core::skeleton::Skeleton;
+//! use posecoach_core::Vec3;
+//!
+//! let coach = Skeleton::standard(Format::H36m17).unwrap();
+//! let longer: Vec<f32> = coach.offsets().iter().map(|o| 1.1 * o.norm()).collect();
+//! let student = coach.with_bone_lengths(&longer).unwrap();
+//! let mut frames = [Vec3::zeros(); 2 * 17];
+//! coach.rest_positions(&mut frames[..17]);
+//! coach.rest_positions(&mut frames[17..]);
+//! let mut out = [Vec3::zeros(); 2 * 17];
+//! let analytic = Analytic::new(&coach, &student).unwrap();
+//! for (from, to) in frames.chunks_exact(17).zip(out.chunks_exact_mut(17)) {
+//!     analytic.frame(from, to).unwrap();
+//! }
+//! let kept = Contacts::new(&coach, &student);
+//! kept.apply(contacts::frames(&frames, 17), 30.0, None, &mut out).unwrap();
+//! ```
+
+use crate::config::MAX_JOINTS;
+use crate::joint::Joint;
+use crate::kinematics::{swing, LengthError};
+use crate::math::norm;
+use crate::skeleton::Skeleton;
+use crate::{Quat, Vec3};
+
+/// A coach's foot counts as planted within this height above its lowest point (metres)...
+pub const CONTACT_HEIGHT_M: f32 = 0.03;
+/// ...while it moves slower than this horizontally (m/s).
+pub const CONTACT_SPEED_M_S: f32 = 0.3;
+/// A correction fades out over this long after its contact ends (seconds): about the time a
+/// foot takes to leave the ground.
+pub const RELEASE_S: f32 = 0.1;
+/// The club head's centre above the floor at the ball, for a coach that tracks no club
+/// (metres): half an iron's head.
+pub const CLUB_HEAD_CLEARANCE_M: f32 = 0.03;
+
+/// Why contacts could not be applied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ContactError {
+    /// The student's frames do not fill whole frames of its skeleton.
+    Length(LengthError),
+    /// The address or impact frame is outside the swing, or impact is not after address.
+    Events,
+}
+
+impl core::fmt::Display for ContactError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ContactError::Length(e) => e.fmt(f),
+            ContactError::Events => f.write_str("address and impact are not frames of the swing"),
+        }
+    }
+}
+
+impl core::error::Error for ContactError {}
+
+/// Two bones, `root → middle → end`, turned as one by [`Limb::reach`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Limb {
+    root: usize,
+    middle: usize,
+    end: usize,
+    /// The joints below `end` (bit `k` = joint `k`), carried along with it.
+    below: u64,
+}
+
+impl Limb {
+    /// The limb ending at `end`, if `end`'s parent's parent is its root and the middle joint
+    /// has no other child (so turning the two bones moves nothing else).
+    fn new(skeleton: &Skeleton, end: Joint) -> Option<Limb> {
+        let end = skeleton.index_of(end)?;
+        let middle = skeleton.parent(end)?;
+        let root = skeleton.parent(middle)?;
+        let only_child =
+            (0..skeleton.len()).all(|k| k == end || skeleton.parent(k) != Some(middle));
+        only_child.then(|| Limb {
+            root,
+            middle,
+            end,
+            below: below(skeleton, end),
+        })
+    }
+
+    /// Turns the two bones so that `end` reaches `goal`, or comes as near as the bones'
+    /// lengths allow, keeping the plane the limb bends in; the joints below `end` are moved
+    /// by the same amount as `end`.
+    fn reach(&self, frame: &mut [Vec3], goal: Vec3) {
+        let (s, m, e) = (frame[self.root], frame[self.middle], frame[self.end]);
+        let (a, b) = (norm(&(m - s)), norm(&(e - m)));
+        let to = goal - s;
+        let distance = norm(&to);
+        if distance < MIN_LENGTH || a < MIN_LENGTH || b < MIN_LENGTH {
+            return;
+        }
+        let u = to / distance;
+        let d = distance.clamp((a - b).abs() + MIN_LENGTH, a + b - MIN_LENGTH);
+        // The middle joint: `x` along the root-to-goal line, `h` off it towards the current
+        // bend.
+        let x = (a * a - b * b + d * d) / (2.0 * d);
+        let h = crate::math::sqrt((a * a - x * x).max(0.0));
+        let bend = bend_direction(m - s, e - s, u);
+        let end = s + u * d;
+        frame[self.middle] = s + u * x + bend * h;
+        let moved = end - e;
+        frame[self.end] = end;
+        for (k, p) in frame.iter_mut().enumerate() {
+            if self.below & (1 << k) != 0 {
+                *p += moved;
+            }
+        }
+    }
+}
+
+/// Limb lengths and distances below this (metres) give no direction.
+const MIN_LENGTH: f32 = 1e-6;
+
+/// The unit direction, across `u`, in which a limb whose middle joint is at `middle` and end
+/// at `end` (both from its root) bends: the middle joint's, else the end's, else any.
+fn bend_direction(middle: Vec3, end: Vec3, u: Vec3) -> Vec3 {
+    let across = |v: Vec3| v - u * u.dot(&v);
+    for v in [
+        across(middle),
+        across(-end),
+        u.cross(&Vec3::x()),
+        u.cross(&Vec3::z()),
+    ] {
+        let n = norm(&v);
+        if n > MIN_LENGTH {
+            return v / n;
+        }
+    }
+    Vec3::zeros()
+}
+
+/// The joints below `k` in `skeleton` (bit `j` = joint `j`; `k` itself not included).
+fn below(skeleton: &Skeleton, k: usize) -> u64 {
+    (0..skeleton.len())
+        .filter(|&j| j != k && skeleton.ancestry(j).any(|a| a == k))
+        .fold(0, |mask, j| mask | 1 << j)
+}
+
+/// A foot: the student's leg, the joint that touches the ground on both sides (toe, else
+/// ankle) and the coach's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Foot {
+    leg: Limb,
+    /// The student's joint that stays where the coach's is planted.
+    contact: usize,
+    /// The coach's joint whose contact decides.
+    coach: usize,
+}
+
+/// Both hands on the grip: the student's arms, left then right, and the joints whose gap is
+/// kept, on both sides (hands where both skeletons have them, else wrists).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Grip {
+    arms: [Limb; 2],
+    coach: [usize; 2],
+    student: [usize; 2],
+}
+
+/// The club on the student: its grip, and what turns with it about the grip.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Club {
+    grip: usize,
+    head: usize,
+    /// The joints below the grip, the head among them.
+    below: u64,
+    /// The coach's club head, if the coach tracks a club.
+    coach_head: Option<usize>,
+}
+
+/// Golf's contacts for one coach skeleton and one student skeleton; which ones apply depends
+/// on the joints both have (a student format without feet has no feet to plant).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Contacts {
+    student_joints: usize,
+    feet: [Option<Foot>; 2],
+    grip: Option<Grip>,
+    club: Option<Club>,
+}
+
+impl Contacts {
+    /// The contacts between `coach`, whose motion was retargeted, and `student`, whose
+    /// skeleton the retargeted swing is on.
+    pub fn new(coach: &Skeleton, student: &Skeleton) -> Contacts {
+        let foot = |toe: Joint, ankle: Joint| {
+            Some(Foot {
+                leg: Limb::new(student, ankle)?,
+                contact: student.find(&[toe, ankle])?,
+                coach: coach.find(&[toe, ankle])?,
+            })
+        };
+        let arms = [Joint::LeftWrist, Joint::RightWrist].map(|w| Limb::new(student, w));
+        // The hands where both skeletons have them, else the wrists.
+        let both = |l: Joint, r: Joint| {
+            Some([
+                [coach.index_of(l)?, coach.index_of(r)?],
+                [student.index_of(l)?, student.index_of(r)?],
+            ])
+        };
+        let hands = both(Joint::LeftHand, Joint::RightHand)
+            .or_else(|| both(Joint::LeftWrist, Joint::RightWrist));
+        let grip = match (arms, hands) {
+            ([Some(l), Some(r)], Some([coach, student])) => Some(Grip {
+                arms: [l, r],
+                coach,
+                student,
+            }),
+            _ => None,
+        };
+        let club = match (
+            student.index_of(Joint::ClubGrip),
+            student.index_of(Joint::ClubHead),
+        ) {
+            (Some(grip), Some(head)) if student.parent(head) == Some(grip) => Some(Club {
+                grip,
+                head,
+                below: below(student, grip),
+                coach_head: coach.index_of(Joint::ClubHead),
+            }),
+            _ => None,
+        };
+        Contacts {
+            student_joints: student.len(),
+            feet: [
+                foot(Joint::LeftToe, Joint::LeftAnkle),
+                foot(Joint::RightToe, Joint::RightAnkle),
+            ],
+            grip,
+            club,
+        }
+    }
+
+    /// These contacts without the body's: only the club is put at the ball (a motion whose
+    /// body is right but whose club, of another length, misses it).
+    pub fn club_only(self) -> Contacts {
+        Contacts {
+            feet: [None; 2],
+            grip: None,
+            ..self
+        }
+    }
+
+    /// Whether the student's feet, grip and club have contacts to keep, in that order.
+    pub fn kept(&self) -> [bool; 3] {
+        [
+            self.feet.iter().any(Option::is_some),
+            self.grip.is_some(),
+            self.club.is_some(),
+        ]
+    }
+
+    /// Moves `student` (the coach's motion retargeted onto the student, frame after frame)
+    /// onto the contacts of `coach`, the coach's motion it came from at `rate_hz`:
+    /// `coach(f, k)` is the coach's joint `k` in frame `f` ([`frames`] reads a slice), for
+    /// every frame of `student`. `swing`, the coach's address and impact frames, says the
+    /// motion is a golf swing: without it only the feet are kept (hands on a grip and a club at
+    /// the ball are golf's).
+    ///
+    /// # Errors
+    /// [`ContactError::Length`] if `student` is not whole frames of its skeleton,
+    /// [`ContactError::Events`] if address or impact is not a frame or impact is not after
+    /// address. Nothing is written then.
+    pub fn apply(
+        &self,
+        coach: impl Fn(usize, usize) -> Vec3,
+        rate_hz: f32,
+        swing: Option<[usize; 2]>,
+        student: &mut [Vec3],
+    ) -> Result<(), ContactError> {
+        let m = self.student_joints;
+        if m == 0 || !student.len().is_multiple_of(m) {
+            return Err(ContactError::Length(LengthError {
+                expected: m,
+                actual: student.len(),
+            }));
+        }
+        let frames = student.len() / m;
+        if let Some([address, impact]) = swing {
+            if address >= impact || impact >= frames {
+                return Err(ContactError::Events);
+            }
+        }
+        let release = libm::roundf(RELEASE_S * rate_hz.max(0.0)).max(1.0) as usize;
+        for foot in self.feet.iter().flatten() {
+            plant(foot, &coach, rate_hz, release, student, m);
+        }
+        let Some(swing) = swing else {
+            return Ok(());
+        };
+        if let Some(grip) = &self.grip {
+            let [l, r] = grip.student;
+            for (f, to) in student.chunks_exact_mut(m).enumerate() {
+                let gap = coach(f, grip.coach[1]) - coach(f, grip.coach[0]);
+                let middle = (to[l] + to[r]) * 0.5;
+                for (arm, (hand, goal)) in grip
+                    .arms
+                    .iter()
+                    .zip([(l, middle - gap * 0.5), (r, middle + gap * 0.5)])
+                {
+                    // The wrist goes where it puts the hand on its goal, the hand unturned.
+                    let wrist = goal - (to[hand] - to[arm.end]);
+                    arm.reach(to, wrist);
+                }
+            }
+        }
+        if let Some(club) = &self.club {
+            ground(club, &coach, swing, release, student, m);
+        }
+        Ok(())
+    }
+}
+
+/// `positions` (whole frames of `joints` joints) as [`Contacts::apply`] reads a coach: joint
+/// `k` of frame `f`, zero outside them.
+pub fn frames(positions: &[Vec3], joints: usize) -> impl Fn(usize, usize) -> Vec3 + '_ {
+    move |f, k| match k < joints {
+        true => positions
+            .get(f * joints + k)
+            .copied()
+            .unwrap_or_else(Vec3::zeros),
+        false => Vec3::zeros(),
+    }
+}
+
+/// Keeps `foot` where the coach's is planted (see the module's documentation): one pass, the
+/// correction carried from frame to frame.
+fn plant(
+    foot: &Foot,
+    coach: &impl Fn(usize, usize) -> Vec3,
+    rate_hz: f32,
+    release: usize,
+    student: &mut [Vec3],
+    m: usize,
+) {
+    let planted = planted(coach, student.len() / m, foot.coach, rate_hz);
+    // The correction moving the foot, and how many frames ago its contact ended.
+    let (mut correction, mut since, mut anchor) = (Vec3::zeros(), usize::MAX, Vec3::zeros());
+    let mut was_planted = false;
+    for (f, frame) in student.chunks_exact_mut(m).enumerate() {
+        let now = planted(f);
+        let free = frame[foot.contact];
+        if now {
+            if !was_planted {
+                anchor = free + faded(correction, since, release);
+            }
+            correction = anchor - free;
+            since = 0;
+        } else if since != usize::MAX {
+            since += 1;
+        }
+        was_planted = now;
+        let moved = faded(correction, since, release);
+        if moved != Vec3::zeros() {
+            let goal = frame[foot.leg.end] + moved;
+            foot.leg.reach(frame, goal);
+        }
+    }
+}
+
+/// Whether joint `k` of the motion `at` (`at(f, k)`, as [`Contacts::apply`] reads a coach;
+/// `count` frames at `rate_hz`) is planted in frame `f`: within [`CONTACT_HEIGHT_M`] of its
+/// lowest point over all frames and moving slower than [`CONTACT_SPEED_M_S`] horizontally
+/// since the frame before (the frame after, for the first).
+pub fn planted(
+    at: &impl Fn(usize, usize) -> Vec3,
+    count: usize,
+    k: usize,
+    rate_hz: f32,
+) -> impl Fn(usize) -> bool + '_ {
+    let lowest = (0..count).map(|f| at(f, k).y).fold(f32::INFINITY, f32::min);
+    move |f: usize| {
+        let (a, b) = match f {
+            0 => (0, 1.min(count.saturating_sub(1))),
+            _ => (f - 1, f),
+        };
+        let step = at(b, k) - at(a, k);
+        let speed = libm::sqrtf(step.x * step.x + step.z * step.z) * rate_hz;
+        at(f, k).y <= lowest + CONTACT_HEIGHT_M && speed < CONTACT_SPEED_M_S
+    }
+}
+
+/// `correction` `since` frames after its contact ended, faded out linearly over `release`
+/// frames (all of it during the contact, none once faded or if there was none).
+fn faded(correction: Vec3, since: usize, release: usize) -> Vec3 {
+    match since {
+        s if s > release => Vec3::zeros(),
+        s => correction * (1.0 - s as f32 / (release + 1) as f32),
+    }
+}
+
+/// Turns the club about its grip so that its head is at the coach's height at address and
+/// impact (see the module's documentation).
+fn ground(
+    club: &Club,
+    coach: &impl Fn(usize, usize) -> Vec3,
+    [address, impact]: [usize; 2],
+    release: usize,
+    student: &mut [Vec3],
+    m: usize,
+) {
+    let turn = |f: usize| {
+        let frame = &student[f * m..(f + 1) * m];
+        let height = match club.coach_head {
+            Some(head) => coach(f, head).y,
+            None => CLUB_HEAD_CLEARANCE_M,
+        };
+        let shaft = frame[club.head] - frame[club.grip];
+        let length = norm(&shaft);
+        let across = libm::sqrtf(shaft.x * shaft.x + shaft.z * shaft.z);
+        let drop = (height - frame[club.grip].y).clamp(-length, length);
+        if across < MIN_LENGTH {
+            return Quat::identity();
+        }
+        let spread = crate::math::sqrt((length * length - drop * drop).max(0.0)) / across;
+        swing(shaft, Vec3::new(shaft.x * spread, drop, shaft.z * spread))
+    };
+    let (at_address, at_impact) = (turn(address), turn(impact));
+    for (f, frame) in student.chunks_exact_mut(m).enumerate() {
+        let q = if f <= address {
+            at_address
+        } else if f <= impact {
+            at_address.nlerp(&at_impact, (f - address) as f32 / (impact - address) as f32)
+        } else {
+            let t = ((f - impact) as f32 / (release + 1) as f32).min(1.0);
+            at_impact.nlerp(&Quat::identity(), t)
+        };
+        let grip = frame[club.grip];
+        for (k, p) in frame.iter_mut().enumerate() {
+            if club.below & (1 << k) != 0 {
+                *p = grip + q * (*p - grip);
+            }
+        }
+    }
+}
+
+/// The most joints a [`Limb`]'s or [`Club`]'s bitset can name.
+const _: () = assert!(MAX_JOINTS <= 64);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::format::Format;
+    use crate::retarget::Analytic;
+
+    extern crate std;
+    use std::vec;
+    use std::vec::Vec;
+
+    /// A coach standing still on `frames` frames, then swaying: the skeleton, its frames.
+    fn coach(format: Format, frames: usize, sway: impl Fn(usize) -> Vec3) -> (Skeleton, Vec<Vec3>) {
+        let skeleton = Skeleton::standard(format).unwrap();
+        let n = skeleton.len();
+        let mut rest = vec![Vec3::zeros(); n];
+        skeleton.rest_positions(&mut rest);
+        let floor = rest.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
+        let mut out = Vec::with_capacity(frames * n);
+        for f in 0..frames {
+            out.extend(
+                rest.iter()
+                    .map(|p| p + Vec3::new(0.0, -floor, 0.0) + sway(f)),
+            );
+        }
+        (skeleton, out)
+    }
+
+    fn retarget(coach: &Skeleton, frames: &[Vec3], student: &Skeleton) -> Vec<Vec3> {
+        let analytic = Analytic::new(coach, student).unwrap();
+        let mut out = vec![Vec3::zeros(); frames.len() / coach.len() * student.len()];
+        for (from, to) in frames
+            .chunks_exact(coach.len())
+            .zip(out.chunks_exact_mut(student.len()))
+        {
+            analytic.frame(from, to).unwrap();
+        }
+        out
+    }
+
+    /// `skeleton` with each bone `k` scaled by `factor(k)`.
+    fn scaled(skeleton: &Skeleton, factor: impl Fn(usize) -> f32) -> Skeleton {
+        let lengths: Vec<f32> = (0..skeleton.len())
+            .map(|k| norm(&skeleton.offset(k)) * factor(k))
+            .collect();
+        skeleton.with_bone_lengths(&lengths).unwrap()
+    }
+
+    fn bone_lengths(skeleton: &Skeleton, frame: &[Vec3]) -> Vec<f32> {
+        (1..skeleton.len())
+            .map(|k| norm(&(frame[k] - frame[skeleton.parent(k).unwrap()])))
+            .collect()
+    }
+
+    #[test]
+    fn every_standard_format_has_its_feet_and_grip() {
+        for format in Format::BUILT_IN {
+            let s = Skeleton::standard(format).unwrap();
+            let c = Contacts::new(&s, &s);
+            assert_eq!(c.kept()[..2], [true, true], "{format:?}");
+        }
+    }
+
+    #[test]
+    fn planted_feet_stay_while_the_hips_sway_and_bones_keep_their_lengths() {
+        // The coach's hips sway 10 cm to the side and sink 15 cm over a second; the student's
+        // legs are longer, so the analytic retargeter scales the sway and the feet slide with
+        // it.
+        let sway = |f: usize| Vec3::new(0.0033, -0.005, 0.0) * f as f32;
+        let (s, frames) = coach(Format::H36m17, 31, sway);
+        let student = scaled(&s, |k| if (1..7).contains(&k) { 1.2 } else { 1.0 });
+        // Only the hips sway: the coach's feet stay (a planted stance).
+        let mut frames = frames;
+        let feet = [
+            s.index_of(Joint::LeftAnkle).unwrap(),
+            s.index_of(Joint::RightAnkle).unwrap(),
+        ];
+        for f in 1..31 {
+            for &k in &feet {
+                frames[f * 17 + k] = frames[k];
+            }
+        }
+        let mut out = retarget(&s, &frames, &student);
+        let ankles = [
+            student.index_of(Joint::LeftAnkle).unwrap(),
+            student.index_of(Joint::RightAnkle).unwrap(),
+        ];
+        let moved = |o: &[Vec3]| norm(&(o[30 * 17 + ankles[0]] - o[ankles[0]]));
+        assert!(moved(&out) > 0.01, "the analytic retargeter's feet slide");
+        let lengths = bone_lengths(&student, &out[..17]);
+        Contacts::new(&s, &student)
+            .apply(super::frames(&frames, s.len()), 30.0, None, &mut out)
+            .unwrap();
+        for f in 0..31 {
+            for &k in &ankles {
+                assert!(norm(&(out[f * 17 + k] - out[k])) < 1e-4, "frame {f}");
+            }
+            let now = bone_lengths(&student, &out[f * 17..(f + 1) * 17]);
+            for (a, b) in now.iter().zip(&lengths) {
+                assert!((a - b).abs() < 1e-4);
+            }
+        }
+    }
+
+    #[test]
+    fn a_lifted_foot_is_released_without_a_jump() {
+        // The coach's left foot stays for 10 frames, then rises 1 cm a frame.
+        let (s, mut frames) = coach(Format::H36m17, 30, |f| {
+            Vec3::new(0.003 * f as f32, 0.0, 0.0)
+        });
+        let ankle = s.index_of(Joint::LeftAnkle).unwrap();
+        for f in 1..30 {
+            let lift = if f < 10 { 0.0 } else { 0.01 * (f - 9) as f32 };
+            frames[f * 17 + ankle] = frames[ankle] + Vec3::new(0.0, lift, 0.0);
+        }
+        let student = scaled(&s, |_| 1.15);
+        let mut out = retarget(&s, &frames, &student);
+        let free = out.clone();
+        Contacts::new(&s, &student)
+            .apply(super::frames(&frames, s.len()), 30.0, None, &mut out)
+            .unwrap();
+        let steps: Vec<f32> = (1..30)
+            .map(|f| norm(&(out[f * 17 + ankle] - out[(f - 1) * 17 + ankle])))
+            .collect();
+        let largest = steps.iter().copied().fold(0.0, f32::max);
+        let free_largest = (1..30)
+            .map(|f| norm(&(free[f * 17 + ankle] - free[(f - 1) * 17 + ankle])))
+            .fold(0.0, f32::max);
+        assert!(
+            largest < 1.5 * free_largest,
+            "{largest} against {free_largest}"
+        );
+        // Faded out: after the release the foot is the retargeter's.
+        assert!(norm(&(out[29 * 17 + ankle] - free[29 * 17 + ankle])) < 1e-6);
+    }
+
+    #[test]
+    fn the_wrists_keep_the_coachs_gap() {
+        let (s, frames) = coach(Format::H36m17, 5, |f| Vec3::new(0.0, 0.0, 0.01 * f as f32));
+        let mut frames = frames;
+        let [l, r] = [Joint::LeftWrist, Joint::RightWrist].map(|j| s.index_of(j).unwrap());
+        // Hands together in front of the chest, 8 cm apart: the arms reach forward.
+        for f in 0..5 {
+            let chest = frames[f * 17 + s.index_of(Joint::Thorax).unwrap()];
+            frames[f * 17 + l] = chest + Vec3::new(0.04, -0.2, 0.35);
+            frames[f * 17 + r] = chest + Vec3::new(-0.04, -0.2, 0.35);
+        }
+        // Not a posable pose for the coach's own arms (the elbows were left in the T-pose),
+        // but the retargeter copies the wrists' chords; the student is broader.
+        let student = scaled(&s, |k| if k >= 11 { 1.3 } else { 1.0 });
+        let mut out = retarget(&s, &frames, &student);
+        let gap = |o: &[Vec3], f: usize| o[f * 17 + r] - o[f * 17 + l];
+        assert!((norm(&gap(&out, 0)) - 0.08).abs() > 0.01);
+        let contacts = Contacts::new(&s, &student);
+        // Not a golf swing: the hands are free.
+        let mut free = out.clone();
+        contacts
+            .apply(super::frames(&frames, s.len()), 30.0, None, &mut free)
+            .unwrap();
+        for f in 0..5 {
+            assert_eq!(gap(&free, f), gap(&out, f));
+        }
+        contacts
+            .apply(
+                super::frames(&frames, s.len()),
+                30.0,
+                Some([1, 3]),
+                &mut out,
+            )
+            .unwrap();
+        for f in 0..5 {
+            assert!(norm(&(gap(&out, f) - gap(&frames, f))) < 1e-4, "frame {f}");
+        }
+    }
+
+    #[test]
+    fn the_club_head_is_at_the_coachs_height_at_address_and_impact() {
+        // The coach's club points down and forward from the grip; the student's is longer,
+        // so the analytic retargeter puts its head into the floor.
+        let (s, mut frames) = coach(Format::GolfMarkers, 20, |_| Vec3::zeros());
+        let n = s.len();
+        let [grip, head] = [Joint::ClubGrip, Joint::ClubHead].map(|j| s.index_of(j).unwrap());
+        let length = norm(&s.offset(head));
+        for f in 0..20 {
+            let down = Vec3::new(0.0, -0.95, 0.3 + 0.01 * f as f32).normalize();
+            frames[f * n + head] = frames[f * n + grip] + down * length;
+        }
+        let student = scaled(&s, |k| if k == head { 1.2 } else { 1.0 });
+        let mut out = retarget(&s, &frames, &student);
+        let contacts = Contacts::new(&s, &student);
+        assert!(contacts.kept()[2]);
+        let [address, impact] = [3, 12];
+        assert!((out[address * n + head].y - frames[address * n + head].y).abs() > 0.05);
+        contacts
+            .apply(
+                super::frames(&frames, s.len()),
+                30.0,
+                Some([address, impact]),
+                &mut out,
+            )
+            .unwrap();
+        for f in [address, impact] {
+            let missed = out[f * n + head].y - frames[f * n + head].y;
+            assert!(missed.abs() < 1e-4, "frame {f}: {missed}");
+            let shaft = norm(&(out[f * n + head] - out[f * n + grip]));
+            assert!((shaft - 1.2 * length).abs() < 1e-4);
+        }
+        assert_eq!(
+            contacts.apply(
+                super::frames(&frames, s.len()),
+                30.0,
+                Some([12, 3]),
+                &mut out
+            ),
+            Err(ContactError::Events)
+        );
+    }
+
+    proptest::proptest! {
+        /// Whatever the coach does and whatever the student's proportions, every bone keeps
+        /// its length and nothing becomes NaN.
+        #[test]
+        fn bones_keep_their_lengths(
+            steps in proptest::collection::vec((-0.05f32..0.05, -0.05f32..0.05, -0.05f32..0.05), 2..40),
+            limbs in 0.7f32..1.4,
+            address in 0usize..20,
+        ) {
+            let (s, mut frames) = coach(Format::GolfMarkers, steps.len(), |_| Vec3::zeros());
+            let n = s.len();
+            // Every joint wanders by the running sum of the steps, the feet by a tenth of it.
+            let mut drift = Vec3::zeros();
+            for (f, &(x, y, z)) in steps.iter().enumerate() {
+                drift += Vec3::new(x, y, z);
+                for k in 0..n {
+                    let share = if s.joint(k).is_some_and(|j| matches!(j, Joint::LeftAnkle | Joint::RightAnkle | Joint::LeftToe | Joint::RightToe)) { 0.1 } else { 1.0 };
+                    frames[f * n + k] += drift * share * (1.0 + k as f32 / n as f32);
+                }
+            }
+            let student = scaled(&s, |k| if k % 2 == 0 { limbs } else { 1.0 });
+            let mut out = retarget(&s, &frames, &student);
+            let lengths = bone_lengths(&student, &out[..n]);
+            let swing = (address + 1 < steps.len()).then(|| [address, steps.len() - 1]);
+            Contacts::new(&s, &student).apply(super::frames(&frames, n), 30.0, swing, &mut out).unwrap();
+            for frame in out.chunks_exact(n) {
+                proptest::prop_assert!(frame.iter().all(|p| p.iter().all(|c| c.is_finite())));
+                for (a, b) in bone_lengths(&student, frame).iter().zip(&lengths) {
+                    proptest::prop_assert!((a - b).abs() < 1e-4 * b.max(1.0), "{a} against {b}");
+                }
+            }
+        }
+    }
+}
