@@ -433,10 +433,14 @@ pub struct EvalArgs {
     /// Include the rotation copy from the format's standard T-pose.
     #[arg(long)]
     copy: bool,
-    /// Include the ground truth itself: no joint error by definition, but its own foot slide,
-    /// foot height and club head, which its convention gives.
+    /// Include the ground truth itself: no joint error by definition, but its own grip, foot
+    /// slide and club head, which its convention gives.
     #[arg(long)]
     truth: bool,
+    /// Also each method (the ground truth aside) with golf's contacts kept: planted feet, both
+    /// hands on one grip, the club head at the ball (`posecoach_core::contacts`).
+    #[arg(long)]
+    contacts: bool,
     #[command(flatten)]
     data: Data,
     /// Seeds the evaluation characters.
@@ -453,12 +457,16 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
         .iter()
         .map(|p| Retargeter::load(p).with_context(|| format!("loading {}", p.display())))
         .collect::<Result<Vec<_>>>()?;
-    let mut methods: Vec<Method> = teachers.iter().map(Method::Teacher).collect();
+    let mut retargeters: Vec<Method> = teachers.iter().map(Method::Teacher).collect();
     if args.analytic {
-        methods.push(Method::Baseline(Baseline::Analytic));
+        retargeters.push(Method::Baseline(Baseline::Analytic));
     }
     if args.copy {
-        methods.push(Method::Baseline(Baseline::RotationCopy));
+        retargeters.push(Method::Baseline(Baseline::RotationCopy));
+    }
+    let mut methods = retargeters.clone();
+    if args.contacts {
+        methods.extend(retargeters.iter().map(Method::Contacts));
     }
     if args.truth {
         methods.push(Method::Baseline(Baseline::GroundTruth));
@@ -570,10 +578,10 @@ fn table_json(table: &Table, paths: &[PathBuf], teachers: &[Retargeter]) -> Valu
                 "local_pct_height": r.local * 100.0,
                 "golf_pairs": r.golf,
                 "hand_gap_error_cm": r.hand_gap.map(|g| [g[0] * 100.0, g[1] * 100.0]),
-                "foot_slide_cm_s": r.foot_slide.map(|s| s * 100.0),
+                "foot_slide_beyond_coach_cm_s": r.foot_slide.map(|s| s * 100.0),
                 "foot_height_error_cm": r.foot_height.map(|h| h * 100.0),
                 "club_pairs": r.clubs,
-                "club_head_height_cm": r.club_head.map(|h| [h[0] * 100.0, h[1] * 100.0]),
+                "club_head_error_cm": r.club_head.map(|h| [h[0] * 100.0, h[1] * 100.0]),
             })
         })
         .collect();

@@ -139,6 +139,7 @@ fn eval_compares_a_teacher_with_the_analytic_baseline() {
         &data,
         "--synthetic",
         "1",
+        "--contacts",
         "--json",
     ]);
     let table: serde_json::Value = serde_json::from_str(&learn::eval(&args).unwrap()).unwrap();
@@ -167,7 +168,20 @@ fn eval_compares_a_teacher_with_the_analytic_baseline() {
     assert!(rows.iter().all(|r| r["foot_height_error_cm"].is_number()));
     assert!(rows
         .iter()
-        .any(|r| r["club_pairs"].as_u64().unwrap() > 0 && r["club_head_height_cm"].is_array()));
+        .any(|r| r["club_pairs"].as_u64().unwrap() > 0 && r["club_head_error_cm"].is_array()));
+    // With the contacts kept, both hands are on the coach's grip on every golf cell.
+    let kept: Vec<&serde_json::Value> = rows
+        .iter()
+        .filter(|r| r["method"] == "analytic + contacts" && r["golf_pairs"].as_u64() > Some(0))
+        .collect();
+    assert!(!kept.is_empty());
+    for row in kept {
+        let gap = &row["hand_gap_error_cm"];
+        assert!(
+            gap[0].as_f64().unwrap() < 0.2 && gap[1].as_f64().unwrap() < 0.2,
+            "{row}"
+        );
+    }
     let posture = table["posture_error"]["rows"].as_array().unwrap();
     assert_eq!(
         table["posture_error"]["turn_deg"],

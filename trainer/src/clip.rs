@@ -28,6 +28,8 @@
 use crate::bodies::Character;
 use crate::error::Error;
 use posecoach_core::config::MAX_JOINTS;
+use posecoach_core::contacts::{self, Contacts};
+use posecoach_core::events;
 use posecoach_core::joint::Joint;
 use posecoach_core::kinematics::{self, inverse, LengthError};
 use posecoach_core::retarget::RetargetError;
@@ -107,6 +109,35 @@ impl Clip {
     /// Whether the source tracks a club.
     pub fn has_club(&self) -> bool {
         self.skeleton.index_of(Joint::ClubGrip).is_some()
+    }
+
+    /// The clip as a coach on `character`: [`Clip::on`], and for a golf swing the club turned
+    /// about its grip so that its head is at the recording's ball at address and impact
+    /// ([`Contacts::club_only`], the recording on the clip's skeleton as the coach). The
+    /// rotation copy alone turns a club of another length by the recording's rotations and
+    /// misses the ball by up to a quarter of a metre, which no coach does; the body is left as
+    /// the rotation copy makes it, so joint errors, which leave the club out, are unchanged.
+    ///
+    /// # Errors
+    /// As [`Clip::on_skeleton`], [`events::detect`] (a golf swing without detectable events)
+    /// and [`Contacts::apply`].
+    pub fn coach_on(&self, character: &Character) -> Result<Motion, Error> {
+        let mut coach = self.on(character)?;
+        if !self.has_club() {
+            return Ok(coach);
+        }
+        let recording = self.on_skeleton(&self.skeleton)?;
+        let swing = events::detect(&self.skeleton, &recording.positions, self.rate_hz)?;
+        let swing = Some([swing.address(), swing.impact()]);
+        Contacts::new(&self.skeleton, &coach.skeleton)
+            .club_only()
+            .apply(
+                contacts::frames(&recording.positions, self.skeleton.len()),
+                self.rate_hz,
+                swing,
+                &mut coach.positions,
+            )?;
+        Ok(coach)
     }
 
     /// The clip on `character`: the rotation copy through canonical names (see the module).

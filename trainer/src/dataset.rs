@@ -369,7 +369,7 @@ pub fn pair_on(
     Ok(Pair {
         clip: clip.name.clone(),
         golf: club,
-        source: clip.on(&source)?,
+        source: clip.coach_on(&source)?,
         ground_truth: clip.on(&target)?,
         target,
     })

@@ -1,6 +1,7 @@
 //! The one error type of the training data pipeline, wrapping the core's and the adapters'.
 
 use crate::golfgen::GenError;
+use posecoach_core::contacts::ContactError;
 use posecoach_core::events::EventError;
 use posecoach_core::kinematics::LengthError;
 use posecoach_core::retarget::RetargetError;
@@ -20,8 +21,10 @@ pub enum Error {
     Length(LengthError),
     /// The analytic retargeter refused a skeleton or frame.
     Retarget(RetargetError),
-    /// Swing events could not be found in a ground truth.
+    /// Swing events could not be found in a coach's or ground truth's swing.
     Events(EventError),
+    /// Golf's contacts could not be applied to a retargeted swing.
+    Contacts(ContactError),
     /// Two motions compared frame by frame differ in frames or joints.
     #[allow(missing_docs)]
     Mismatch { expected: usize, actual: usize },
@@ -53,6 +56,7 @@ impl fmt::Display for Error {
             Error::Length(e) => write!(f, "frame: {e}"),
             Error::Retarget(e) => write!(f, "analytic retargeter: {e}"),
             Error::Events(e) => write!(f, "swing events: {e}"),
+            Error::Contacts(e) => write!(f, "contacts: {e}"),
             Error::Mismatch { expected, actual } => write!(
                 f,
                 "motions differ in size: expected {expected} samples, got {actual}"
@@ -84,5 +88,5 @@ macro_rules! from {
 }
 
 from!(FileError => File, SkeletonError => Skeleton, LengthError => Length,
-      RetargetError => Retarget, EventError => Events, GenError => Golf,
+      RetargetError => Retarget, EventError => Events, ContactError => Contacts, GenError => Golf,
       LimitError => Limit, TeachFileError => TeachFile);

@@ -5,18 +5,21 @@
 //!   with the root moved to the origin in every frame. Joints are the target's body joints with
 //!   a canonical name the source also has (a joint the source format lacks, such as COCO's
 //!   missing toes, cannot be retargeted by anyone, and the club is not body).
-//! - **Hand gap** (golf): how far apart the two hands (else wrists) are on the grip, at address
-//!   and impact as [`events::detect`] finds them in the ground truth; the error is the absolute
-//!   difference of the gaps, metres.
-//! - **Foot slide**: the mean horizontal speed (m/s) of each foot (toe, else ankle) over the
-//!   frames where it is planted in the ground truth: within [`CONTACT_HEIGHT_M`] of its lowest
-//!   point and slower than [`CONTACT_SPEED_M_S`] there.
-//! - **Foot height**: over the same frames, the mean distance (m) between each foot's height
-//!   and the ground truth's: a planted foot off the ground or in it.
-//! - **Club head** (golf, targets that carry a club): the club head's height (m) above the
-//!   floor (`y = 0`, where every clip and character stands) at the ground truth's address and
-//!   impact, where the club is at the ball. It needs no ground truth: a right answer has it at
-//!   the ground for the target's own club.
+//! - **Grip** (golf): how far apart the two hands (else wrists, where either side lacks hands)
+//!   are, at address and impact as [`events::detect`] finds them in the coach (else the ground
+//!   truth); the
+//!   error is the absolute difference from the coach's gap, metres (both hands on one grip,
+//!   whatever the arms' lengths).
+//! - **Foot slide**: over the frames where the coach (the source) plants a foot (its toe, else
+//!   ankle: [`contacts::planted`]), the mean horizontal speed (m/s) of the output's foot less
+//!   the coach's own there.
+//! - **Foot height**: over the same frames, the mean distance (m) between the output's foot
+//!   height and the ground truth's: a planted foot off the ground or in it.
+//! - **Club head** (golf, targets that carry a club): the distance (m) of the club head's
+//!   height from the coach's club head height at the same address and impact, where the
+//!   club is at the ball (from [`CLUB_HEAD_CLEARANCE_M`] above the floor where the coach
+//!   tracks no club). It needs no ground truth, whose club, turned by the coach's rotations
+//!   on another club length, misses the ball.
 //! - **Posture error** ([`posture_error`]): how far the output moves (mean joint distance, m)
 //!   when the target's T-pose has each body bone turned by 3-8°, as a phone's estimate of a
 //!   student's T-pose has: a right answer takes the target's bone lengths from its T-pose, not
@@ -27,6 +30,7 @@ use crate::clip::{motion, standard_rest, Clip};
 use crate::dataset::{pair_on, Pair, Pool, Split, SplitRng, Structure, FORMATS};
 use crate::error::Error;
 use crate::infer::Retargeter;
+use posecoach_core::contacts::{self, Contacts, CLUB_HEAD_CLEARANCE_M};
 use posecoach_core::events::{self, SwingEvents};
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
@@ -35,11 +39,6 @@ use posecoach_core::Vec3;
 use posecoach_io::Motion;
 use rand::Rng;
 
-/// A foot counts as planted within this height above its lowest point (metres)...
-pub const CONTACT_HEIGHT_M: f32 = 0.03;
-/// ...while it moves slower than this (m/s, horizontal).
-pub const CONTACT_SPEED_M_S: f32 = 0.3;
-
 /// How one retargeted motion compares with the ground truth.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Metrics {
@@ -47,51 +46,59 @@ pub struct Metrics {
     pub global: f32,
     /// The same with the root at the origin in every frame.
     pub local: f32,
-    /// Hand-gap error at address and impact (metres), for golf swings.
+    /// Hand-gap error against the coach's at address and impact (metres), for golf swings.
     pub hand_gap: Option<[f32; 2]>,
-    /// Mean horizontal speed of the feet where the ground truth plants them (m/s).
+    /// Mean horizontal speed of the feet where the coach plants them, less the coach's (m/s).
     pub foot_slide: Option<f32>,
     /// Mean distance of those feet's heights from the ground truth's there (metres).
     pub foot_height: Option<f32>,
-    /// The club head's height above the floor at address and impact (metres), for golf
-    /// swings onto a target with a club.
+    /// The club head's height error against the coach's at address and impact (metres), for
+    /// golf swings onto a target with a club.
     pub club_head: Option<[f32; 2]>,
 }
 
-/// Compares `retargeted` (on the pair's target skeleton) with the pair's ground truth.
+/// Compares `retargeted` (on the pair's target skeleton) with the pair's ground truth and,
+/// for what needs no convention, with the coach (the pair's source).
 ///
 /// # Errors
-/// [`Error::Mismatch`] if the two motions differ in size; [`Error::Events`] if a golf pair's
-/// ground truth has no detectable swing.
+/// [`Error::Mismatch`] if the motions differ in size; [`Error::Events`] if neither a golf
+/// pair's coach nor its ground truth has a detectable swing (its address and impact are where
+/// the grip and the club head are measured).
 pub fn evaluate(pair: &Pair, retargeted: &Motion) -> Result<Metrics, Error> {
-    let truth = &pair.ground_truth;
+    let (truth, coach) = (&pair.ground_truth, &pair.source);
+    for m in [retargeted, coach] {
+        if m.frames() != truth.frames() {
+            return Err(Error::Mismatch {
+                expected: truth.frames(),
+                actual: m.frames(),
+            });
+        }
+    }
     if retargeted.positions.len() != truth.positions.len() {
         return Err(Error::Mismatch {
             expected: truth.positions.len(),
             actual: retargeted.positions.len(),
         });
     }
-    let joints = scored_joints(&pair.source.skeleton, &truth.skeleton);
+    let joints = scored_joints(&coach.skeleton, &truth.skeleton);
     let height = truth.skeleton.height();
+    // The coach's address and impact, where its club is at the ball; the ground truth's for
+    // a coach whose swing the detector does not find.
+    let detect = |m: &Motion| events::detect(&m.skeleton, &m.positions, m.rate_hz);
     let swing = match pair.golf {
-        true => Some(events::detect(
-            &truth.skeleton,
-            &truth.positions,
-            truth.rate_hz,
-        )?),
+        true => Some(detect(coach).or_else(|_| detect(truth))?),
         false => None,
     };
-    let (foot_slide, foot_height) = planted_feet(truth, retargeted);
+    let (foot_slide, foot_height) = planted_feet(coach, truth, retargeted);
     Ok(Metrics {
         global: joint_error(truth, retargeted, &joints, false) / height,
         local: joint_error(truth, retargeted, &joints, true) / height,
         hand_gap: swing
             .as_ref()
-            .map(|s| hand_gap_error(truth, retargeted, s))
-            .transpose()?,
+            .and_then(|s| hand_gap_error(coach, retargeted, s)),
         foot_slide,
         foot_height,
-        club_head: swing.as_ref().and_then(|s| club_head(retargeted, s)),
+        club_head: swing.as_ref().and_then(|s| club_head(coach, retargeted, s)),
     })
 }
 
@@ -128,29 +135,30 @@ fn joint_error(truth: &Motion, other: &Motion, joints: &[usize], local: bool) ->
     (sum / count as f64) as f32
 }
 
-/// The two hands' joints (hands, else wrists).
-fn hands(skeleton: &Skeleton) -> Option<[usize; 2]> {
-    Some([
-        skeleton.find(&[Joint::LeftHand, Joint::LeftWrist])?,
-        skeleton.find(&[Joint::RightHand, Joint::RightWrist])?,
-    ])
+/// The two hands' joints in `a` and in `b`: hands where both have them, else wrists.
+fn hands(a: &Skeleton, b: &Skeleton) -> Option<[[usize; 2]; 2]> {
+    let both = |l: Joint, r: Joint| {
+        Some([
+            [a.index_of(l)?, a.index_of(r)?],
+            [b.index_of(l)?, b.index_of(r)?],
+        ])
+    };
+    both(Joint::LeftHand, Joint::RightHand).or_else(|| both(Joint::LeftWrist, Joint::RightWrist))
 }
 
-/// Hand-gap errors at the ground truth's address and impact (`swing`, its events).
-fn hand_gap_error(truth: &Motion, other: &Motion, swing: &SwingEvents) -> Result<[f32; 2], Error> {
-    let [l, r] = hands(&truth.skeleton).ok_or(Error::Events(events::EventError::MissingJoint(
-        Joint::LeftWrist,
-    )))?;
-    let gap = |m: &Motion, f: usize| (m.frame(f)[l] - m.frame(f)[r]).norm();
-    Ok([swing.address(), swing.impact()].map(|f| (gap(other, f) - gap(truth, f)).abs()))
+/// Hand-gap errors of `other` against `coach` at `swing`'s address and impact.
+fn hand_gap_error(coach: &Motion, other: &Motion, swing: &SwingEvents) -> Option<[f32; 2]> {
+    let [c, o] = hands(&coach.skeleton, &other.skeleton)?;
+    let gap = |m: &Motion, [l, r]: [usize; 2], f: usize| (m.frame(f)[l] - m.frame(f)[r]).norm();
+    Some([swing.address(), swing.impact()].map(|f| (gap(other, o, f) - gap(coach, c, f)).abs()))
 }
 
-/// The feet's joints (toes, else ankles).
-fn feet(skeleton: &Skeleton) -> Option<[usize; 2]> {
-    Some([
-        skeleton.find(&[Joint::LeftToe, Joint::LeftAnkle])?,
-        skeleton.find(&[Joint::RightToe, Joint::RightAnkle])?,
-    ])
+/// A foot's joint (toe, else ankle) in `skeleton`, left then right.
+fn feet(skeleton: &Skeleton) -> [Option<usize>; 2] {
+    [
+        skeleton.find(&[Joint::LeftToe, Joint::LeftAnkle]),
+        skeleton.find(&[Joint::RightToe, Joint::RightAnkle]),
+    ]
 }
 
 /// Horizontal speed of joint `k` of `m` between frames `f - 1` and `f`.
@@ -159,35 +167,36 @@ fn horizontal_speed(m: &Motion, k: usize, f: usize) -> f32 {
     (d.x * d.x + d.z * d.z).sqrt() * m.rate_hz
 }
 
-/// Over the frames where `truth` plants a foot: the mean horizontal speed of `other`'s foot
-/// there, and the mean distance of its height from `truth`'s.
-fn planted_feet(truth: &Motion, other: &Motion) -> (Option<f32>, Option<f32>) {
-    let Some(feet) = feet(&truth.skeleton) else {
-        return (None, None);
-    };
-    let (mut speeds, mut heights) = (Vec::new(), Vec::new());
-    for foot in feet {
-        let lowest = (0..truth.frames())
-            .map(|f| truth.frame(f)[foot].y)
-            .fold(f32::INFINITY, f32::min);
-        for f in 1..truth.frames() {
-            if truth.frame(f)[foot].y <= lowest + CONTACT_HEIGHT_M
-                && horizontal_speed(truth, foot, f) < CONTACT_SPEED_M_S
-            {
-                speeds.push(horizontal_speed(other, foot, f));
-                heights.push((other.frame(f)[foot].y - truth.frame(f)[foot].y).abs());
-            }
+/// Over the frames where `coach` plants a foot: the mean horizontal speed of `other`'s foot
+/// there less the coach's, and the mean distance of its height from `truth`'s.
+fn planted_feet(coach: &Motion, truth: &Motion, other: &Motion) -> (Option<f32>, Option<f32>) {
+    let (mut slide, mut heights) = (Vec::new(), Vec::new());
+    let n = coach.skeleton.len();
+    for (c, o) in feet(&coach.skeleton).into_iter().zip(feet(&other.skeleton)) {
+        let (Some(c), Some(o)) = (c, o) else {
+            continue;
+        };
+        let at = contacts::frames(&coach.positions, n);
+        let planted = contacts::planted(&at, coach.frames(), c, coach.rate_hz);
+        for f in (1..coach.frames()).filter(|&f| planted(f)) {
+            slide.push(horizontal_speed(other, o, f) - horizontal_speed(coach, c, f));
+            heights.push((other.frame(f)[o].y - truth.frame(f)[o].y).abs());
         }
     }
     let mean = |v: &[f32]| (!v.is_empty()).then(|| v.iter().sum::<f32>() / v.len() as f32);
-    (mean(&speeds), mean(&heights))
+    (mean(&slide), mean(&heights))
 }
 
-/// The club head's height above the floor in `m` at `swing`'s address and impact, if `m`
-/// carries a club.
-fn club_head(m: &Motion, swing: &SwingEvents) -> Option<[f32; 2]> {
-    let head = m.skeleton.index_of(Joint::ClubHead)?;
-    Some([swing.address(), swing.impact()].map(|f| m.frame(f)[head].y))
+/// How far the club head's height in `other` is from the coach's at `swing`'s address and
+/// impact ([`CLUB_HEAD_CLEARANCE_M`] where the coach tracks no club), if `other` carries a
+/// club.
+fn club_head(coach: &Motion, other: &Motion, swing: &SwingEvents) -> Option<[f32; 2]> {
+    let head = other.skeleton.index_of(Joint::ClubHead)?;
+    let coach_head = coach.skeleton.index_of(Joint::ClubHead);
+    Some([swing.address(), swing.impact()].map(|f| {
+        let reference = coach_head.map_or(CLUB_HEAD_CLEARANCE_M, |h| coach.frame(f)[h].y);
+        (other.frame(f)[head].y - reference).abs()
+    }))
 }
 
 /// A way of retargeting a pair's source onto its target.
@@ -247,6 +256,8 @@ pub enum Method<'a> {
     Baseline(Baseline),
     /// A trained teacher.
     Teacher(&'a Retargeter),
+    /// A method's output moved onto golf's contacts ([`Contacts`]).
+    Contacts(&'a Method<'a>),
 }
 
 impl Method<'_> {
@@ -255,6 +266,7 @@ impl Method<'_> {
         match self {
             Method::Baseline(b) => b.name().to_string(),
             Method::Teacher(t) => t.name.clone(),
+            Method::Contacts(m) => format!("{} + contacts", m.name()),
         }
     }
 
@@ -266,6 +278,24 @@ impl Method<'_> {
         match self {
             Method::Baseline(b) => b.retarget(pair),
             Method::Teacher(t) => t.retarget(&pair.source, &pair.target.skeleton),
+            Method::Contacts(m) => {
+                let mut out = m.retarget(pair)?;
+                let coach = &pair.source;
+                // A coach without a detectable swing keeps only its feet, as on the device.
+                let events = match pair.golf {
+                    true => events::detect(&coach.skeleton, &coach.positions, coach.rate_hz)
+                        .ok()
+                        .map(|s| [s.address(), s.impact()]),
+                    false => None,
+                };
+                Contacts::new(&coach.skeleton, &out.skeleton).apply(
+                    contacts::frames(&coach.positions, coach.skeleton.len()),
+                    coach.rate_hz,
+                    events,
+                    &mut out.positions,
+                )?;
+                Ok(out)
+            }
         }
     }
 }
@@ -290,15 +320,15 @@ pub struct Row {
     pub local: f32,
     /// Golf pairs.
     pub golf: usize,
-    /// Mean hand-gap errors at address and impact, metres.
+    /// Mean hand-gap errors against the coach's at address and impact, metres.
     pub hand_gap: Option<[f32; 2]>,
-    /// Mean foot slide, metres per second.
+    /// Mean foot slide beyond the coach's where the coach plants a foot, metres per second.
     pub foot_slide: Option<f32>,
-    /// Mean foot height error where the ground truth plants a foot, metres.
+    /// Mean foot height error there against the ground truth, metres.
     pub foot_height: Option<f32>,
     /// Golf pairs whose target carries a club.
     pub clubs: usize,
-    /// The club head's mean distance from the floor at address and impact, metres.
+    /// The club head's mean height error against the coach's at address and impact, metres.
     pub club_head: Option<[f32; 2]>,
 }
 
@@ -343,8 +373,8 @@ impl Sums {
         }
         if let Some([a, i]) = m.club_head {
             self.clubs += 1;
-            self.head[0] += a.abs();
-            self.head[1] += i.abs();
+            self.head[0] += a;
+            self.head[1] += i;
         }
     }
 
@@ -493,7 +523,7 @@ pub fn onto_phone_formats(
             let pair = Pair {
                 clip: clip.name.clone(),
                 golf: true,
-                source: clip.on(&source)?,
+                source: clip.coach_on(&source)?,
                 ground_truth: clip.on(&target)?,
                 target,
             };
@@ -735,7 +765,7 @@ impl std::fmt::Display for Table {
             "golf",
             "gap@addr cm",
             "gap@imp cm",
-            "slide cm/s",
+            "slide+ cm/s",
             "foot y cm",
             "clubs",
             "head@addr cm",
@@ -862,7 +892,7 @@ mod tests {
     }
 
     #[test]
-    fn a_club_head_on_the_floor_at_address_and_impact_reads_zero() {
+    fn the_club_head_reads_its_distance_from_the_coachs() {
         let pool = synthetic_pool(1);
         let clip = &pool.eval[0];
         let mut rng = SplitRng::new(Split::Eval, 4);
@@ -873,20 +903,24 @@ mod tests {
         pair.target =
             Character::new(body, posecoach_core::format::Format::Canonical, true).unwrap();
         pair.ground_truth = clip.on(&pair.target).unwrap();
-        let truth = &pair.ground_truth;
-        let swing = events::detect(&truth.skeleton, &truth.positions, truth.rate_hz).unwrap();
+        let (truth, coach) = (&pair.ground_truth, &pair.source);
+        let swing = events::detect(&coach.skeleton, &coach.positions, coach.rate_hz).unwrap();
+        let reference = |f: usize| match coach.skeleton.index_of(Joint::ClubHead) {
+            Some(h) => coach.frame(f)[h].y,
+            None => CLUB_HEAD_CLEARANCE_M,
+        };
         let head = truth.skeleton.index_of(Joint::ClubHead).unwrap();
         let mut grounded = truth.clone();
         let n = grounded.skeleton.len();
         for f in [swing.address(), swing.impact()] {
-            grounded.positions[f * n + head].y = 0.0;
+            grounded.positions[f * n + head].y = reference(f);
         }
         assert_eq!(
             evaluate(&pair, &grounded).unwrap().club_head,
             Some([0.0, 0.0])
         );
         // Raised 5 cm at address, the head reads 5 cm there.
-        grounded.positions[swing.address() * n + head].y = 0.05;
+        grounded.positions[swing.address() * n + head].y += 0.05;
         let raised = evaluate(&pair, &grounded).unwrap().club_head.unwrap();
         assert!(
             (raised[0] - 0.05).abs() < 1e-6 && raised[1] == 0.0,
@@ -898,6 +932,42 @@ mod tests {
         lifted.positions.iter_mut().for_each(|p| p.y += 0.02);
         let height = evaluate(&pair, &lifted).unwrap().foot_height.unwrap();
         assert!((height - 0.02).abs() < 1e-5, "{height}");
+    }
+
+    #[test]
+    fn contacts_keep_the_grip_the_planted_feet_and_the_club_head() {
+        // Across formats with varied bodies: the analytic retargeter misses every contact
+        // somewhere; with the contacts kept the grip and club head are the coach's and the
+        // feet slide no more than the coach's.
+        let pool = synthetic_pool(2);
+        let analytic = Method::Baseline(Baseline::Analytic);
+        let methods = [analytic, Method::Contacts(&analytic)];
+        let mut rng = SplitRng::new(Split::Eval, 6);
+        let mut before = [0.0f32; 3];
+        for clip in &pool.eval {
+            for structure in [Structure::Intra, Structure::Cross] {
+                let mut pair =
+                    pair_on(clip, &mut rng, structure, &Variation::STANDARD_REST).unwrap();
+                let body = crate::bodies::Body::sample(&Variation::STANDARD_REST, rng.rng());
+                pair.target = Character::new(body, Format::GolfMarkers, true).unwrap();
+                pair.ground_truth = clip.on(&pair.target).unwrap();
+                let [free, kept] =
+                    methods.map(|m| evaluate(&pair, &m.retarget(&pair).unwrap()).unwrap());
+                let (gap, head) = (kept.hand_gap.unwrap(), kept.club_head.unwrap());
+                assert!(gap[0].max(gap[1]) < 1e-4, "{gap:?}");
+                assert!(head[0].max(head[1]) < 1e-3, "{head:?}");
+                assert!(kept.foot_slide.unwrap() <= 0.005, "{kept:?}");
+                let free_gap = free.hand_gap.unwrap();
+                before[0] = before[0].max(free_gap[0].max(free_gap[1]));
+                before[1] = before[1].max(free.foot_slide.unwrap());
+                let free_head = free.club_head.unwrap();
+                before[2] = before[2].max(free_head[0].max(free_head[1]));
+            }
+        }
+        assert!(
+            before[0] > 0.005 && before[1] > 0.005 && before[2] > 0.01,
+            "{before:?}"
+        );
     }
 
     #[test]
