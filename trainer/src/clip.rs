@@ -28,7 +28,7 @@
 use crate::bodies::Character;
 use crate::error::Error;
 use posecoach_core::config::MAX_JOINTS;
-use posecoach_core::contacts::{self, Contacts};
+use posecoach_core::contacts::{self, Contacts, Kept, Swing};
 use posecoach_core::events;
 use posecoach_core::joint::Joint;
 use posecoach_core::kinematics::{self, inverse, LengthError};
@@ -113,7 +113,7 @@ impl Clip {
 
     /// The clip as a coach on `character`: [`Clip::on`], and for a golf swing the club turned
     /// about its grip so that its head is at the recording's ball at address and impact
-    /// ([`Contacts::club_only`], the recording on the clip's skeleton as the coach). The
+    /// ([`Kept::CLUB`], the recording on the clip's skeleton as the coach). The
     /// rotation copy alone turns a club of another length by the recording's rotations and
     /// misses the ball by up to a quarter of a metre, which no coach does; the body is left as
     /// the rotation copy makes it, so joint errors, which leave the club out, are unchanged.
@@ -128,9 +128,9 @@ impl Clip {
         }
         let recording = self.on_skeleton(&self.skeleton)?;
         let swing = events::detect(&self.skeleton, &recording.positions, self.rate_hz)?;
-        let swing = Some([swing.address(), swing.impact()]);
+        let swing = Some(Swing::from(&swing));
         Contacts::new(&self.skeleton, &coach.skeleton)
-            .club_only()
+            .keeping(Kept::CLUB)
             .apply(
                 contacts::frames(&recording.positions, self.skeleton.len()),
                 self.rate_hz,
