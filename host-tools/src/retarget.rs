@@ -3,6 +3,7 @@
 use crate::failure::Usage;
 use crate::{input, teacher};
 use anyhow::Result;
+use posecoach_core::contacts::Kept;
 use posecoach_io as io;
 use serde_json::json;
 use std::path::PathBuf;
@@ -25,6 +26,10 @@ pub struct Args {
     /// the `learn` feature).
     #[arg(long)]
     weights: Option<PathBuf>,
+    /// Leave the motion as the retargeter makes it, off golf's contacts (planted feet, both
+    /// hands on one grip, the club head at the ball: kept by default).
+    #[arg(long)]
+    no_contacts: bool,
     #[command(flatten)]
     input: input::Args,
     /// Print one JSON object instead of text.
@@ -43,7 +48,7 @@ pub fn run(args: &Args) -> Result<String> {
     }
     let coach = args.input.load(&args.coach)?;
     let student = args.input.load(&args.student_tpose)?;
-    let (virtual_swing, method) = match &args.weights {
+    let (mut virtual_swing, method) = match &args.weights {
         Some(path) => (
             teacher::retarget(path, &coach, &student.skeleton)?,
             "teacher",
@@ -55,9 +60,15 @@ pub fn run(args: &Args) -> Result<String> {
             "analytic",
         ),
     };
+    if !args.no_contacts {
+        virtual_swing
+            .keep_contacts(&coach, Kept::ALL)
+            .map_err(|e| anyhow::anyhow!("the coach's contacts on the student: {e}"))?;
+    }
     io::save(&virtual_swing, &args.out)?;
     let summary = json!({
         "method": method,
+        "contacts": !args.no_contacts,
         "weights": args.weights.as_ref().map(|p| p.display().to_string()),
         "coach": {"file": args.coach.display().to_string(), "format": coach.skeleton.format().name(),
                   "joints": coach.skeleton.len(), "frames": coach.frames(), "height_m": coach.skeleton.height()},
@@ -70,7 +81,8 @@ pub fn run(args: &Args) -> Result<String> {
         format!("{summary}\n")
     } else {
         format!(
-            "retargeted ({method}) {} frames of {} ({} joints, {:.2} m) onto {} ({} joints, {:.2} m), root scale {:.3}\n",
+            "retargeted ({method}{}) {} frames of {} ({} joints, {:.2} m) onto {} ({} joints, {:.2} m), root scale {:.3}\n",
+            if args.no_contacts { "" } else { ", golf's contacts kept" },
             coach.frames(),
             args.coach.display(),
             coach.skeleton.len(),

@@ -5,6 +5,7 @@ use crate::{html, input, teacher};
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_core::body::{Angles, Link, Metrics, Shift};
 use posecoach_core::checks::BodyDeviation;
+use posecoach_core::contacts::Kept;
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{Event, EventError, SwingEvents};
 use posecoach_core::score::{self, Advice, Report, ScoreError};
@@ -33,6 +34,10 @@ pub struct Args {
     /// the `learn` feature).
     #[arg(long)]
     weights: Option<PathBuf>,
+    /// Leave both swings as the retargeter makes them, off golf's contacts (planted feet and
+    /// the club head at the ball, kept by default as the device keeps them).
+    #[arg(long)]
+    no_contacts: bool,
     /// DTW band radius in frames at the scoring rate.
     #[arg(long, default_value_t = Band::DEFAULT.radius)]
     band: u16,
@@ -72,16 +77,30 @@ pub fn run(args: &Args) -> Result<String> {
         Some(path) => args.input.load(path)?,
         None => student.clone(),
     };
-    let on_body = |motion: &Motion, who: &str| {
-        motion
-            .retarget_analytic(&body)
-            .map_err(|(f, e)| anyhow!("{who} frame {f} onto the student's skeleton: {e}"))
+    // Each keeps its own golf contacts as the device's virtual coach does (planted feet, the
+    // club at the ball: `Kept::SCORED`), which rigid bones of other lengths would lose.
+    let contacts = |mut on: Motion, of: &Motion, who: &str| -> Result<Motion> {
+        if !args.no_contacts {
+            on.keep_contacts(of, Kept::SCORED)
+                .with_context(|| format!("the {who}'s contacts on the student's skeleton"))?;
+        }
+        Ok(on)
     };
-    let student = on_body(&student, "student")?;
+    let on_body = |motion: &Motion, who: &str| {
+        let on = motion
+            .retarget_analytic(&body)
+            .map_err(|(f, e)| anyhow!("{who} frame {f} onto the student's skeleton: {e}"))?;
+        contacts(on, motion, who)
+    };
     let virtual_coach = match &args.weights {
-        Some(path) => teacher::retarget(path, &coach, &body.skeleton)?,
+        Some(path) => contacts(
+            teacher::retarget(path, &coach, &body.skeleton)?,
+            &coach,
+            "coach",
+        )?,
         None => on_body(&coach, "coach")?,
     };
+    let student = on_body(&student, "student")?;
     let (student, virtual_coach) = (
         student.resampled(args.score_rate)?,
         virtual_coach.resampled(args.score_rate)?,

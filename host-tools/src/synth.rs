@@ -17,6 +17,7 @@ use crate::synth_imu::{self, ImuNoise};
 use anyhow::{bail, Context, Result};
 use posecoach_adapters::log;
 use posecoach_core::body::Stance;
+use posecoach_core::contacts::Kept;
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, SwingEvents, SwingKind};
 use posecoach_core::format::{Format, Source};
@@ -224,14 +225,14 @@ pub fn run(args: &Args) -> Result<String> {
         bail!("unknown format `{}`", args.format);
     };
     let keypoint_joints = keypoint_sources(format, &body.skeleton)?;
+    // A golfer swings as the coach, on their own body, with their contacts: both hands on one
+    // grip, the feet planted.
     let onto_body = |path: &Path| -> Result<Motion> {
-        let motion = args
-            .input
-            .load(path)?
-            .retarget_analytic(&body)
-            .map_err(|(f, e)| {
-                anyhow::anyhow!("{} frame {f} onto the student: {e}", path.display())
-            })?;
+        let coach = args.input.load(path)?;
+        let mut motion = coach.retarget_analytic(&body).map_err(|(f, e)| {
+            anyhow::anyhow!("{} frame {f} onto the student: {e}", path.display())
+        })?;
+        motion.keep_contacts(&coach, Kept::SCORED)?;
         Ok(motion.resampled(TIMELINE_HZ)?)
     };
     let swings: Vec<(PathBuf, Motion)> = args

@@ -4,6 +4,7 @@
 use posecoach_adapters::session::{
     BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session, MAX_FRAMES_PER_MESSAGE,
 };
+use posecoach_core::contacts::Kept;
 use posecoach_core::dtw::Band;
 use posecoach_core::format::Format;
 use posecoach_core::plausible::Implausible;
@@ -152,10 +153,13 @@ fn scores(coach: &io::Motion, messages: &[Message]) -> Vec<(f32, Vec<usize>)> {
     let mut found = Vec::new();
     for m in messages {
         session.handle(m, |o| match o {
-            Outcome::Scored { report, .. } => found.push((
-                report.score,
-                report.student_events.iter().map(|(_, f)| f).collect(),
-            )),
+            Outcome::Scored { report, .. } => {
+                eprintln!("DEV {:?}", report.spatial);
+                found.push((
+                    report.score,
+                    report.student_events.iter().map(|(_, f)| f).collect(),
+                ))
+            }
             other => panic!("{other:?}"),
         });
     }
@@ -164,11 +168,12 @@ fn scores(coach: &io::Motion, messages: &[Message]) -> Vec<(f32, Vec<usize>)> {
 
 #[test]
 fn a_stream_in_another_format_is_mapped_onto_the_profile() {
-    // The student (1.75 m, H3.6M profile) swings the driver; one phone sends H3.6M keypoints,
-    // another CMU-31 keypoints of the same motion.
+    // The student (1.75 m, H3.6M profile) swings the driver, feet planted as the coach's; one
+    // phone sends H3.6M keypoints, another CMU-31 keypoints of the same motion.
     let coach = io::load(&fixture("golf_driver_60hz.csv")).unwrap();
     let student = io::load(&fixture("h36m17_tpose.csv")).unwrap();
-    let on_h36m = coach.retarget_analytic(&student).unwrap();
+    let mut on_h36m = coach.retarget_analytic(&student).unwrap();
+    on_h36m.keep_contacts(&coach, Kept::SCORED).unwrap();
     let h36m = Skeleton::standard(Format::H36m17).unwrap();
     let h36m = io::Motion {
         skeleton: h36m.clone(),
@@ -196,7 +201,8 @@ fn a_stream_in_another_format_is_mapped_onto_the_profile() {
             rest.iter().map(|p| p * scale).collect()
         },
     };
-    let on_cmu = coach.retarget_analytic(&cmu).unwrap();
+    let mut on_cmu = coach.retarget_analytic(&cmu).unwrap();
+    on_cmu.keep_contacts(&coach, Kept::SCORED).unwrap();
     let profile = Message::StudentProfile(StudentProfile {
         format: Format::H36m17,
         joints_mm: h36m

@@ -1,9 +1,11 @@
 //! The coach reference as the session keeps it: its frames at the model rate, and the virtual
 //! coach made from them on the student's skeleton (by the analytic retargeter or the int8
-//! network).
+//! network, then moved onto the coach's golf contacts).
 
 use super::Refusal;
 use posecoach_core::config::MAX_JOINTS;
+use posecoach_core::contacts::{Contacts, Kept, Swing};
+use posecoach_core::events;
 use posecoach_core::network::{self, NetworkError};
 use posecoach_core::reference::Reference;
 use posecoach_core::resample;
@@ -76,6 +78,43 @@ impl Coach<'_> {
             (Some(a), _) => Some(a),
             (None, _) => None,
         }
+    }
+
+    /// Joint `k` of frame `f` at `rate_hz`, interpolated as [`Coach::frame_at`] interpolates
+    /// frames (zero outside them).
+    fn joint_at(&self, f: usize, k: usize, rate_hz: u16) -> Vec3 {
+        let n = self.skeleton.len();
+        let (i, fraction) = resample::source(f, self.rate_hz, f32::from(rate_hz), self.frames());
+        let at = |i: usize| match k < n {
+            true => self.positions.get(i * n + k).copied(),
+            false => None,
+        };
+        match (at(i), at(i + 1)) {
+            (Some(p), Some(q)) if fraction > 0.0 => p + (q - p) * fraction,
+            (Some(p), _) => p,
+            (None, _) => Vec3::zeros(),
+        }
+    }
+
+    /// `out`, the coach at `rate_hz` retargeted onto `student`, moved onto the coach's golf
+    /// contacts that scoring keeps ([`Kept::SCORED`]: planted feet, the club at the ball): the coach's address and impact are the retargeted swing's
+    /// (without a swing found, only the feet are kept). (Out of line: its frame is not on the
+    /// stack while a coach is retargeted.)
+    #[inline(never)]
+    pub(super) fn keep_contacts(
+        &self,
+        student: &Skeleton,
+        rate_hz: u16,
+        out: &mut [Vec3],
+    ) -> Result<(), Refusal> {
+        let rate = self.rate_at(rate_hz);
+        let swing = events::detect(student, out, rate)
+            .ok()
+            .map(|s| Swing::from(&s));
+        Contacts::new(self.skeleton, student)
+            .keeping(Kept::SCORED)
+            .apply(|f, k| self.joint_at(f, k, rate_hz), rate, swing, out)
+            .map_err(|_| Refusal::Retarget)
     }
 
     /// The coach at `rate_hz` retargeted onto `student` frame by frame with the analytic

@@ -668,7 +668,8 @@ fn valid(config: &Config) -> bool {
 
 /// Makes the virtual coach of `coach` on `skeleton` at the model rate `rate` into the front of
 /// `out`: with the int8 network (its scratch the ring) where given, else the analytic
-/// retargeter; as the student's IMUs would see it in a session with them. Returns its swing and
+/// retargeter, then moved onto the coach's golf contacts; as the student's IMUs would see it in
+/// a session with them. Returns its swing and
 /// events, as [`swing_span`]. (Kept out of line: three callers, one copy in flash.)
 #[inline(never)]
 fn make_virtual(
@@ -687,6 +688,7 @@ fn make_virtual(
         Some((w, ring)) => coach.retarget_network(w, skeleton, rate, ring, out)?,
         None => coach.retarget_analytic(skeleton, rate, out)?,
     }
+    coach.keep_contacts(skeleton, rate, out)?;
     if let Some(imu) = imu {
         seen_by(imu, skeleton, out)?;
     }

@@ -40,6 +40,7 @@ use flaws::{Body, Flaw, Planted, Times, Truth};
 use posecoach_adapters::session::Outcome;
 use posecoach_core::body::{self, Metrics, Stance};
 use posecoach_core::checks::BodyDeviation;
+use posecoach_core::contacts::Kept;
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, Event, Position, Side};
 use posecoach_core::format::Format;
@@ -221,10 +222,13 @@ pub fn run(args: &Args) -> Result<String> {
             .with_context(|| format!("events of {}", path.display()))?;
         let times = flaws::times(&found, motion.rate_hz);
         for body in &bodies {
-            let swing = motion
+            // The golfer swings as the coach on their own body, keeping their grip and
+            // planted feet: the virtual coach the device makes, before any flaw.
+            let mut swing = motion
                 .retarget_analytic(body)
-                .map_err(|(f, e)| anyhow::anyhow!("{} frame {f}: {e}", path.display()))?
-                .resampled(LAYOUT_HZ)?;
+                .map_err(|(f, e)| anyhow::anyhow!("{} frame {f}: {e}", path.display()))?;
+            swing.keep_contacts(&motion, Kept::SCORED)?;
+            let swing = swing.resampled(LAYOUT_HZ)?;
             cleans.push(Clean {
                 source: path.clone(),
                 coach: coach as u16,
