@@ -15,10 +15,14 @@
 //!   correction fades out over [`RELEASE_S`], so the foot leaves the ground without a jump. The leg reaches its goal by two-bone inverse
 //!   kinematics (hip fixed, knee in its current bend plane); the foot is carried along
 //!   unturned.
-//! - **Grip** (a golf swing: the coach's [`Swing`] given). In every frame the trail wrist is
-//!   moved along the line between the wrists to the coach's distance from the lead wrist (both
-//!   hands on one grip, whatever the arms' lengths; the line's direction is the retargeting's;
-//!   wrists, which every format places alike): the trail arm reaches by two-bone
+//! - **Grip** (a golf swing: the coach's [`Swing`] given). The trail wrist is moved along the
+//!   line between the wrists (the line's direction is the retargeting's; wrists, which every
+//!   format places alike) so that their distance is the coach's at address and at impact (both
+//!   hands on one grip, whatever the arms' lengths): the retargeted distance is scaled by the
+//!   ratio of the coach's to it at address, then at impact, interpolated between and held
+//!   outside, so that the coach's own frame-to-frame wobble of the gap never moves a still
+//!   set-up (per frame, it moved the takeaway's timing by 9 ms at the median on the coaching
+//!   benchmark). The trail arm reaches by two-bone
 //!   inverse kinematics from the shoulder, carrying the hand unturned, and the lead arm keeps
 //!   the coach's angles (its bend at the top is what a coach reads, and a nearly straight arm
 //!   would need a large turn of the elbow for a centimetre of reach).
@@ -116,21 +120,10 @@ pub struct Kept {
 }
 
 impl Kept {
-    /// Every contact: the virtual coach a golfer should see (`posecoach retarget`).
+    /// Every contact: the virtual coach scored against and shown.
     pub const ALL: Kept = Kept {
         feet: true,
         grip: true,
-        club: true,
-    };
-    /// The contacts the virtual coach that is scored against keeps (the device's session,
-    /// `posecoach score`): the grip is left out. Kept, it puts the trail wrist at the coach's
-    /// distance from the lead wrist in every frame, and on the coaching benchmark the
-    /// takeaway, timed against the virtual coach's hands, moved from 5 to 14 ms off at the
-    /// median on clean input (false advice at 20 mm of phone drift from 9 to 16 %), while the
-    /// feet and the club changed nothing measurable there.
-    pub const SCORED: Kept = Kept {
-        feet: true,
-        grip: false,
         club: true,
     };
     /// Only the club at the ball (a motion whose body is right but whose club, of another
@@ -411,14 +404,29 @@ impl Contacts {
                 Side::Right => (1, 0),
             };
             let [lead_wrist, trail_wrist] = [lead, trail].map(|k| grip.student[k]);
-            for (f, to) in student.chunks_exact_mut(m).enumerate() {
+            // The gap is scaled by the ratio of the coach's to the retargeted one at address,
+            // then at impact, interpolated between them and held outside: exact at the two
+            // moments the club is at the ball, smooth between, and never the coach's own
+            // frame-to-frame wobble (which moved the still set-up's hands).
+            let ratio = |f: usize| {
+                let frame = &student[f * m..(f + 1) * m];
+                let now = norm(&(frame[trail_wrist] - frame[lead_wrist]));
                 let gap = norm(&(coach(f, grip.coach[trail]) - coach(f, grip.coach[lead])));
-                let apart = to[trail_wrist] - to[lead_wrist];
-                let now = norm(&apart);
-                if now > MIN_LENGTH {
-                    let goal = to[lead_wrist] + apart * (gap / now);
-                    grip.arms[trail].reach(to, goal);
+                match now > MIN_LENGTH {
+                    true => gap / now,
+                    false => 1.0,
                 }
+            };
+            let (at_address, at_impact) = (ratio(swing.address), ratio(swing.impact));
+            for (f, to) in student.chunks_exact_mut(m).enumerate() {
+                let t = match f {
+                    f if f <= swing.address => 0.0,
+                    f if f >= swing.impact => 1.0,
+                    f => (f - swing.address) as f32 / (swing.impact - swing.address) as f32,
+                };
+                let scale = at_address + (at_impact - at_address) * t;
+                let apart = to[trail_wrist] - to[lead_wrist];
+                grip.arms[trail].reach(to, to[lead_wrist] + apart * scale);
             }
         }
         if let Some(club) = &self.club {

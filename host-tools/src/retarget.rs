@@ -3,7 +3,6 @@
 use crate::failure::Usage;
 use crate::{input, teacher};
 use anyhow::Result;
-use posecoach_core::contacts::Kept;
 use posecoach_io as io;
 use serde_json::json;
 use std::path::PathBuf;
@@ -62,7 +61,7 @@ pub fn run(args: &Args) -> Result<String> {
     };
     if !args.no_contacts {
         virtual_swing
-            .keep_contacts(&coach, Kept::ALL)
+            .keep_contacts(&coach)
             .map_err(|e| anyhow::anyhow!("the coach's contacts on the student: {e}"))?;
     }
     io::save(&virtual_swing, &args.out)?;

@@ -5,7 +5,6 @@ use crate::{html, input, teacher};
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_core::body::{Angles, Link, Metrics, Shift};
 use posecoach_core::checks::BodyDeviation;
-use posecoach_core::contacts::Kept;
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{Event, EventError, SwingEvents};
 use posecoach_core::score::{self, Advice, Report, ScoreError};
@@ -34,8 +33,8 @@ pub struct Args {
     /// the `learn` feature).
     #[arg(long)]
     weights: Option<PathBuf>,
-    /// Leave both swings as the retargeter makes them, off golf's contacts (planted feet and
-    /// the club head at the ball, kept by default as the device keeps them).
+    /// Leave both swings as the retargeter makes them, off golf's contacts (planted feet, both
+    /// hands on one grip, the club head at the ball: kept by default, as on the device).
     #[arg(long)]
     no_contacts: bool,
     /// DTW band radius in frames at the scoring rate.
@@ -77,11 +76,11 @@ pub fn run(args: &Args) -> Result<String> {
         Some(path) => args.input.load(path)?,
         None => student.clone(),
     };
-    // Each keeps its own golf contacts as the device's virtual coach does (planted feet, the
-    // club at the ball: `Kept::SCORED`), which rigid bones of other lengths would lose.
+    // Each keeps its own golf contacts as the device's virtual coach does (planted feet, both
+    // hands on one grip, the club at the ball), which rigid bones of other lengths would lose.
     let contacts = |mut on: Motion, of: &Motion, who: &str| -> Result<Motion> {
         if !args.no_contacts {
-            on.keep_contacts(of, Kept::SCORED)
+            on.keep_contacts(of)
                 .with_context(|| format!("the {who}'s contacts on the student's skeleton"))?;
         }
         Ok(on)

@@ -17,7 +17,6 @@ use crate::synth_imu::{self, ImuNoise};
 use anyhow::{bail, Context, Result};
 use posecoach_adapters::log;
 use posecoach_core::body::Stance;
-use posecoach_core::contacts::Kept;
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, SwingEvents, SwingKind};
 use posecoach_core::format::{Format, Source};
@@ -232,7 +231,7 @@ pub fn run(args: &Args) -> Result<String> {
         let mut motion = coach.retarget_analytic(&body).map_err(|(f, e)| {
             anyhow::anyhow!("{} frame {f} onto the student: {e}", path.display())
         })?;
-        motion.keep_contacts(&coach, Kept::SCORED)?;
+        motion.keep_contacts(&coach)?;
         Ok(motion.resampled(TIMELINE_HZ)?)
     };
     let swings: Vec<(PathBuf, Motion)> = args

@@ -5,7 +5,7 @@ use crate::bvh::{Bvh, Channel};
 use crate::golf::{JointCentres, GOLF_JOINTS};
 use crate::limits::{check_limits, LimitError, MAX_RATE_HZ, MIN_RATE_HZ};
 use crate::units::Units;
-use posecoach_core::contacts::{self, ContactError, Contacts, Kept, Swing};
+use posecoach_core::contacts::{self, ContactError, Contacts, Swing};
 use posecoach_core::events;
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
@@ -78,13 +78,13 @@ impl Motion {
     }
 
     /// This motion (a retargeting of `coach`, frame for frame) moved onto the coach's golf
-    /// contacts that `kept` names ([`Contacts`]): planted feet stay planted and, where the
-    /// detector finds the coach's swing, both hands stay on one grip and the club head is at
-    /// the coach's ball at address and impact.
+    /// contacts ([`Contacts`]): planted feet stay planted and, where the detector finds the
+    /// coach's swing, both hands stay on one grip and the club head is at the coach's ball at
+    /// address and impact.
     ///
     /// # Errors
     /// [`ContactError::Frames`] if the two motions differ in frames (nothing is changed then).
-    pub fn keep_contacts(&mut self, coach: &Motion, kept: Kept) -> Result<(), ContactError> {
+    pub fn keep_contacts(&mut self, coach: &Motion) -> Result<(), ContactError> {
         if coach.frames() != self.frames() {
             return Err(ContactError::Frames {
                 coach: coach.frames(),
@@ -94,14 +94,12 @@ impl Motion {
         let swing = events::detect(&coach.skeleton, &coach.positions, coach.rate_hz)
             .ok()
             .map(|s| Swing::from(&s));
-        Contacts::new(&coach.skeleton, &self.skeleton)
-            .keeping(kept)
-            .apply(
-                contacts::frames(&coach.positions, coach.skeleton.len()),
-                coach.rate_hz,
-                swing,
-                &mut self.positions,
-            )
+        Contacts::new(&coach.skeleton, &self.skeleton).apply(
+            contacts::frames(&coach.positions, coach.skeleton.len()),
+            coach.rate_hz,
+            swing,
+            &mut self.positions,
+        )
     }
 
     /// The motion resampled to `rate_hz` by linear interpolation in time

@@ -4,7 +4,6 @@
 use posecoach_adapters::session::{
     BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session, MAX_FRAMES_PER_MESSAGE,
 };
-use posecoach_core::contacts::Kept;
 use posecoach_core::dtw::Band;
 use posecoach_core::format::Format;
 use posecoach_core::plausible::Implausible;
@@ -168,12 +167,12 @@ fn scores(coach: &io::Motion, messages: &[Message]) -> Vec<(f32, Vec<usize>)> {
 
 #[test]
 fn a_stream_in_another_format_is_mapped_onto_the_profile() {
-    // The student (1.75 m, H3.6M profile) swings the driver, feet planted as the coach's; one
-    // phone sends H3.6M keypoints, another CMU-31 keypoints of the same motion.
+    // The student (1.75 m, H3.6M profile) swings the driver, keeping the grip and planted feet;
+    // one phone sends H3.6M keypoints, another CMU-31 keypoints of the same motion.
     let coach = io::load(&fixture("golf_driver_60hz.csv")).unwrap();
     let student = io::load(&fixture("h36m17_tpose.csv")).unwrap();
     let mut on_h36m = coach.retarget_analytic(&student).unwrap();
-    on_h36m.keep_contacts(&coach, Kept::SCORED).unwrap();
+    on_h36m.keep_contacts(&coach).unwrap();
     let h36m = Skeleton::standard(Format::H36m17).unwrap();
     let h36m = io::Motion {
         skeleton: h36m.clone(),
@@ -202,7 +201,7 @@ fn a_stream_in_another_format_is_mapped_onto_the_profile() {
         },
     };
     let mut on_cmu = coach.retarget_analytic(&cmu).unwrap();
-    on_cmu.keep_contacts(&coach, Kept::SCORED).unwrap();
+    on_cmu.keep_contacts(&coach).unwrap();
     let profile = Message::StudentProfile(StudentProfile {
         format: Format::H36m17,
         joints_mm: h36m

@@ -4,7 +4,7 @@
 
 use super::Refusal;
 use posecoach_core::config::MAX_JOINTS;
-use posecoach_core::contacts::{Contacts, Kept, Swing};
+use posecoach_core::contacts::{Contacts, Swing};
 use posecoach_core::events;
 use posecoach_core::network::{self, NetworkError};
 use posecoach_core::reference::Reference;
@@ -97,9 +97,10 @@ impl Coach<'_> {
     }
 
     /// `out`, the coach at `rate_hz` retargeted onto `student`, moved onto the coach's golf
-    /// contacts that scoring keeps ([`Kept::SCORED`]: planted feet, the club at the ball): the coach's address and impact are the retargeted swing's
-    /// (without a swing found, only the feet are kept). (Out of line: its frame is not on the
-    /// stack while a coach is retargeted.)
+    /// contacts ([`Contacts`]: planted feet, both hands on one grip, the club at the ball): the
+    /// coach's address, impact and lead side are the retargeted swing's (without a swing
+    /// found, only the feet are kept). (Out of line: its frame is not on the stack while a
+    /// coach is retargeted.)
     #[inline(never)]
     pub(super) fn keep_contacts(
         &self,
@@ -112,7 +113,6 @@ impl Coach<'_> {
             .ok()
             .map(|s| Swing::from(&s));
         Contacts::new(self.skeleton, student)
-            .keeping(Kept::SCORED)
             .apply(|f, k| self.joint_at(f, k, rate_hz), rate, swing, out)
             .map_err(|_| Refusal::Retarget)
     }

@@ -683,7 +683,6 @@ fn move_joints(swing: &mut Motion, times: &Times, lead: Side, flaw: &Flaw) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use posecoach_core::contacts::Kept;
     use posecoach_core::events;
     use posecoach_io::csv;
 
@@ -695,7 +694,7 @@ mod tests {
         let found = events::detect(&source.skeleton, &source.positions, source.rate_hz).unwrap();
         let body = csv::read(include_str!("../../../tests/fixtures/h36m17_tpose.csv")).unwrap();
         let mut swing = source.retarget_analytic(&body).unwrap();
-        swing.keep_contacts(&source, Kept::SCORED).unwrap();
+        swing.keep_contacts(&source).unwrap();
         let swing = swing.resampled(240.0).unwrap();
         (swing, times(&found, source.rate_hz), found.lead)
     }

@@ -40,7 +40,6 @@ use flaws::{Body, Flaw, Planted, Times, Truth};
 use posecoach_adapters::session::Outcome;
 use posecoach_core::body::{self, Metrics, Stance};
 use posecoach_core::checks::BodyDeviation;
-use posecoach_core::contacts::Kept;
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, Event, Position, Side};
 use posecoach_core::format::Format;
@@ -227,7 +226,7 @@ pub fn run(args: &Args) -> Result<String> {
             let mut swing = motion
                 .retarget_analytic(body)
                 .map_err(|(f, e)| anyhow::anyhow!("{} frame {f}: {e}", path.display()))?;
-            swing.keep_contacts(&motion, Kept::SCORED)?;
+            swing.keep_contacts(&motion)?;
             let swing = swing.resampled(LAYOUT_HZ)?;
             cleans.push(Clean {
                 source: path.clone(),
