@@ -19,13 +19,15 @@
 //!   line between the wrists (the line's direction is the retargeting's; wrists, which every
 //!   format places alike) so that their distance is the coach's at address and at impact (both
 //!   hands on one grip, whatever the arms' lengths): the retargeted distance is scaled by the
-//!   ratio of the coach's to it at address, then at impact, interpolated between and held
-//!   outside, so that the coach's own frame-to-frame wobble of the gap never moves a still
-//!   set-up (per frame, it moved the takeaway's timing by 9 ms at the median on the coaching
-//!   benchmark). The trail arm reaches by two-bone
+//!   ratio of the coach's to it at address, then at impact (within a factor of two),
+//!   interpolated between and held outside, so that the coach's own frame-to-frame wobble of
+//!   the gap never moves a still set-up (per frame, it moved the takeaway's timing by 9 ms at
+//!   the median on the coaching benchmark). The trail arm reaches by two-bone
 //!   inverse kinematics from the shoulder, carrying the hand unturned, and the lead arm keeps
 //!   the coach's angles (its bend at the top is what a coach reads, and a nearly straight arm
-//!   would need a large turn of the elbow for a centimetre of reach).
+//!   would need a large turn of the elbow for a centimetre of reach). The club hangs off the
+//!   left hand, so for a left-handed golfer the trail wrist carries it; the club's pass below
+//!   then puts its head back at the ball.
 //! - **Club** (a golf swing, onto a target that carries a club). The club is
 //!   turned about its grip, keeping its direction seen from above, so that its head is at the
 //!   coach's club head height at address and at impact (the head's centre
@@ -120,12 +122,6 @@ pub struct Kept {
 }
 
 impl Kept {
-    /// Every contact: the virtual coach scored against and shown.
-    pub const ALL: Kept = Kept {
-        feet: true,
-        grip: true,
-        club: true,
-    };
     /// Only the club at the ball (a motion whose body is right but whose club, of another
     /// length, misses it).
     pub const CLUB: Kept = Kept {
@@ -193,11 +189,16 @@ impl Limb {
         let (a, b) = (norm(&(m - s)), norm(&(e - m)));
         let to = goal - s;
         let distance = norm(&to);
-        if distance < MIN_LENGTH || a < MIN_LENGTH || b < MIN_LENGTH {
+        // (Also false for NaN: a frame or goal that is not finite is left as it is.)
+        let usable = |v: f32| v.is_finite() && v >= MIN_LENGTH;
+        if !(usable(distance) && usable(a) && usable(b)) {
             return;
         }
         let u = to / distance;
-        let d = distance.clamp((a - b).abs() + MIN_LENGTH, a + b - MIN_LENGTH);
+        // Within reach (`max` then `min`: a bone shorter than the margin cannot panic).
+        let d = distance
+            .max((a - b).abs() + MIN_LENGTH)
+            .min(a + b - MIN_LENGTH);
         // The middle joint: `x` along the root-to-goal line, `h` off it towards the current
         // bend.
         let x = (a * a - b * b + d * d) / (2.0 * d);
@@ -215,16 +216,29 @@ impl Limb {
     }
 }
 
+/// The most the grip scales the retargeted gap by, or the least its inverse.
+const MAX_GRIP_SCALE: f32 = 2.0;
+
+/// The most frames a correction fades over.
+const MAX_RELEASE: f32 = 1000.0;
+
 /// Limb lengths and distances below this (metres) give no direction.
 const MIN_LENGTH: f32 = 1e-6;
 
 /// The unit direction, across `u`, in which a limb whose middle joint is at `middle` and end
-/// at `end` (both from its root) bends: the middle joint's, else the end's, else any.
+/// at `end` (both from its root) bends: the middle joint's offset across the limb's own chord
+/// (the plane it bends in now, whichever way its end is sent), else, for a straight limb, the
+/// middle joint's offset across `u`, else any.
 fn bend_direction(middle: Vec3, end: Vec3, u: Vec3) -> Vec3 {
-    let across = |v: Vec3| v - u * u.dot(&v);
+    let across = |v: Vec3, axis: Vec3| v - axis * axis.dot(&v);
+    let chord = norm(&end);
+    let bent = match chord > MIN_LENGTH {
+        true => across(middle, end / chord),
+        false => Vec3::zeros(),
+    };
     for v in [
-        across(middle),
-        across(-end),
+        across(bent, u),
+        across(middle, u),
         u.cross(&Vec3::x()),
         u.cross(&Vec3::z()),
     ] {
@@ -388,7 +402,12 @@ impl Contacts {
                 return Err(ContactError::Events);
             }
         }
-        let release = libm::roundf(RELEASE_S * rate_hz.max(0.0)).max(1.0) as usize;
+        // A frame at least, a second's worth of frames at 10 kHz at most (a rate that is not
+        // finite or not positive gives one).
+        let release = match rate_hz.is_finite() && rate_hz > 0.0 {
+            true => libm::roundf(RELEASE_S * rate_hz).clamp(1.0, MAX_RELEASE) as usize,
+            false => 1,
+        };
         for foot in self.feet.iter().flatten() {
             plant(foot, &coach, rate_hz, release, student, m);
         }
@@ -412,8 +431,10 @@ impl Contacts {
                 let frame = &student[f * m..(f + 1) * m];
                 let now = norm(&(frame[trail_wrist] - frame[lead_wrist]));
                 let gap = norm(&(coach(f, grip.coach[trail]) - coach(f, grip.coach[lead])));
-                match now > MIN_LENGTH {
-                    true => gap / now,
+                // A gap less than half or more than twice the coach's is a pose that scaling
+                // cannot mend (and a scale of it would carry the trail hand away mid-swing).
+                match now > MIN_LENGTH && gap.is_finite() {
+                    true => (gap / now).clamp(1.0 / MAX_GRIP_SCALE, MAX_GRIP_SCALE),
                     false => 1.0,
                 }
             };
@@ -524,7 +545,7 @@ pub fn planted(
 fn faded(correction: Vec3, since: usize, release: usize) -> Vec3 {
     match since {
         s if s > release => Vec3::zeros(),
-        s => correction * (1.0 - s as f32 / (release + 1) as f32),
+        s => correction * (1.0 - s as f32 / release.saturating_add(1) as f32),
     }
 }
 
@@ -549,10 +570,12 @@ fn ground(
         let shaft = frame[club.head] - frame[club.grip];
         let length = norm(&shaft);
         let across = libm::sqrtf(shaft.x * shaft.x + shaft.z * shaft.z);
-        let drop = (height - frame[club.grip].y).clamp(-length, length);
-        if across < MIN_LENGTH {
+        let drop = height - frame[club.grip].y;
+        // (False for NaN too: a club that is not finite is left as it is.)
+        if !(length.is_finite() && drop.is_finite() && across >= MIN_LENGTH) {
             return Quat::identity();
         }
+        let drop = drop.max(-length).min(length);
         let spread = crate::math::sqrt((length * length - drop * drop).max(0.0)) / across;
         swing(shaft, Vec3::new(shaft.x * spread, drop, shaft.z * spread))
     };
@@ -561,10 +584,14 @@ fn ground(
         let q = if f <= address {
             at_address
         } else if f <= impact {
-            at_address.nlerp(&at_impact, (f - address) as f32 / (impact - address) as f32)
+            blend(
+                at_address,
+                at_impact,
+                (f - address) as f32 / (impact - address) as f32,
+            )
         } else {
-            let t = ((f - impact) as f32 / (release + 1) as f32).min(1.0);
-            at_impact.nlerp(&Quat::identity(), t)
+            let t = ((f - impact) as f32 / release.saturating_add(1) as f32).min(1.0);
+            blend(at_impact, Quat::identity(), t)
         };
         let grip = frame[club.grip];
         for (k, p) in frame.iter_mut().enumerate() {
@@ -573,6 +600,16 @@ fn ground(
             }
         }
     }
+}
+
+/// The normalized linear blend of two turns, `t` of the way from `a` to `b`, the short way
+/// round (`b` as its opposite quaternion, the same turn, where theirs is the long way).
+fn blend(a: Quat, b: Quat, t: f32) -> Quat {
+    let b = match a.coords.dot(&b.coords) < 0.0 {
+        true => Quat::new_unchecked(-b.into_inner()),
+        false => b,
+    };
+    a.nlerp(&b, t)
 }
 
 /// The most joints a [`Limb`]'s or [`Club`]'s bitset can name.
@@ -615,6 +652,21 @@ mod tests {
             analytic.frame(from, to).unwrap();
         }
         out
+    }
+
+    /// Each elbow of `frames` (whole frames of `skeleton`) put halfway between its shoulder and
+    /// wrist and 5 cm lower, as arms that reach forward bend.
+    fn bend_elbows(skeleton: &Skeleton, frames: &mut [Vec3]) {
+        let n = skeleton.len();
+        for frame in frames.chunks_exact_mut(n) {
+            for [shoulder, elbow, wrist] in [
+                [Joint::LeftShoulder, Joint::LeftElbow, Joint::LeftWrist],
+                [Joint::RightShoulder, Joint::RightElbow, Joint::RightWrist],
+            ] {
+                let [s, e, w] = [shoulder, elbow, wrist].map(|j| skeleton.index_of(j).unwrap());
+                frame[e] = (frame[s] + frame[w]) * 0.5 - Vec3::new(0.0, 0.05, 0.0);
+            }
+        }
     }
 
     /// `skeleton` with each bone `k` scaled by `factor(k)`.
@@ -719,18 +771,18 @@ mod tests {
         let (s, frames) = coach(Format::H36m17, 5, |f| Vec3::new(0.0, 0.0, 0.01 * f as f32));
         let mut frames = frames;
         let [l, r] = [Joint::LeftWrist, Joint::RightWrist].map(|j| s.index_of(j).unwrap());
-        // Hands together in front of the chest, 8 cm apart: the arms reach forward.
+        // Hands in front of the chest, 20 cm apart: the arms reach forward.
         for f in 0..5 {
             let chest = frames[f * 17 + s.index_of(Joint::Thorax).unwrap()];
-            frames[f * 17 + l] = chest + Vec3::new(0.04, -0.2, 0.35);
-            frames[f * 17 + r] = chest + Vec3::new(-0.04, -0.2, 0.35);
+            frames[f * 17 + l] = chest + Vec3::new(0.1, -0.2, 0.35);
+            frames[f * 17 + r] = chest + Vec3::new(-0.1, -0.2, 0.35);
         }
-        // Not a posable pose for the coach's own arms (the elbows were left in the T-pose),
-        // but the retargeter copies the wrists' chords; the student is broader.
-        let student = scaled(&s, |k| if k >= 11 { 1.3 } else { 1.0 });
+        bend_elbows(&s, &mut frames);
+        // The student is broader.
+        let student = scaled(&s, |k| if k >= 11 { 1.1 } else { 1.0 });
         let mut out = retarget(&s, &frames, &student);
         let gap = |o: &[Vec3], f: usize| o[f * 17 + r] - o[f * 17 + l];
-        assert!((norm(&gap(&out, 0)) - 0.08).abs() > 0.01);
+        assert!((norm(&gap(&out, 0)) - 0.2).abs() > 0.01);
         let contacts = Contacts::new(&s, &student);
         // Not a golf swing: the hands are free.
         let mut free = out.clone();
@@ -752,8 +804,10 @@ mod tests {
                 &mut out,
             )
             .unwrap();
+        // A gap that does not change: its distance is the coach's in every frame.
         for f in 0..5 {
-            assert!(norm(&(gap(&out, f) - gap(&frames, f))) < 1e-4, "frame {f}");
+            let miss = norm(&gap(&out, f)) - norm(&gap(&frames, f));
+            assert!(miss.abs() < 1e-4, "frame {f}: {miss}");
         }
     }
 
@@ -804,6 +858,118 @@ mod tests {
                 }),
                 &mut out
             ),
+            Err(ContactError::Events)
+        );
+    }
+
+    #[test]
+    fn the_grip_is_the_coachs_at_address_and_impact_and_the_lead_arm_is_untouched() {
+        // The coach's wrists 8 cm apart at address, 12 cm at impact (frames 2 and 8); the
+        // student's arms are longer, so the retargeted gap is wider.
+        let (s, mut frames) = coach(Format::H36m17, 11, |_| Vec3::zeros());
+        let [l, r, thorax] =
+            [Joint::LeftWrist, Joint::RightWrist, Joint::Thorax].map(|j| s.index_of(j).unwrap());
+        for f in 0..11 {
+            let gap = 0.08 + 0.04 * (f as f32 / 10.0);
+            let chest = frames[f * 17 + thorax];
+            frames[f * 17 + l] = chest + Vec3::new(gap / 2.0, -0.3, 0.3);
+            frames[f * 17 + r] = chest + Vec3::new(-gap / 2.0, -0.3, 0.3);
+        }
+        bend_elbows(&s, &mut frames);
+        let student = scaled(&s, |k| if k >= 11 { 1.25 } else { 1.0 });
+        let mut out = retarget(&s, &frames, &student);
+        let free = out.clone();
+        let swing = Swing {
+            address: 2,
+            impact: 8,
+            lead: Side::Left,
+        };
+        Contacts::new(&s, &student)
+            .apply(super::frames(&frames, 17), 30.0, Some(swing), &mut out)
+            .unwrap();
+        let gap = |o: &[Vec3], f: usize| norm(&(o[f * 17 + r] - o[f * 17 + l]));
+        for f in [2, 8] {
+            assert!((gap(&out, f) - gap(&frames, f)).abs() < 1e-4, "frame {f}");
+        }
+        for f in 0..11 {
+            // The lead arm as retargeted; the trail wrist on the line between the wrists.
+            for k in [11, 12, 13] {
+                assert_eq!(out[f * 17 + k], free[f * 17 + k], "frame {f}");
+            }
+            let (before, after) = (
+                free[f * 17 + r] - free[f * 17 + l],
+                out[f * 17 + r] - out[f * 17 + l],
+            );
+            assert!(norm(&before.cross(&after)) < 1e-4 * norm(&before) * norm(&after).max(1.0));
+        }
+    }
+
+    #[test]
+    fn a_bent_knee_keeps_its_side() {
+        // A leg bent slightly forward, its foot sent forward and up: the knee still points
+        // forward (+z), as it did.
+        let s = Skeleton::standard(Format::H36m17).unwrap();
+        let leg = Limb::new(&s, Joint::LeftAnkle).unwrap();
+        let mut frame = [Vec3::zeros(); 17];
+        s.rest_positions(&mut frame);
+        let (hip, ankle) = (frame[leg.root], frame[leg.end]);
+        frame[leg.middle] = (hip + ankle) * 0.5 + Vec3::new(0.0, 0.0, 0.01);
+        leg.reach(&mut frame, ankle + Vec3::new(0.0, 0.1, 0.15));
+        let knee = frame[leg.middle] - hip;
+        let chord = frame[leg.end] - hip;
+        let side = knee - chord * (chord.dot(&knee) / chord.norm_squared());
+        assert!(side.z > 0.0, "{side:?}");
+    }
+
+    #[test]
+    fn input_that_is_not_finite_or_empty_is_refused_or_left_without_a_panic() {
+        let (s, frames) = coach(Format::GolfMarkers, 6, |f| {
+            Vec3::new(0.01 * f as f32, 0.0, 0.0)
+        });
+        let n = s.len();
+        let contacts = Contacts::new(&s, &s);
+        let swing = Some(Swing {
+            address: 1,
+            impact: 4,
+            lead: Side::Right,
+        });
+        for rate in [0.0, -30.0, f32::NAN, f32::INFINITY, 1e30] {
+            let mut out = frames.clone();
+            contacts
+                .apply(super::frames(&frames, n), rate, swing, &mut out)
+                .unwrap();
+        }
+        for bad in [f32::NAN, f32::INFINITY, 3e38] {
+            let mut coach_frames = frames.clone();
+            coach_frames[2 * n + 3] = Vec3::new(bad, bad, 0.0);
+            let mut out = frames.clone();
+            out[3 * n] = Vec3::new(bad, -bad, bad);
+            contacts
+                .apply(super::frames(&coach_frames, n), 30.0, swing, &mut out)
+                .unwrap();
+        }
+        let mut empty: [Vec3; 0] = [];
+        assert_eq!(
+            contacts.apply(super::frames(&frames, n), 30.0, None, &mut empty),
+            Ok(())
+        );
+        assert_eq!(
+            contacts.apply(super::frames(&frames, n), 30.0, swing, &mut empty),
+            Err(ContactError::Events)
+        );
+        let mut short = frames[..n + 1].to_vec();
+        assert!(matches!(
+            contacts.apply(super::frames(&frames, n), 30.0, None, &mut short),
+            Err(ContactError::Length(_))
+        ));
+        let at_end = Some(Swing {
+            address: 1,
+            impact: 6,
+            lead: Side::Left,
+        });
+        let mut out = frames.clone();
+        assert_eq!(
+            contacts.apply(super::frames(&frames, n), 30.0, at_end, &mut out),
             Err(ContactError::Events)
         );
     }

@@ -34,7 +34,8 @@ pub struct Args {
     #[arg(long)]
     weights: Option<PathBuf>,
     /// Leave both swings as the retargeter makes them, off golf's contacts (planted feet, both
-    /// hands on one grip, the club head at the ball: kept by default, as on the device).
+    /// hands on one grip, the club head at the ball: kept by default, the coach's as on the
+    /// device).
     #[arg(long)]
     no_contacts: bool,
     /// DTW band radius in frames at the scoring rate.

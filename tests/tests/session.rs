@@ -152,13 +152,10 @@ fn scores(coach: &io::Motion, messages: &[Message]) -> Vec<(f32, Vec<usize>)> {
     let mut found = Vec::new();
     for m in messages {
         session.handle(m, |o| match o {
-            Outcome::Scored { report, .. } => {
-                eprintln!("DEV {:?}", report.spatial);
-                found.push((
-                    report.score,
-                    report.student_events.iter().map(|(_, f)| f).collect(),
-                ))
-            }
+            Outcome::Scored { report, .. } => found.push((
+                report.score,
+                report.student_events.iter().map(|(_, f)| f).collect(),
+            )),
             other => panic!("{other:?}"),
         });
     }
