@@ -30,6 +30,10 @@ use nalgebra::{Quaternion, Unit};
 /// Bones shorter than this (metres) have no direction: they keep their parent's rotation.
 pub const MIN_BONE: f32 = 1e-6;
 
+/// A child bone turns its parent's twist only where its rest offset leaves the parent's axis by
+/// more than this fraction of its length (0.06°): closer, its sideways part is rounding.
+pub const MIN_TWIST_LEVER: f32 = 1e-3;
+
 /// A slice has the wrong length for the skeleton.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -159,7 +163,13 @@ fn fit(
             continue;
         }
         let perp = |v: Vec3| v - axis * axis.dot(&v);
-        let predicted = perp(swung * skeleton.offset(c));
+        let offset = skeleton.offset(c);
+        let predicted = perp(swung * offset);
+        // A child at rest on the bone's axis says nothing of its twist: its sideways part is
+        // rounding, and would choose the twist at random.
+        if predicted.norm() <= MIN_TWIST_LEVER * offset.norm() {
+            continue;
+        }
         let actual = perp(positions[c] - positions[k]);
         sin += axis.dot(&predicted.cross(&actual));
         cos += predicted.dot(&actual);
