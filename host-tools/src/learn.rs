@@ -433,6 +433,9 @@ pub struct EvalArgs {
     /// Include the rotation copy from the format's standard T-pose.
     #[arg(long)]
     copy: bool,
+    /// Include the rotation transfer the device runs (`posecoach_core::transfer`).
+    #[arg(long)]
+    transfer: bool,
     /// Include the ground truth itself: no joint error by definition, but its own grip, foot
     /// slide and club head, which its convention gives.
     #[arg(long)]
@@ -464,6 +467,9 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
     if args.copy {
         retargeters.push(Method::Baseline(Baseline::RotationCopy));
     }
+    if args.transfer {
+        retargeters.push(Method::Baseline(Baseline::Transfer));
+    }
     let mut methods = retargeters.clone();
     if args.contacts {
         methods.extend(retargeters.iter().map(Method::Contacts));
@@ -472,7 +478,9 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
         methods.push(Method::Baseline(Baseline::GroundTruth));
     }
     if methods.is_empty() {
-        bail!("nothing to evaluate: pass --weights FILE, --analytic, --copy or --truth");
+        bail!(
+            "nothing to evaluate: pass --weights FILE, --analytic, --copy, --transfer or --truth"
+        );
     }
     let pool = args.data.pool(args.seed)?;
     let bar = Progress::new(0, "pairs");
