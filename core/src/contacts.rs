@@ -29,7 +29,8 @@
 //!   left hand, so for a left-handed golfer the trail wrist carries it; the club's pass below
 //!   then puts its head back at the ball.
 //! - **Club** (a golf swing, onto a target that carries a club). The club is
-//!   turned about its grip, keeping its direction seen from above, so that its head is at the
+//!   turned about its grip, keeping its direction seen from above (a shaft within 3° of plumb
+//!   is turned away from the body), so that its head is at the
 //!   coach's club head height at address and at impact (the head's centre
 //!   [`CLUB_HEAD_CLEARANCE_M`] above the floor where the coach tracks no club); the turn is
 //!   interpolated between the two, held before address and faded out over [`RELEASE_S`]
@@ -224,6 +225,10 @@ const MAX_RELEASE: f32 = 1000.0;
 
 /// Limb lengths and distances below this (metres) give no direction.
 const MIN_LENGTH: f32 = 1e-6;
+
+/// A shaft whose part seen from above is below this fraction of its length (within 3° of
+/// plumb) has no direction there: a few millimetres would choose it.
+const PLUMB: f32 = 0.05;
 
 /// The unit direction, across `u`, in which a limb whose middle joint is at `middle` and end
 /// at `end` (both from its root) bends: the middle joint's offset across the limb's own chord
@@ -569,15 +574,26 @@ fn ground(
         };
         let shaft = frame[club.head] - frame[club.grip];
         let length = norm(&shaft);
-        let across = libm::sqrtf(shaft.x * shaft.x + shaft.z * shaft.z);
         let drop = height - frame[club.grip].y;
+        // Seen from above: the shaft's direction, or for a shaft that hangs plumb, away from
+        // the body (the ball is in front of the hands).
+        let away = frame[club.grip] - frame[0];
+        let Some((x, z)) = [(shaft, PLUMB * length), (away, MIN_LENGTH)]
+            .into_iter()
+            .find_map(|(v, least)| {
+                let across = libm::sqrtf(v.x * v.x + v.z * v.z);
+                (across >= least.max(MIN_LENGTH)).then(|| (v.x / across, v.z / across))
+            })
+        else {
+            return Quat::identity();
+        };
         // (False for NaN too: a club that is not finite is left as it is.)
-        if !(length.is_finite() && drop.is_finite() && across >= MIN_LENGTH) {
+        if !(length.is_finite() && drop.is_finite()) {
             return Quat::identity();
         }
         let drop = drop.max(-length).min(length);
-        let spread = crate::math::sqrt((length * length - drop * drop).max(0.0)) / across;
-        swing(shaft, Vec3::new(shaft.x * spread, drop, shaft.z * spread))
+        let spread = crate::math::sqrt((length * length - drop * drop).max(0.0));
+        swing(shaft, Vec3::new(x * spread, drop, z * spread))
     };
     let (at_address, at_impact) = (turn(address), turn(impact));
     for (f, frame) in student.chunks_exact_mut(m).enumerate() {
@@ -813,14 +829,25 @@ mod tests {
 
     #[test]
     fn the_club_head_is_at_the_coachs_height_at_address_and_impact() {
-        // The coach's club points down and forward from the grip; the student's is longer,
-        // so the analytic retargeter puts its head into the floor.
+        for lean in [0.3, 0.0] {
+            club_at_the_coachs_height(lean);
+        }
+    }
+
+    /// The coach's club points down and `lean` forward from the grip (plumb for 0); the
+    /// student's is longer, so the analytic retargeter puts its head into the floor.
+    fn club_at_the_coachs_height(lean: f32) {
         let (s, mut frames) = coach(Format::GolfMarkers, 20, |_| Vec3::zeros());
         let n = s.len();
         let [grip, head] = [Joint::ClubGrip, Joint::ClubHead].map(|j| s.index_of(j).unwrap());
         let length = norm(&s.offset(head));
         for f in 0..20 {
-            let down = Vec3::new(0.0, -0.95, 0.3 + 0.01 * f as f32).normalize();
+            let forward = if lean > 0.0 {
+                lean + 0.01 * f as f32
+            } else {
+                0.0
+            };
+            let down = Vec3::new(0.0, -0.95, forward).normalize();
             frames[f * n + head] = frames[f * n + grip] + down * length;
         }
         let student = scaled(&s, |k| if k == head { 1.2 } else { 1.0 });
@@ -843,9 +870,15 @@ mod tests {
             .unwrap();
         for f in [address, impact] {
             let missed = out[f * n + head].y - frames[f * n + head].y;
-            assert!(missed.abs() < 1e-4, "frame {f}: {missed}");
-            let shaft = norm(&(out[f * n + head] - out[f * n + grip]));
-            assert!((shaft - 1.2 * length).abs() < 1e-4);
+            assert!(missed.abs() < 1e-4, "lean {lean}, frame {f}: {missed}");
+            let shaft = out[f * n + head] - out[f * n + grip];
+            assert!((norm(&shaft) - 1.2 * length).abs() < 1e-4);
+            // A plumb shaft swings away from the body, seen from above.
+            let away = out[f * n + grip] - out[f * n];
+            assert!(
+                shaft.x * away.x + shaft.z * away.z > 0.0,
+                "lean {lean}, frame {f}"
+            );
         }
         assert_eq!(
             contacts.apply(
