@@ -23,10 +23,8 @@
 //! - [`kinematics`]: forward and inverse kinematics with per-bone rotations.
 //! - [`resample`]: linear resampling from one frame rate to another.
 //! - [`retarget`]: the analytic retargeter.
-//! - [`transfer`]: the rotation transfer, the coach's rotations onto the student's bones.
 //! - [`detector`]: which stretch of a live pose stream is a swing.
 //! - [`events`]: the eight swing events.
-//! - [`contacts`]: golf's contacts kept on a virtual coach (planted feet, grip, club at the ball).
 //! - [`body`]: the angles and shifts coaches read a swing by (turn, bend, sway, X-factor).
 //! - [`checks`]: the body metrics advice speaks of, at the positions it speaks of them.
 //! - [`sequence`]: the kinematic sequence, and its gaps against the coach's.
@@ -68,7 +66,6 @@ pub mod score;
 pub mod sequence;
 pub mod setup;
 pub mod skeleton;
-pub mod transfer;
 pub mod weights;
 pub mod wire;
 

@@ -33,11 +33,10 @@
 use crate::config::MAX_JOINTS;
 use crate::joint::Joint;
 use crate::kinematics::{swing, LengthError};
-use crate::skeleton::{Skeleton, SkeletonError};
+use crate::skeleton::Skeleton;
 use crate::{Quat, Vec3};
 
-/// No counterpart.
-pub(crate) const NONE: u8 = u8::MAX;
+const NONE: u8 = u8::MAX;
 
 /// Why a retarget could not be set up or run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,8 +49,6 @@ pub enum RetargetError {
     /// A source joint position is NaN or infinite.
     #[allow(missing_docs)]
     NonFinite { joint: usize },
-    /// A skeleton derived from a given one could not be built.
-    Skeleton(SkeletonError),
 }
 
 impl From<LengthError> for RetargetError {
@@ -68,7 +65,6 @@ impl core::fmt::Display for RetargetError {
                 f.write_str("the source skeleton's legs have no length")
             }
             RetargetError::NonFinite { joint } => write!(f, "source joint {joint} is not finite"),
-            RetargetError::Skeleton(e) => e.fmt(f),
         }
     }
 }
@@ -178,7 +174,19 @@ impl Fit {
         if source_legs <= f32::EPSILON {
             return Err(RetargetError::DegenerateSource);
         }
-        let counterpart = counterparts(source, target);
+        let same_tree = source.format() == target.format()
+            && source.format().joints().len() == source.len()
+            && source.len() == target.len()
+            && (0..source.len()).all(|i| source.parent(i) == target.parent(i));
+        let mut counterpart = [NONE; MAX_JOINTS];
+        for (k, slot) in counterpart.iter_mut().enumerate().take(target.len()) {
+            let found = if same_tree {
+                Some(k)
+            } else {
+                target.joint(k).and_then(|j| source.index_of(j))
+            };
+            *slot = found.map_or(NONE, |i| i as u8);
+        }
         let mut rest = [Vec3::zeros(); MAX_JOINTS];
         target.rest_positions(&mut rest);
         let mut anchor = [NONE; MAX_JOINTS];
@@ -260,24 +268,6 @@ impl Fit {
         }
         Ok(())
     }
-}
-
-/// Per `target` joint, its `source` counterpart ([`NONE`] for none): by index when both are
-/// the same built-in format with the same tree, else by canonical name.
-pub(crate) fn counterparts(source: &Skeleton, target: &Skeleton) -> [u8; MAX_JOINTS] {
-    let same_tree = source.format() == target.format()
-        && source.format().joints().len() == source.len()
-        && source.len() == target.len()
-        && (0..source.len()).all(|i| source.parent(i) == target.parent(i));
-    let mut counterpart = [NONE; MAX_JOINTS];
-    for (k, slot) in counterpart.iter_mut().enumerate().take(target.len()) {
-        let found = match same_tree {
-            true => Some(k),
-            false => target.joint(k).and_then(|j| source.index_of(j)),
-        };
-        *slot = found.map_or(NONE, |i| i as u8);
-    }
-    counterpart
 }
 
 /// Mean root-to-foot chain lengths of both skeletons, measured to the deepest foot joints both

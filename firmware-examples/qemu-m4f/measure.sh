@@ -37,7 +37,6 @@ ram=$((static_ram + stack))
 per_mac() { grep "^KERNEL int8 $1:" "$out" | sed -E 's/.*: ([0-9.]+) instructions per MAC/\1/'; }
 per_cell=$(grep '^KERNEL DTW cell' "$out" | sed -E 's/.*: ([0-9.]+) instructions per cell/\1/')
 window=$(grep '^NETWORK window' "$out" | sed -E 's/NETWORK window ([0-9]+).*/\1/')
-transferred=$(grep '^TRANSFER window' "$out" | sed -E 's/TRANSFER window ([0-9]+).*/\1/')
 stage_stack() { field "STAGE $1" stack; }
 hostile_stack=$(grep "^STACK hostile recording" "$out" | sed -E "s/.* ([0-9]+)$/\1/")
 echo
@@ -59,7 +58,6 @@ row "int8 linear layer: decoder.features, 16 x 16, requantization included, inst
 row "int8 grouped convolution: up_2, 96 channels in 6 groups, kernel 3, 64 frames, instructions per MAC" "2.5" "$(per_mac conv1d)" "$(per_mac conv1d)" 2.5
 row "banded DTW with the path, a real 55-frame swing of 17 joints, radius 10, instructions per cell" "120" "$per_cell" "$per_cell" 120
 row "retarget one 64-frame coach window (int8 network, 22 joints onto 17)" "6 M" "$(minstr "$window")" "$window" 6000000
-row "the same window by the rotation transfer (posecoach_core::transfer)" "6 M" "$(minstr "$transferred")" "$transferred" 6000000
 row "decode one message (mean, $(field 'STAGE decode' calls) messages)" "" "$(minstr "$(field 'STAGE decode' mean)")"
 row "one pose frame: stream, skeleton fit, detector (mean / max)" "" "$(minstr "$(field 'STAGE frame' mean)") / $(minstr "$(field 'STAGE frame' max)")"
 row "the frame that ends a swing: events, DTW, report (mean of $(field 'STAGE swing' calls))" "0.5 M" "$(minstr "$(field 'STAGE swing' mean)")" "$(field 'STAGE swing' mean)" 500000

@@ -433,9 +433,6 @@ pub struct EvalArgs {
     /// Include the rotation copy from the format's standard T-pose.
     #[arg(long)]
     copy: bool,
-    /// Include the rotation transfer the device runs (`posecoach_core::transfer`).
-    #[arg(long)]
-    transfer: bool,
     /// Include the ground truth itself: no joint error by definition, but its own grip, foot
     /// slide and club head, which its convention gives.
     #[arg(long)]
@@ -467,9 +464,6 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
     if args.copy {
         retargeters.push(Method::Baseline(Baseline::RotationCopy));
     }
-    if args.transfer {
-        retargeters.push(Method::Baseline(Baseline::Transfer));
-    }
     let mut methods = retargeters.clone();
     if args.contacts {
         methods.extend(retargeters.iter().map(Method::Contacts));
@@ -478,9 +472,7 @@ pub fn eval(args: &EvalArgs) -> Result<String> {
         methods.push(Method::Baseline(Baseline::GroundTruth));
     }
     if methods.is_empty() {
-        bail!(
-            "nothing to evaluate: pass --weights FILE, --analytic, --copy, --transfer or --truth"
-        );
+        bail!("nothing to evaluate: pass --weights FILE, --analytic, --copy or --truth");
     }
     let pool = args.data.pool(args.seed)?;
     let bar = Progress::new(0, "pairs");

@@ -34,7 +34,6 @@ use posecoach_core::joint::Joint;
 use posecoach_core::kinematics::{self, inverse, LengthError};
 use posecoach_core::retarget::RetargetError;
 use posecoach_core::skeleton::Skeleton;
-use posecoach_core::transfer::leg_length;
 use posecoach_core::{Quat, Vec3};
 use posecoach_io::Motion;
 
@@ -188,6 +187,17 @@ impl Clip {
 /// As [`Clip::on`].
 pub fn ground_truth(source: &Clip, target: &Character) -> Result<Motion, Error> {
     source.on(target)
+}
+
+/// Mean chain length from the root to both ankles (every built-in format has ankles; else the
+/// skeleton's own leg length): the ground truth's root scale, the same whatever format a body
+/// is dressed in.
+pub fn leg_length(skeleton: &Skeleton) -> f32 {
+    let chain = |joint| skeleton.index_of(joint).map(|k| skeleton.chain_length(k));
+    match (chain(Joint::LeftAnkle), chain(Joint::RightAnkle)) {
+        (Some(left), Some(right)) => 0.5 * (left + right),
+        _ => skeleton.leg_length(),
+    }
 }
 
 /// Global rotations from local ones, `G_k = G_parent · q_k`.

@@ -19,7 +19,7 @@ pub enum Error {
     Skeleton(SkeletonError),
     /// A frame does not fit its skeleton.
     Length(LengthError),
-    /// A retargeter refused a skeleton or frame.
+    /// The analytic retargeter refused a skeleton or frame.
     Retarget(RetargetError),
     /// Swing events could not be found in a coach's or ground truth's swing.
     Events(EventError),
@@ -54,7 +54,7 @@ impl fmt::Display for Error {
             Error::File(e) => e.fmt(f),
             Error::Skeleton(e) => write!(f, "skeleton: {e}"),
             Error::Length(e) => write!(f, "frame: {e}"),
-            Error::Retarget(e) => write!(f, "retargeting: {e}"),
+            Error::Retarget(e) => write!(f, "analytic retargeter: {e}"),
             Error::Events(e) => write!(f, "swing events: {e}"),
             Error::Contacts(e) => write!(f, "contacts: {e}"),
             Error::Mismatch { expected, actual } => write!(

@@ -254,9 +254,9 @@ fn fitted(mut m: Motion, frames: usize) -> Motion {
 mod tests {
     use super::*;
     use crate::bodies::testing::character;
+    use crate::clip::leg_length;
     use crate::clip::testing::wave_frames;
     use posecoach_core::format::Format;
-    use posecoach_core::transfer::leg_length;
 
     #[test]
     fn an_untrained_teacher_retargets_as_the_analytic_retargeter_on_the_standard_rest_poses() {

@@ -34,7 +34,6 @@ use posecoach_core::events::{self, SwingEvents};
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;
-use posecoach_core::transfer::Transfer;
 use posecoach_core::Vec3;
 use posecoach_io::Motion;
 use rand::Rng;
@@ -199,20 +198,15 @@ pub enum Baseline {
     /// Rotations of the source relative to its format's standard T-pose (the source's own rest
     /// pose is unknown to a retargeter), copied through canonical names onto the target's rest.
     RotationCopy,
-    /// [`posecoach_core::transfer::Transfer`]: the same rotations onto the target re-rested on
-    /// its format's standard T-pose (its bone lengths kept, its rest posture not), as the
-    /// device runs it.
-    Transfer,
     /// The ground truth itself (zero joint error; its own foot slide, for reference).
     GroundTruth,
 }
 
 impl Baseline {
     /// Every baseline, in table order.
-    pub const ALL: [Baseline; 4] = [
+    pub const ALL: [Baseline; 3] = [
         Baseline::Analytic,
         Baseline::RotationCopy,
-        Baseline::Transfer,
         Baseline::GroundTruth,
     ];
 
@@ -221,7 +215,6 @@ impl Baseline {
         match self {
             Baseline::Analytic => "analytic",
             Baseline::RotationCopy => "rotation copy",
-            Baseline::Transfer => "rotation transfer",
             Baseline::GroundTruth => "ground truth",
         }
     }
@@ -241,20 +234,6 @@ impl Baseline {
             Baseline::RotationCopy => {
                 let clip = Clip::from_motion(&pair.clip, &standard_rest(&pair.source)?)?;
                 clip.on(&pair.target)
-            }
-            Baseline::Transfer => {
-                let (source, target) = (&pair.source, &pair.target.skeleton);
-                let transfer = Transfer::new(&source.skeleton, target)?;
-                let (n, m) = (source.skeleton.len(), target.len());
-                let mut positions = vec![Vec3::zeros(); source.positions.len() / n * m];
-                for (from, onto) in source
-                    .positions
-                    .chunks_exact(n)
-                    .zip(positions.chunks_exact_mut(m))
-                {
-                    transfer.frame(from, onto)?;
-                }
-                Ok(motion(target, source.rate_hz, positions))
             }
             Baseline::GroundTruth => Ok(pair.ground_truth.clone()),
         }
@@ -853,29 +832,27 @@ mod tests {
     }
 
     #[test]
-    fn posture_error_moves_the_rotation_copy_and_neither_the_analytic_retargeter_nor_the_transfer()
-    {
+    fn posture_error_moves_the_rotation_copy_and_not_the_analytic_retargeter() {
         // The analytic retargeter copies each bone's direction and takes only its length from
         // the T-pose; the rotation copy turns the T-pose's own bones, posture error and all.
         let pool = synthetic_pool(2);
         let methods = [
             Baseline::Analytic,
             Baseline::RotationCopy,
-            Baseline::Transfer,
             Baseline::GroundTruth,
         ]
         .map(Method::Baseline);
         let rows = posture_error(&pool, 1, &methods, |_, _| {}).unwrap();
         assert_eq!(
             rows.len(),
-            6,
+            4,
             "two structures, the ground truth left out: {rows:?}"
         );
         for row in &rows {
             assert_eq!(row.pairs, 2 * GOLF_PAIRS);
             assert!(row.max >= row.mean);
             match row.method.as_str() {
-                "analytic" | "rotation transfer" => assert!(row.mean < 0.005, "{row:?}"),
+                "analytic" => assert!(row.mean < 0.005, "{row:?}"),
                 _ => assert!(row.mean > 0.01, "{row:?}"),
             }
         }
@@ -902,31 +879,6 @@ mod tests {
                 "ground truth" => assert_eq!(row.global, 0.0),
                 _ => assert!(row.global > 0.0, "{row:?}"),
             }
-        }
-    }
-
-    #[test]
-    fn the_devices_rotation_transfer_is_the_rotation_copy_onto_a_standard_rest() {
-        // The core's per-frame transfer against the trainer's clip path (the teacher's prior):
-        // the source re-rested, its rotations estimated, put on the target re-rested.
-        let pool = synthetic_pool(1);
-        let mut rng = SplitRng::new(Split::Eval, 7);
-        for structure in [Structure::Cross, Structure::Intra] {
-            let pair = pair_on(&pool.eval[0], &mut rng, structure, &Variation::FULL).unwrap();
-            let device = Baseline::Transfer.retarget(&pair).unwrap();
-            let target = pair.target.skeleton.standard_rest().unwrap();
-            let copy = Clip::from_motion(&pair.clip, &standard_rest(&pair.source).unwrap())
-                .unwrap()
-                .on_skeleton(&target)
-                .unwrap();
-            assert_eq!(device.positions.len(), copy.positions.len());
-            let worst = device
-                .positions
-                .iter()
-                .zip(&copy.positions)
-                .map(|(a, b)| (a - b).norm())
-                .fold(0.0, f32::max);
-            assert!(worst < 1e-4, "{structure:?}: {worst} m");
         }
     }
 

@@ -22,14 +22,13 @@
 //! the ankles for the rotations ([`leg_length`]: a body's is the same in every format, so
 //! its trajectory does not depend on the keypoints a capture has).
 
-use crate::clip::{counterparts, transfer, Rotations};
+use crate::clip::{counterparts, leg_length, transfer, Rotations};
 use crate::error::Error;
 use crate::fk;
 use crate::skeletons::Skeletons;
 use burn::prelude::{Device, Tensor, TensorData};
 use posecoach_core::retarget::{Analytic, RetargetError};
 use posecoach_core::skeleton::Skeleton;
-use posecoach_core::transfer::leg_length;
 use posecoach_core::{Quat, Vec3};
 
 /// Added to a chord's squared length before its square root, so that a chord of zero (a bone

@@ -20,7 +20,6 @@ mod count;
 mod kernels;
 mod network;
 mod stack;
-mod transfer;
 
 use cortex_m as _;
 use cortex_m_rt::entry;
@@ -164,8 +163,6 @@ fn run() -> Result<(), &'static str> {
     let (ring, coach) = (RING.take(), VIRTUAL_COACH.take());
     let window = network::check_golden(&weights, ring, coach)?;
     defmt::println!("NETWORK window {=u64} instructions", window);
-    let transferred = transfer::window(coach)?;
-    defmt::println!("TRANSFER window {=u64} instructions", transferred);
     // The golden check's depth (nothing has repainted the stack since reset); the replays
     // measure each message's from a freshly painted stack.
     let golden_stack = stack::high_water();

@@ -12,7 +12,7 @@ use posecoach_core::Vec3;
 pub static WEIGHTS: &Aligned<[u8]> =
     &Aligned(*include_bytes!("../../../weights/distilled-int8.pcw"));
 /// Their golden vectors: a coach swing at the network's rate, and its retargeting by the host.
-pub static GOLDEN_IN: &Aligned<[u8]> = &Aligned(*include_bytes!(
+static GOLDEN_IN: &Aligned<[u8]> = &Aligned(*include_bytes!(
     "../../../weights/distilled-int8.golden-in.pcr"
 ));
 pub static GOLDEN_OUT: &Aligned<[u8]> = &Aligned(*include_bytes!(
