@@ -1,47 +1,9 @@
-//! Instructions per unit of work of the core's kernels: a multiply-accumulate of the int8
-//! kernels, on the committed network's own layers (its widest convolution and a joint layer),
-//! and a cell of the banded DTW, on a real swing.
+//! Instructions per multiply-accumulate of the int8 kernels, on the committed network's own
+//! layers (its widest convolution and a joint layer).
 
 use crate::count;
-use crate::network::GOLDEN_OUT;
-use posecoach_core::dtw::{self, Band, Sequence, Window};
 use posecoach_core::int8::{self, Activation, Conv, Layer};
-use posecoach_core::reference::Reference;
 use posecoach_core::weights::{Dense, Weights};
-
-/// Band radius of the DTW benchmark, frames: scoring's at 30 Hz.
-const DTW_RADIUS: u16 = 10;
-
-/// Instructions per banded cell of `dtw::align` with the path, times 100: the golden output
-/// (the driver coach retargeted onto a 17-joint student, 55 frames at 30 Hz) aligned with
-/// itself as scoring aligns swings (rooted frames, every joint weighing the same), in a
-/// global band of [`DTW_RADIUS`]. Also returns the cells.
-#[inline(never)]
-pub fn dtw_per_cell_centi() -> Result<(u64, usize), &'static str> {
-    let swing = Reference::from_bytes(&GOLDEN_OUT.0).map_err(|_| "golden output damaged")?;
-    let (frames, joints) = (swing.frames(), swing.skeleton().len());
-    let a = Sequence::rooted(swing.positions(), joints).map_err(|_| "golden output's shape")?;
-    let window = Window::new(Band::global(DTW_RADIUS), &[]).map_err(|_| "band")?;
-    let len = dtw::scratch_len(frames, frames, &window).map_err(|_| "band")?;
-    let mut cost = [0.0f32; 128];
-    let mut steps = [0u8; 512];
-    let mut path = [(0u16, 0u16); 2 * 64];
-    let (Some(cost), Some(steps), Some(path)) = (
-        cost.get_mut(..len.cost),
-        steps.get_mut(..len.path_bytes),
-        path.get_mut(..2 * frames - 1),
-    ) else {
-        return Err("the DTW benchmark's scratch is too short for the golden output");
-    };
-    let b = core::hint::black_box(a);
-    let start = count::now();
-    let aligned = dtw::align(&a, &b, &[], &window, cost, steps, path).map_err(|_| "DTW")?;
-    let spent = count::now() - start;
-    if aligned.path_len != frames || aligned.distance != 0.0 {
-        return Err("a swing aligned with itself is not the diagonal");
-    }
-    Ok((spent * 100 / len.cells as u64, len.cells))
-}
 
 /// Deterministic bytes: a 32-bit LCG's high byte.
 fn bytes<const N: usize>(seed: u32) -> [i8; N] {

@@ -1,23 +1,29 @@
 //! posecoach's device pipeline on a Cortex-M4F (QEMU `mps2-an386`).
 //!
-//! First checks the int8 retargeter (`weights/distilled-int8.pcw`, embedded) against its golden
-//! vectors bit for bit. Then replays the recorded session `tests/logs/device_h36m_30hz.pclog`
-//! (embedded; a 30 Hz model rate, the network's) through the device's session with the
-//! bundled coach references (embedded `.pcr` blobs) and the network: decode → pose stream →
-//! swing detection → retarget (the int8 network, once per student and coach) → events → DTW →
-//! report. Every reply the device would send is encoded as on the serial link and compared
-//! with the host's (`posecoach replay --weights … --wire`, committed as
-//! `device_h36m_30hz.int8.device.bin`). Then, in a fresh session, the hostile recording
-//! `tests/logs/hostile_h36m_30hz.pclog` (the same session with bursts of what a broken or
-//! hostile phone sends, and IMU clocks that leap, restart and wrap), its replies compared the
-//! same way, and no message of either allowed more than [`MESSAGE_BUDGET`] instructions.
-//! Prints each report and the instructions each stage took over defmt; exits 0 only if every
-//! bit matched and every message kept to the budget.
+//! Replays the recorded session `tests/logs/device_h36m_30hz.pclog` (embedded; a 30 Hz model
+//! rate) through the device's session with the bundled coach references (embedded `.pcr`
+//! blobs): decode → pose stream → swing detection → retarget (the analytic retargeter, once
+//! per student and coach, then golf's contacts) → events → DTW → report. Every reply the
+//! device would send is encoded as on the serial link and compared with the host's
+//! (`posecoach replay --wire`, committed as `device_h36m_30hz.device.bin`). Then, in a fresh
+//! session, the hostile recording `tests/logs/hostile_h36m_30hz.pclog` (the same session with
+//! bursts of what a broken or hostile phone sends, and IMU clocks that leap, restart and
+//! wrap), its replies compared the same way, and no message of either allowed more than
+//! [`MESSAGE_BUDGET`] instructions. Prints each report and the instructions each stage took
+//! over defmt; exits 0 only if every bit matched and every message kept to the budget.
+//!
+//! With the `network` feature the session retargets with the int8 network instead
+//! (`weights/distilled-int8.pcw`, embedded), checked first against its golden vectors bit for
+//! bit and its kernels and one 64-frame window counted; the replies are then compared with
+//! `posecoach replay --weights … --wire` (`device_h36m_30hz.int8.device.bin`).
 #![no_std]
 #![no_main]
 
 mod count;
+mod dtw;
+#[cfg(feature = "network")]
 mod kernels;
+#[cfg(feature = "network")]
 mod network;
 mod stack;
 
@@ -30,7 +36,9 @@ use posecoach_adapters::session::{BufferLens, Buffers, Coach, Outcome, Session, 
 use posecoach_core::blob::Aligned;
 use posecoach_core::reference::Reference;
 use posecoach_core::resample;
-use posecoach_core::weights::{Architecture, Weights, SEGMENTS, WINDOW};
+use posecoach_core::weights::Weights;
+#[cfg(feature = "network")]
+use posecoach_core::weights::{Architecture, SEGMENTS, WINDOW};
 use posecoach_core::wire::{encode, Config, Message, MAX_FRAME};
 use posecoach_core::Vec3;
 use static_cell::ConstStaticCell;
@@ -38,10 +46,16 @@ use static_cell::ConstStaticCell;
 static LOG: &Aligned<[u8]> = &Aligned(*include_bytes!(
     "../../../tests/logs/device_h36m_30hz.pclog"
 ));
+#[cfg(not(feature = "network"))]
+static EXPECTED: &[u8] = include_bytes!("../../../tests/logs/device_h36m_30hz.device.bin");
+#[cfg(feature = "network")]
 static EXPECTED: &[u8] = include_bytes!("../../../tests/logs/device_h36m_30hz.int8.device.bin");
 static HOSTILE: &Aligned<[u8]> = &Aligned(*include_bytes!(
     "../../../tests/logs/hostile_h36m_30hz.pclog"
 ));
+#[cfg(not(feature = "network"))]
+static HOSTILE_EXPECTED: &[u8] = include_bytes!("../../../tests/logs/hostile_h36m_30hz.device.bin");
+#[cfg(feature = "network")]
 static HOSTILE_EXPECTED: &[u8] =
     include_bytes!("../../../tests/logs/hostile_h36m_30hz.int8.device.bin");
 static COACHES: [&Aligned<[u8]>; 2] = [
@@ -55,14 +69,16 @@ const STUDENT_JOINTS: usize = 17;
 const MODEL_RATE_HZ: u16 = 30;
 /// Frames of the longest bundled coach reference (110 at 60 Hz) at the model rate.
 const COACH_FRAMES: usize = resample::frames(110, 60.0, MODEL_RATE_HZ as f32);
-/// Joints of the bundled coaches (the canonical 22).
+/// Joints of the bundled coaches (the canonical 22): the network's input.
+#[cfg(feature = "network")]
 const COACH_JOINTS: usize = 22;
 /// Most instructions one message may take, whatever it holds: a quarter of a second of a
 /// 64 MHz Cortex-M4F (the nRF52840's clock) at an instruction a cycle, the longest a phone
 /// waits for a reply. The costliest message a phone can send is a set-up (a profile, coach
-/// selection or sensor layout: the coach retargeted by the network, about 8 M).
+/// selection or sensor layout: the coach retargeted, about 11 M by the network).
 const MESSAGE_BUDGET: u64 = 16_000_000;
 /// The embedded network's sizes (checked against its header at start).
+#[cfg(feature = "network")]
 const NETWORK: Architecture = Architecture {
     features: 16,
     heads: 2,
@@ -71,6 +87,9 @@ const NETWORK: Architecture = Architecture {
     segments: SEGMENTS as u16,
     rate_hz: 30.0,
 };
+#[cfg(not(feature = "network"))]
+const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RATE_HZ);
+#[cfg(feature = "network")]
 const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RATE_HZ).with_network(
     &NETWORK,
     STUDENT_JOINTS,
@@ -99,7 +118,7 @@ struct Stages {
     /// completes.
     imu: Tally,
     /// A profile, settings, coach selection or sensor layout: the coach retargeted onto the
-    /// student (the int8 network), its events; or a refusal.
+    /// student, its events; or a refusal.
     setup: Tally,
     /// Encoding a reply for the serial link.
     reply: Tally,
@@ -117,7 +136,7 @@ fn main() -> ! {
     };
     match status {
         Ok(()) => {
-            defmt::println!("PASS: the network's golden vectors and every reply equal the host's");
+            defmt::println!("PASS: every reply equals the host's");
             semihosting::process::exit(0)
         }
         Err(why) => {
@@ -129,23 +148,7 @@ fn main() -> ! {
 
 fn run() -> Result<(), &'static str> {
     count::check()?;
-    let weights =
-        Weights::from_bytes(&network::WEIGHTS.0).map_err(|_| "the weights are damaged")?;
-    if *weights.architecture() != NETWORK {
-        return Err("the weights are not the network the buffers were sized for");
-    }
-    for (name, per_mac) in [
-        ("linear", kernels::linear_per_mac_centi(&weights)?),
-        ("conv1d", kernels::conv_per_mac_centi(&weights)?),
-    ] {
-        defmt::println!(
-            "KERNEL int8 {=str}: {=u64}.{=u64:02} instructions per MAC",
-            name,
-            per_mac / 100,
-            per_mac % 100
-        );
-    }
-    let (per_cell, cells) = kernels::dtw_per_cell_centi()?;
+    let (per_cell, cells) = dtw::per_cell_centi()?;
     defmt::println!(
         "KERNEL DTW cell ({=usize} cells): {=u64}.{=u64:02} instructions per cell",
         cells,
@@ -161,15 +164,18 @@ fn run() -> Result<(), &'static str> {
     };
     let coaches = [Coach::from(&driver), Coach::from(&iron)];
     let (ring, coach) = (RING.take(), VIRTUAL_COACH.take());
-    let window = network::check_golden(&weights, ring, coach)?;
-    defmt::println!("NETWORK window {=u64} instructions", window);
-    // The golden check's depth (nothing has repainted the stack since reset); the replays
+    #[cfg(feature = "network")]
+    let weights = Some(network::checked(ring, coach)?);
+    #[cfg(not(feature = "network"))]
+    let weights: Option<Weights<'_>> = None;
+    let weights = weights.as_ref();
+    // The network's checks' depth (nothing has repainted the stack since reset); the replays
     // measure each message's from a freshly painted stack.
-    let golden_stack = stack::high_water();
+    let checks_stack = stack::high_water();
     let (floats, bytes, unsure) = (FLOATS.take(), BYTES.take(), UNSURE.take());
     let clean = replay(
         &coaches,
-        &weights,
+        weights,
         Buffers {
             ring: &mut *ring,
             coach: &mut *coach,
@@ -189,11 +195,11 @@ fn run() -> Result<(), &'static str> {
         LENS.floats * core::mem::size_of::<f32>(),
         LENS.bytes,
         LENS.unsure * core::mem::size_of::<u64>(),
-        golden_stack.max(clean.stages.deepest())
+        checks_stack.max(clean.stages.deepest())
     );
     let hostile = replay(
         &coaches,
-        &weights,
+        weights,
         Buffers {
             ring,
             coach,
@@ -207,12 +213,16 @@ fn run() -> Result<(), &'static str> {
     print("HOSTILE", &hostile.stages);
     // How deep the hostile recording took the stack (the clean session's depth is above).
     defmt::println!("STACK hostile recording {=usize}", hostile.stages.deepest());
+    #[cfg(feature = "network")]
+    let (vectors, weights) = (network::golden_bytes(), network::WEIGHTS.0.len());
+    #[cfg(not(feature = "network"))]
+    let (vectors, weights) = (dtw::SWING.0.len(), 0);
     defmt::println!(
         "EMBEDDED log {=usize} transcript {=usize} golden {=usize} weights {=usize} hostile {=usize}",
         LOG.0.len(),
         EXPECTED.len(),
-        network::golden_bytes(),
-        network::WEIGHTS.0.len(),
+        vectors,
+        weights,
         HOSTILE.0.len() + HOSTILE_EXPECTED.len()
     );
     let costliest = clean.stages.costliest().max(hostile.stages.costliest());
@@ -250,7 +260,7 @@ struct Replayed {
 #[inline(always)]
 fn replay(
     coaches: &[Coach<'_>],
-    weights: &Weights<'_>,
+    weights: Option<&Weights<'_>>,
     buffers: Buffers<'_>,
     log: &[u8],
     mut expected: &[u8],
@@ -259,9 +269,12 @@ fn replay(
         model_rate_hz: MODEL_RATE_HZ,
         ..DEFAULT_CONFIG
     };
-    let mut session = Session::with_config(coaches, buffers, own)
-        .map_err(|_| "the device's own settings")?
-        .with_network(weights);
+    let session =
+        Session::with_config(coaches, buffers, own).map_err(|_| "the device's own settings")?;
+    let mut session = match weights {
+        Some(w) => session.with_network(w),
+        None => session,
+    };
     let mut reader = LogReader::new(log).map_err(|_| "an embedded log is not a log")?;
     let mut stages = Stages::default();
     let mut mismatch = false;

@@ -1,7 +1,8 @@
-//! The int8 retargeter on the device: its golden vectors checked bit for bit, and one
-//! 64-frame window counted.
+//! The int8 retargeter on the device (the `network` feature): its kernels counted, its golden
+//! vectors checked bit for bit and one 64-frame window counted.
 
-use crate::count;
+use crate::NETWORK;
+use crate::{count, kernels};
 use posecoach_core::blob::Aligned;
 use posecoach_core::network;
 use posecoach_core::reference::Reference;
@@ -15,9 +16,31 @@ pub static WEIGHTS: &Aligned<[u8]> =
 static GOLDEN_IN: &Aligned<[u8]> = &Aligned(*include_bytes!(
     "../../../weights/distilled-int8.golden-in.pcr"
 ));
-pub static GOLDEN_OUT: &Aligned<[u8]> = &Aligned(*include_bytes!(
-    "../../../weights/distilled-int8.golden-out.pcr"
-));
+pub use crate::dtw::SWING as GOLDEN_OUT;
+
+/// The embedded weights, once their kernels are counted and their golden vectors checked with
+/// `scratch` and `out` (see [`check_golden`]); prints what each took.
+#[inline(never)]
+pub fn checked(scratch: &mut [Vec3], out: &mut [Vec3]) -> Result<Weights<'static>, &'static str> {
+    let weights = Weights::from_bytes(&WEIGHTS.0).map_err(|_| "the weights are damaged")?;
+    if *weights.architecture() != NETWORK {
+        return Err("the weights are not the network the buffers were sized for");
+    }
+    for (name, per_mac) in [
+        ("linear", kernels::linear_per_mac_centi(&weights)?),
+        ("conv1d", kernels::conv_per_mac_centi(&weights)?),
+    ] {
+        defmt::println!(
+            "KERNEL int8 {=str}: {=u64}.{=u64:02} instructions per MAC",
+            name,
+            per_mac / 100,
+            per_mac % 100
+        );
+    }
+    let window = check_golden(&weights, scratch, out)?;
+    defmt::println!("NETWORK window {=u64} instructions", window);
+    Ok(weights)
+}
 
 /// Bytes of the golden vectors, which only the test embeds.
 pub fn golden_bytes() -> usize {
@@ -28,7 +51,7 @@ pub fn golden_bytes() -> usize {
 /// the session's ring and virtual coach before the session starts) and compares every bit
 /// with the host's output; returns the instructions it took.
 #[inline(never)]
-pub fn check_golden(
+fn check_golden(
     weights: &Weights<'_>,
     scratch: &mut [Vec3],
     out: &mut [Vec3],
