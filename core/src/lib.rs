@@ -25,6 +25,7 @@
 //! - [`retarget`]: the analytic retargeter.
 //! - [`detector`]: which stretch of a live pose stream is a swing.
 //! - [`events`]: the eight swing events.
+//! - [`contacts`]: golf's contacts kept on a virtual coach (planted feet, grip, club at the ball).
 //! - [`body`]: the angles and shifts coaches read a swing by (turn, bend, sway, X-factor).
 //! - [`checks`]: the body metrics advice speaks of, at the positions it speaks of them.
 //! - [`sequence`]: the kinematic sequence, and its gaps against the coach's.
