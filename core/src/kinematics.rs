@@ -296,6 +296,43 @@ mod tests {
     }
 
     #[test]
+    fn a_child_on_its_parents_axis_does_not_twist_it() {
+        // Every bone of every format whose only child lies on its axis at rest: with the whole
+        // body turned and that child bent 30 degrees, the bone itself keeps its rest rotation
+        // (its children cannot tell its twist; rounding must not choose one).
+        let mut checked = 0;
+        for format in Format::BUILT_IN {
+            let skeleton = Skeleton::standard(format).unwrap();
+            let n = skeleton.len();
+            for k in 1..n {
+                let children: std::vec::Vec<usize> = (k + 1..n)
+                    .filter(|&c| skeleton.parent(c) == Some(k))
+                    .collect();
+                let [c] = children[..] else { continue };
+                let (bone, child) = (skeleton.offset(k), skeleton.offset(c));
+                if bone.norm() < 1e-3 || bone.cross(&child).norm() > 1e-6 * child.norm() {
+                    continue;
+                }
+                let mut local = [Quat::identity(); MAX_JOINTS];
+                local[0] = Quat::from_euler_angles(0.3, 1.1, -0.4);
+                let across = bone.cross(&Vec3::new(0.3, 0.5, 0.7)).normalize();
+                local[c] = Quat::from_axis_angle(&Unit::new_normalize(across), 0.5);
+                let mut posed = [Vec3::zeros(); MAX_JOINTS];
+                forward(&skeleton, &local[..n], Vec3::zeros(), &mut posed[..n]).unwrap();
+                let mut found = [Quat::identity(); MAX_JOINTS];
+                inverse(&skeleton, &posed[..n], &mut found[..n]).unwrap();
+                assert!(
+                    found[k].angle() < 1e-3,
+                    "{format} joint {k}: {}",
+                    found[k].angle()
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 0, "no format has such a bone");
+    }
+
+    #[test]
     fn short_slices_are_errors() {
         let skeleton = Skeleton::standard(Format::Coco17).unwrap();
         let mut out = [Vec3::zeros(); 3];
