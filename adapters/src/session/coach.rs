@@ -6,11 +6,13 @@ use super::Refusal;
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::contacts::{Contacts, Swing};
 use posecoach_core::events;
+#[cfg(feature = "network")]
 use posecoach_core::network::{self, NetworkError};
 use posecoach_core::reference::Reference;
 use posecoach_core::resample;
 use posecoach_core::retarget::Analytic;
 use posecoach_core::skeleton::Skeleton;
+#[cfg(feature = "network")]
 use posecoach_core::weights::Weights;
 use posecoach_core::Vec3;
 
@@ -142,6 +144,7 @@ impl Coach<'_> {
 
     /// The coach at `rate_hz` retargeted onto `student` by the int8 network of `weights`, into
     /// `out` (whole frames of the student); its input and scratch are carved from `ring`.
+    #[cfg(feature = "network")]
     pub(super) fn retarget_network(
         &self,
         weights: &Weights<'_>,

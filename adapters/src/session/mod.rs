@@ -56,7 +56,6 @@ use posecoach_core::events::{self, EventError, Side, SwingEvents, STILL_S};
 use posecoach_core::format::Format;
 use posecoach_core::math::norm;
 use posecoach_core::plausible;
-use posecoach_core::resample;
 use posecoach_core::retarget::Fit;
 use posecoach_core::score::{self, Detected, Report, ScoreError, Unsure};
 use posecoach_core::setup::{self, Setup};
@@ -123,6 +122,7 @@ struct Student<'b> {
 #[derive(Debug)]
 pub struct Session<'b> {
     coaches: &'b [Coach<'b>],
+    #[cfg(feature = "network")]
     network: Option<&'b Weights<'b>>,
     config: Config,
     /// The phone's `CoachSelect`; until one, each swing is scored against the coach whose
@@ -174,7 +174,9 @@ impl<'b> Session<'b> {
 
     /// This session retargeting coaches with the int8 network of `weights` whenever the model
     /// rate is the network's ([`Architecture::rate_hz`](posecoach_core::weights::Architecture::rate_hz)); its ring must then be as long as
-    /// [`BufferLens::with_network`] says. Set it before the profile arrives.
+    /// [`BufferLens::with_network`] says. Set it before the profile arrives. (With the
+    /// `network` feature.)
+    #[cfg(feature = "network")]
     pub fn with_network(mut self, weights: &'b Weights<'b>) -> Session<'b> {
         self.network = Some(weights);
         self
@@ -183,6 +185,7 @@ impl<'b> Session<'b> {
     fn start(coaches: &'b [Coach<'b>], buffers: Buffers<'b>, config: Config) -> Session<'b> {
         Session {
             coaches,
+            #[cfg(feature = "network")]
             network: None,
             config,
             selected: None,
@@ -340,9 +343,12 @@ impl<'b> Session<'b> {
         let checked = SwingDetector::check(&skeleton, detector, ring.len())
             .map_err(Refusal::Detector)
             .and_then(|_| {
-                let network = self
-                    .network
-                    .filter(|w| resample::same_rate(w.architecture().rate_hz, f32::from(rate)));
+                #[cfg(feature = "network")]
+                let network = self.network.filter(|w| {
+                    posecoach_core::resample::same_rate(w.architecture().rate_hz, f32::from(rate))
+                });
+                #[cfg(not(feature = "network"))]
+                let network: Option<&Weights<'_>> = None;
                 let mut needed = BufferLens::new(joints, frames, rate);
                 if let Some(w) = network {
                     let n = coach.skeleton.len();
@@ -685,8 +691,9 @@ fn make_virtual(
         .get_mut(..coach.frames_at(rate) * joints)
         .ok_or(Refusal::Buffers)?;
     match network {
+        #[cfg(feature = "network")]
         Some((w, ring)) => coach.retarget_network(w, skeleton, rate, ring, out)?,
-        None => coach.retarget_analytic(skeleton, rate, out)?,
+        _ => coach.retarget_analytic(skeleton, rate, out)?,
     }
     coach.keep_contacts(skeleton, rate, out)?;
     if let Some(imu) = imu {

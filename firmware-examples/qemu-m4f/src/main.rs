@@ -75,7 +75,7 @@ const COACH_JOINTS: usize = 22;
 /// Most instructions one message may take, whatever it holds: a quarter of a second of a
 /// 64 MHz Cortex-M4F (the nRF52840's clock) at an instruction a cycle, the longest a phone
 /// waits for a reply. The costliest message a phone can send is a set-up (a profile, coach
-/// selection or sensor layout: the coach retargeted, about 11 M by the network).
+/// selection or sensor layout: the coach retargeted, about 4 M; 11 M by the network).
 const MESSAGE_BUDGET: u64 = 16_000_000;
 /// The embedded network's sizes (checked against its header at start).
 #[cfg(feature = "network")]
@@ -169,8 +169,8 @@ fn run() -> Result<(), &'static str> {
     #[cfg(not(feature = "network"))]
     let weights: Option<Weights<'_>> = None;
     let weights = weights.as_ref();
-    // The network's checks' depth (nothing has repainted the stack since reset); the replays
-    // measure each message's from a freshly painted stack.
+    // The benchmarks' (and the network's checks') depth: nothing has repainted the stack since
+    // reset; the replays measure each message's from a freshly painted stack.
     let checks_stack = stack::high_water();
     let (floats, bytes, unsure) = (FLOATS.take(), BYTES.take(), UNSURE.take());
     let clean = replay(
@@ -218,7 +218,7 @@ fn run() -> Result<(), &'static str> {
     #[cfg(not(feature = "network"))]
     let (vectors, weights) = (dtw::SWING.0.len(), 0);
     defmt::println!(
-        "EMBEDDED log {=usize} transcript {=usize} golden {=usize} weights {=usize} hostile {=usize}",
+        "EMBEDDED log {=usize} transcript {=usize} vectors {=usize} weights {=usize} hostile {=usize}",
         LOG.0.len(),
         EXPECTED.len(),
         vectors,
@@ -258,6 +258,7 @@ struct Replayed {
 /// into `run`, their arrays (12 KiB for the convolution's) stayed in its frame through both
 /// replays.
 #[inline(always)]
+#[cfg_attr(not(feature = "network"), allow(unused_variables))]
 fn replay(
     coaches: &[Coach<'_>],
     weights: Option<&Weights<'_>>,
@@ -269,12 +270,12 @@ fn replay(
         model_rate_hz: MODEL_RATE_HZ,
         ..DEFAULT_CONFIG
     };
-    let session =
+    let mut session =
         Session::with_config(coaches, buffers, own).map_err(|_| "the device's own settings")?;
-    let mut session = match weights {
-        Some(w) => session.with_network(w),
-        None => session,
-    };
+    #[cfg(feature = "network")]
+    if let Some(w) = weights {
+        session = session.with_network(w);
+    }
     let mut reader = LogReader::new(log).map_err(|_| "an embedded log is not a log")?;
     let mut stages = Stages::default();
     let mut mismatch = false;
