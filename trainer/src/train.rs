@@ -993,7 +993,7 @@ mod tests {
     }
 
     #[test]
-    fn a_batch_in_parts_steps_as_the_whole() {
+    fn a_batch_in_parts_steps_as_the_whole_on_the_per_window_losses() {
         let device = Device::flex().autodiff();
         let pool = pool();
         let dir = std::env::temp_dir().join(format!("posecoach-parts-{}", std::process::id()));
