@@ -13,14 +13,14 @@ net=$(mktemp)
 trap 'rm -f "$out" "$net"' EXIT
 
 section() { size -A "$elf" | awk -v s="$1" '$1 == s { print $2 }' | grep . || echo 0; }
-field() { grep "^$2 " "$1" | sed -E "s/.* $3 ([0-9]+).*/\1/"; }
+field() { grep -m1 "^$2 " "$1" | sed -E "s/.* $3 ([0-9]+).*/\1/"; }
 kib() { awk -v b="$1" 'BEGIN { printf "%.1f KiB", b / 1024 }'; }
 minstr() { awk -v n="$1" 'BEGIN { printf "%.3f M", n / 1e6 }'; }
 # Flash without the test's embedded logs, transcripts and test vectors, and static RAM, of the
 # ELF just built whose output is in $1.
 flash_of() {
     local code=$(( $(section .vector_table) + $(section .text) + $(section .rodata) + $(section .data) ))
-    echo $((code - $(field "$1" EMBEDDED log) - $(field "$1" EMBEDDED transcript) - $(field "$1" EMBEDDED golden) - $(field "$1" EMBEDDED hostile)))
+    echo $((code - $(field "$1" EMBEDDED log) - $(field "$1" EMBEDDED transcript) - $(field "$1" EMBEDDED vectors) - $(field "$1" EMBEDDED hostile)))
 }
 static_of() { echo $(( $(section .data) + $(section .bss) + $(section .uninit) )); }
 

@@ -16,7 +16,7 @@ pub static WEIGHTS: &Aligned<[u8]> =
 static GOLDEN_IN: &Aligned<[u8]> = &Aligned(*include_bytes!(
     "../../../weights/distilled-int8.golden-in.pcr"
 ));
-pub use crate::dtw::SWING as GOLDEN_OUT;
+use crate::dtw::SWING as GOLDEN_OUT;
 
 /// The embedded weights, once their kernels are counted and their golden vectors checked with
 /// `scratch` and `out` (see [`check_golden`]); prints what each took.
