@@ -167,7 +167,7 @@ fn fit(
         let predicted = perp(swung * offset);
         // A child at rest on the bone's axis says nothing of its twist: its sideways part is
         // rounding, and would choose the twist at random.
-        if predicted.norm() <= MIN_TWIST_LEVER * offset.norm() {
+        if predicted.norm_squared() <= MIN_TWIST_LEVER * MIN_TWIST_LEVER * offset.norm_squared() {
             continue;
         }
         let actual = perp(positions[c] - positions[k]);
