@@ -57,6 +57,7 @@
 
 use crate::config::MAX_JOINTS;
 use crate::events::{Position, Side, SwingEvents, SMOOTHING_S};
+use crate::frames::Frames;
 use crate::joint::Joint;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
@@ -479,14 +480,17 @@ impl Body {
     /// positive rate), degrees per second: the angle it turns from `SMOOTHING_S / 2` before to
     /// as long after (see [`crate::sequence::kinematic_sequence`]). `None` within that of either end of the swing
     /// and for a club that is not tracked.
-    pub fn speed(&self, link: Link, swing: &[Vec3], hz: f32, t: usize) -> Option<f32> {
-        let joints = self.joints.max(1);
-        let frame = |f: usize| swing.get(f.checked_mul(joints)?..)?.get(..joints);
+    pub fn speed(&self, link: Link, swing: Frames<'_>, hz: f32, t: usize) -> Option<f32> {
         let half = self.window(hz) / 2;
+        let (a, b) = (t.checked_sub(half)?, t.checked_add(half)?);
+        if b >= swing.len() || swing.joints() != self.joints {
+            return None;
+        }
+        let (mut pose_a, mut pose_b) = ([Vec3::zeros(); MAX_JOINTS], [Vec3::zeros(); MAX_JOINTS]);
         let turned = self.turned(
             link,
-            frame(t.checked_sub(half)?)?,
-            frame(t.checked_add(half)?)?,
+            swing.frame(a, &mut pose_a),
+            swing.frame(b, &mut pose_b),
         )?;
         Some(turned * hz / (2 * half) as f32)
     }
@@ -567,23 +571,22 @@ impl Link {
 /// [`BodyError::MissingJoint`] as [`Body::new`].
 pub fn at_positions(
     skeleton: &Skeleton,
-    swing: &[Vec3],
+    swing: Frames<'_>,
     events: &SwingEvents,
 ) -> Result<[Option<Metrics>; Position::ALL.len()], BodyError> {
     let body = Body::new(skeleton, events.lead)?;
     let joints = skeleton.len().min(MAX_JOINTS);
-    let frames = swing.len() / joints.max(1);
     // The pose at `time` (frames), linear between the frames around it.
     let pose = |time: f32, out: &mut [Vec3; MAX_JOINTS]| -> Option<()> {
-        let last = frames.checked_sub(1)?;
+        let last = swing.len().checked_sub(1)?;
+        if swing.joints() != joints {
+            return None;
+        }
         let time = time.clamp(0.0, last as f32);
         let (f, w) = (time as usize, time - libm::floorf(time));
-        let (a, b) = (
-            swing.get(f * joints..(f + 1) * joints)?,
-            swing.get((f + 1).min(last) * joints..((f + 1).min(last) + 1) * joints)?,
-        );
-        for ((o, p), q) in out.iter_mut().zip(a).zip(b) {
-            *o = p * (1.0 - w) + q * w;
+        let g = (f + 1).min(last);
+        for (k, o) in out.iter_mut().enumerate().take(joints) {
+            *o = swing.at(f, k) * (1.0 - w) + swing.at(g, k) * w;
         }
         Some(())
     };

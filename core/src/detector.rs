@@ -23,6 +23,7 @@
 //! assert_eq!(detector.push(&rest), Ok(None));
 //! ```
 
+use crate::frames::Frames;
 use crate::joint::Joint;
 use crate::math::norm;
 use crate::skeleton::Skeleton;
@@ -372,7 +373,7 @@ impl<'s> SwingDetector<'s> {
     pub fn with_window<R>(
         &mut self,
         window: &SwingWindow,
-        f: impl FnOnce(&[Vec3]) -> R,
+        f: impl FnOnce(Frames<'_>) -> R,
     ) -> Result<R, DetectorError> {
         let end = window.start + window.len as u64;
         if end > self.seen || self.seen - window.start > self.capacity as u64 {
@@ -381,7 +382,10 @@ impl<'s> SwingDetector<'s> {
         let ring = &mut self.storage[..self.capacity * self.joints];
         let turn = (window.start % self.capacity as u64) as usize * self.joints;
         ring.rotate_left(turn);
-        let result = f(&ring[..window.len * self.joints]);
+        let result = f(Frames::metres(
+            &ring[..window.len * self.joints],
+            self.joints,
+        ));
         ring.rotate_right(turn);
         Ok(result)
     }
@@ -443,7 +447,7 @@ mod tests {
         let before = d.storage.to_vec();
         let seen: Vec<f32> = d
             .with_window(&window, |frames| {
-                frames.chunks(17).map(|f| f[0].x).collect()
+                (0..frames.len()).map(|f| frames.at(f, 0).x).collect()
             })
             .unwrap();
         let expected: Vec<f32> = (capacity - 10..capacity + 20).map(|n| n as f32).collect();

@@ -34,6 +34,7 @@
 //! ```
 
 use crate::config::MAX_JOINTS;
+use crate::frames::{from_mm, Frames, Stored};
 use crate::math::{sqrt, sum_sqrt};
 use crate::Vec3;
 
@@ -112,7 +113,7 @@ enum Layout<'a> {
     /// Channel-major floats, as the caller measured them.
     Channels(&'a [f32]),
     /// Frame-major positions, each measured from its frame's first joint when costed.
-    Rooted(&'a [Vec3]),
+    Rooted(Frames<'a>),
 }
 
 impl<'a> Sequence<'a> {
@@ -129,16 +130,20 @@ impl<'a> Sequence<'a> {
         })
     }
 
-    /// Wraps frame-major `frames` of `joints` positions (a swing as it is stored), each
-    /// measured from its frame's first joint (the root) as it is costed. The costs are those
-    /// of the channel-major sequence of the root-relative positions, to the bit, without the
-    /// copy; cells are costed one at a time (no vectors across columns), which suits a
-    /// microcontroller and is slower on the host.
+    /// Wraps `frames` (a swing as it is stored), each position measured from its frame's
+    /// first joint (the root) as it is costed. The costs are those of the channel-major
+    /// sequence of the root-relative positions, to the bit, without the copy; cells are costed
+    /// one at a time (no vectors across columns), which suits a microcontroller and is slower
+    /// on the host.
     ///
     /// # Errors
     /// As [`Sequence::new`].
-    pub fn rooted(frames: &'a [Vec3], joints: usize) -> Result<Self, DtwError> {
-        check_shape(frames.len(), joints, joints)?;
+    pub fn rooted(frames: Frames<'a>) -> Result<Self, DtwError> {
+        let joints = frames.joints();
+        if !frames.is_whole() {
+            return Err(DtwError::SequenceShape);
+        }
+        check_shape(frames.len() * joints, joints, joints)?;
         Ok(Sequence {
             layout: Layout::Rooted(frames),
             joints,
@@ -149,7 +154,7 @@ impl<'a> Sequence<'a> {
     pub fn frames(&self) -> usize {
         match self.layout {
             Layout::Channels(data) => data.len() / (3 * self.joints),
-            Layout::Rooted(frames) => frames.len() / self.joints,
+            Layout::Rooted(frames) => frames.len(),
         }
     }
 
@@ -176,8 +181,7 @@ impl<'a> Sequence<'a> {
             Layout::Channels(data) => data[c * self.frames() + i],
             Layout::Rooted(frames) => {
                 let (axis, k) = (c / self.joints, c % self.joints);
-                let frame = &frames[i * self.joints..];
-                (frame[k] - frame[0])[axis]
+                (frames.at(i, k) - frames.at(i, 0))[axis]
             }
         }
     }
@@ -654,7 +658,7 @@ impl CellCost<'_> {
         weigh: impl Fn(f32, f32) -> f32,
     ) {
         if let (Layout::Rooted(fa), Layout::Rooted(fb)) = (a.layout, b.layout) {
-            return self.sum_rooted(fa, i, fb, a.joints, first, out, weigh);
+            return self.sum_rooted(fa, i, fb, first, out, weigh);
         }
         let mut column = first;
         // Without vectors (the Cortex-M4F), column after column: no blocks to compile.
@@ -719,29 +723,55 @@ impl CellCost<'_> {
     /// same order (each joint's root-relative position, the squared distance summed x, y, z,
     /// joints added in order from zero, then scaled), so the costs equal the channel-major
     /// ones to the bit.
-    #[allow(clippy::too_many_arguments)]
+    /// `b`'s frames are read as they are stored: `f32` metres as they are, millimetres each
+    /// turned into metres ([`from_mm`]) where it is used.
     #[inline(always)]
     fn sum_rooted(
         &self,
-        a: &[Vec3],
+        a: Frames<'_>,
         i: usize,
-        b: &[Vec3],
-        joints: usize,
+        b: Frames<'_>,
         first: usize,
         out: &mut [f32],
         weigh: impl Fn(f32, f32) -> f32,
     ) {
-        let frame = &a[i * joints..(i + 1) * joints];
+        let joints = a.joints();
         let mut here = [Vec3::zeros(); MAX_JOINTS];
-        for (h, p) in here.iter_mut().zip(frame) {
-            *h = p - frame[0];
+        let root = a.at(i, 0);
+        for (k, h) in here.iter_mut().enumerate().take(joints) {
+            *h = a.at(i, k) - root;
         }
-        let frames = b[first * joints..].chunks_exact(joints);
+        match b.stored() {
+            Stored::Metres(p) => {
+                let frames = p[first * joints..].chunks_exact(joints);
+                self.rooted_costs(&here[..joints], frames, |p| *p, out, weigh);
+            }
+            Stored::Millimetres(p) => {
+                let frames = p[first * joints..].chunks_exact(joints);
+                self.rooted_costs(&here[..joints], frames, |p| from_mm(*p), out, weigh);
+            }
+        }
+    }
+
+    /// The costs of `here` (root-relative positions) against each of `frames`, read through
+    /// `metres`, into `out`.
+    #[inline(always)]
+    fn rooted_costs<'p, P: 'p>(
+        &self,
+        here: &[Vec3],
+        frames: impl Iterator<Item = &'p [P]>,
+        metres: impl Fn(&P) -> Vec3,
+        out: &mut [f32],
+        weigh: impl Fn(f32, f32) -> f32,
+    ) {
         let mut squares = [0.0; MAX_JOINTS];
-        let squares = &mut squares[..joints];
+        let squares = &mut squares[..here.len()];
         for (o, other) in out.iter_mut().zip(frames) {
-            for ((s, h), p) in squares.iter_mut().zip(&here).zip(other) {
-                let d = h - (p - other[0]);
+            let Some(root) = other.first().map(&metres) else {
+                return;
+            };
+            for ((s, h), p) in squares.iter_mut().zip(here).zip(other) {
+                let d = h - (metres(p) - root);
                 *s = d.x * d.x + d.y * d.y + d.z * d.z;
             }
             let sum = if self.unit {
@@ -794,6 +824,7 @@ impl StepWriter<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frames::{to_mm, Mm};
     use proptest::prelude::*;
     use std::vec::Vec;
 
@@ -909,10 +940,27 @@ mod tests {
             let (ca, cb) = (channels(&fa, joints), channels(&fb, joints));
             let weights: &[f32] = if weighted && w.iter().sum::<f32>() > 0.0 { &w } else { &[] };
             let window = Window::new(Band::global(radius), &[]).unwrap();
-            let rooted = run(&Sequence::rooted(&fa, joints).unwrap(), &Sequence::rooted(&fb, joints).unwrap(), weights, &window);
+            let rooted = run(&Sequence::rooted(Frames::metres(&fa, joints)).unwrap(), &Sequence::rooted(Frames::metres(&fb, joints)).unwrap(), weights, &window);
             let copied = run(&Sequence::new(&ca, joints).unwrap(), &Sequence::new(&cb, joints).unwrap(), weights, &window);
             prop_assert_eq!(rooted.0.distance.to_bits(), copied.0.distance.to_bits());
             prop_assert_eq!(rooted.1, copied.1);
+        }
+
+        #[test]
+        fn millimetre_frames_align_as_the_metres_they_hold_to_the_bit(
+            (joints, a, b, w) in sequences(), radius in 0u16..8, weighted in any::<bool>(),
+        ) {
+            let mm = |c: &[f32]| -> Vec<Mm> { c.chunks_exact(3).filter_map(|v| to_mm(&Vec3::new(v[0], v[1], v[2]))).collect() };
+            let (ma, mb) = (mm(&a), mm(&b));
+            prop_assume!(3 * ma.len() == a.len() && 3 * mb.len() == b.len());
+            let metres = |m: &[Mm]| -> Vec<Vec3> { m.iter().map(|&p| from_mm(p)).collect() };
+            let (fa, fb) = (metres(&ma), metres(&mb));
+            let weights: &[f32] = if weighted && w.iter().sum::<f32>() > 0.0 { &w } else { &[] };
+            let window = Window::new(Band::global(radius), &[]).unwrap();
+            let stored = run(&Sequence::rooted(Frames::millimetres(&ma, joints)).unwrap(), &Sequence::rooted(Frames::millimetres(&mb, joints)).unwrap(), weights, &window);
+            let read = run(&Sequence::rooted(Frames::metres(&fa, joints)).unwrap(), &Sequence::rooted(Frames::metres(&fb, joints)).unwrap(), weights, &window);
+            prop_assert_eq!(stored.0.distance.to_bits(), read.0.distance.to_bits());
+            prop_assert_eq!(stored.1, read.1);
         }
 
         #[test]
@@ -1013,7 +1061,7 @@ mod tests {
         let window = Window::new(Band::global(2), &[]).unwrap();
         let mut path = [(0, 0); 8];
         let positions = [Vec3::zeros(); 2];
-        let rooted = Sequence::rooted(&positions, 1).unwrap();
+        let rooted = Sequence::rooted(Frames::metres(&positions, 1)).unwrap();
         assert_eq!(
             align(
                 &s1,
@@ -1027,7 +1075,7 @@ mod tests {
             Err(DtwError::Layouts)
         );
         assert_eq!(
-            Sequence::rooted(&positions, 3).err(),
+            Sequence::rooted(Frames::metres(&positions, 3)).err(),
             Some(DtwError::SequenceShape)
         );
         assert_eq!(

@@ -37,6 +37,7 @@
 //! assert_eq!(Event::Impact.name(), "impact");
 //! ```
 
+use crate::frames::Frames;
 use crate::joint::Joint;
 use crate::math::norm;
 use crate::skeleton::Skeleton;
@@ -388,7 +389,7 @@ impl SwingEvents {
 pub enum EventError {
     /// The skeleton lacks a joint the detector needs.
     MissingJoint(Joint),
-    /// `positions` is not a whole number of frames, or too few frames (under a second) or
+    /// `positions` is not whole frames of the skeleton's joints, or too few frames (under a second) or
     /// more than `u16::MAX`.
     Length,
     /// The rate is not a positive finite number.
@@ -446,20 +447,18 @@ impl<F: Fn(usize) -> f32> Memo<F> {
 
 /// Smoothed trajectories of one motion.
 struct Track<'a> {
-    positions: &'a [Vec3],
-    joints: usize,
+    positions: Frames<'a>,
     frames: usize,
     half: usize,
     rate: f32,
 }
 
 impl<'a> Track<'a> {
-    /// `positions` of `joints` joints at `rate` frames per second, smoothed over ±[`SMOOTHING_S`].
-    fn new(positions: &'a [Vec3], joints: usize, rate: f32) -> Track<'a> {
+    /// `positions` at `rate` frames per second, smoothed over ±[`SMOOTHING_S`].
+    fn new(positions: Frames<'a>, rate: f32) -> Track<'a> {
         Track {
             positions,
-            joints,
-            frames: positions.len() / joints.max(1),
+            frames: positions.len(),
             half: libm::roundf(SMOOTHING_S * rate) as usize,
             rate,
         }
@@ -471,9 +470,7 @@ impl<'a> Track<'a> {
             t.saturating_sub(self.half),
             (t + self.half).min(self.frames - 1),
         );
-        let sum = (lo..=hi).fold(Vec3::zeros(), |s, f| {
-            s + self.positions[f * self.joints + j]
-        });
+        let sum = (lo..=hi).fold(Vec3::zeros(), |s, f| s + self.positions.at(f, j));
         sum / (hi - lo + 1) as f32
     }
 
@@ -616,10 +613,10 @@ pub struct Takeaway {
 /// the events or a crossing.
 pub fn takeaway_against(
     skeleton: &Skeleton,
-    student: &[Vec3],
+    student: Frames<'_>,
     student_events: &SwingEvents,
     student_hz: f32,
-    coach: &[Vec3],
+    coach: Frames<'_>,
     coach_events: &SwingEvents,
     coach_hz: f32,
 ) -> Option<Takeaway> {
@@ -630,11 +627,7 @@ pub fn takeaway_against(
         skeleton.index_of(Joint::LeftElbow)?,
         skeleton.index_of(Joint::RightElbow)?,
     ];
-    let joints = skeleton.len();
-    let (s, c) = (
-        Track::new(student, joints, student_hz),
-        Track::new(coach, joints, coach_hz),
-    );
+    let (s, c) = (Track::new(student, student_hz), Track::new(coach, coach_hz));
     if s.frames == 0 || c.frames == 0 {
         return None;
     }
@@ -784,21 +777,21 @@ pub fn takeaway_against(
 /// non-finite motion, or a motion without a complete swing.
 pub fn detect(
     skeleton: &Skeleton,
-    positions: &[Vec3],
+    positions: Frames<'_>,
     rate_hz: f32,
 ) -> Result<SwingEvents, EventError> {
     if !(rate_hz.is_finite() && rate_hz > 0.0) {
         return Err(EventError::Rate);
     }
-    let joints = skeleton.len();
-    let frames = positions.len() / joints;
-    if !positions.len().is_multiple_of(joints)
+    let frames = positions.len();
+    if !positions.is_whole()
+        || positions.joints() != skeleton.len()
         || (frames as f32) < rate_hz
         || frames > u16::MAX as usize
     {
         return Err(EventError::Length);
     }
-    if positions.iter().any(|p| !p.iter().all(|v| v.is_finite())) {
+    if !positions.is_finite() {
         return Err(EventError::NonFinite);
     }
     let need = |j: Joint| skeleton.index_of(j).ok_or(EventError::MissingJoint(j));
@@ -815,7 +808,7 @@ pub fn detect(
     let club = skeleton
         .index_of(Joint::ClubGrip)
         .zip(skeleton.index_of(Joint::ClubHead));
-    let track = &Track::new(positions, joints, rate_hz);
+    let track = &Track::new(positions, rate_hz);
     let hands = |t: usize| (track.at(wrists[0], t) + track.at(wrists[1], t)) * 0.5;
     let hand_speeds = Memo::new(|t| track.speed(hands, t));
     let hand_speed = |t: usize| hand_speeds.get(t);
@@ -1129,6 +1122,11 @@ mod tests {
     use std::vec::Vec;
 
     const RATE_HZ: f32 = 60.0;
+
+    /// [`super::detect`] of positions in metres.
+    fn detect(skeleton: &Skeleton, positions: &[Vec3], hz: f32) -> Result<SwingEvents, EventError> {
+        super::detect(skeleton, Frames::metres(positions, skeleton.len()), hz)
+    }
 
     fn standing(skeleton: &Skeleton, frames: usize) -> Vec<Vec3> {
         let mut rest = std::vec![Vec3::zeros(); skeleton.len()];

@@ -22,6 +22,7 @@
 //! - [`plausible`]: the human limits a body and its motion must keep (stature, bones, speed).
 //! - [`kinematics`]: forward and inverse kinematics with per-bone rotations.
 //! - [`resample`]: linear resampling from one frame rate to another.
+//! - [`frames`]: a swing as stored (`f32` metres or 16-bit millimetres), read as metres.
 //! - [`retarget`]: the analytic retargeter.
 //! - [`detector`]: which stretch of a live pose stream is a swing.
 //! - [`events`]: the eight swing events.
@@ -54,6 +55,7 @@ pub mod detector;
 pub mod dtw;
 pub mod events;
 pub mod format;
+pub mod frames;
 pub mod int8;
 pub mod joint;
 pub mod kinematics;

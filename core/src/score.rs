@@ -35,6 +35,7 @@ use crate::checks::{BodyDeviation, CHECKS};
 use crate::config::{DEVIATIONS_PER_EVENT, MAX_DEVIATIONS, MAX_JOINTS, MAX_SWING_FRAMES};
 use crate::dtw::{self, Band, DtwError, Sequence, Window};
 use crate::events::{self, Event, EventError, Position, Side, SwingEvents};
+use crate::frames::Frames;
 use crate::joint::Joint;
 use crate::math::{median, norm, select};
 use crate::sequence::{self, Downswing, Gap, GAPS, GAP_TOLERANCE_S};
@@ -559,21 +560,22 @@ pub fn face(skeleton: &Skeleton, coach: &mut [Vec3], events: &SwingEvents, towar
     }
 }
 
-/// Frame `f` of a swing of `joints` joints.
-fn frame(swing: &[Vec3], joints: usize, f: usize) -> &[Vec3] {
-    &swing[f * joints..(f + 1) * joints]
+/// The stance of `swing` at frame `f`.
+fn stance_at(skeleton: &Skeleton, swing: Frames<'_>, f: usize, lead: Side) -> Stance {
+    let mut pose = [Vec3::zeros(); MAX_JOINTS];
+    Stance::new(skeleton, swing.frame(f, &mut pose), lead)
 }
 
-/// Joint `k` of a swing of `joints` joints at fractional frame `x` (linear between frames,
-/// clamped to the swing), averaged over `x ± half` frames: zero-phase smoothing of the cut
-/// swing, computed where it is needed.
-fn smoothed(swing: &[Vec3], joints: usize, x: f32, k: usize, half: usize) -> Vec3 {
-    let last = (swing.len() / joints).saturating_sub(1);
+/// Joint `k` of `swing` at fractional frame `x` (linear between frames, clamped to the swing),
+/// averaged over `x ± half` frames: zero-phase smoothing of the cut swing, computed where it
+/// is needed.
+fn smoothed(swing: Frames<'_>, x: f32, k: usize, half: usize) -> Vec3 {
+    let last = swing.len().saturating_sub(1);
     let at = |x: f32| {
         let x = x.clamp(0.0, last as f32);
         let (f, w) = (x as usize, x - libm::floorf(x));
         let g = (f + 1).min(last);
-        swing[f * joints + k] * (1.0 - w) + swing[g * joints + k] * w
+        swing.at(f, k) * (1.0 - w) + swing.at(g, k) * w
     };
     let sum = (0..=2 * half).fold(Vec3::zeros(), |s, i| s + at(x + i as f32 - half as f32));
     sum / (2 * half + 1) as f32
@@ -652,22 +654,24 @@ pub fn score(
         Detected::new(skeleton, positions, hz)
             .map_err(|error| ScoreError::Events { student, error })
     };
-    let student = detect(student, student_hz, true)?;
-    let coach_events =
-        events::detect(skeleton, coach, coach_hz).map_err(|error| ScoreError::Events {
-            student: false,
-            error,
-        })?;
     let joints = skeleton.len();
-    let address = student.events.address() * joints;
-    let stance = Stance::new(
+    let student = detect(Frames::metres(student, joints), student_hz, true)?;
+    let coach_events =
+        events::detect(skeleton, Frames::metres(coach, joints), coach_hz).map_err(|error| {
+            ScoreError::Events {
+                student: false,
+                error,
+            }
+        })?;
+    let stance = stance_at(
         skeleton,
-        &student.positions[address..address + joints],
+        student.positions,
+        student.events.address(),
         student.events.lead,
     );
     face(skeleton, coach, &coach_events, stance.toward_target());
     let coach = Detected {
-        positions: coach,
+        positions: Frames::metres(coach, joints),
         hz: coach_hz,
         events: coach_events,
         unsure: Unsure::default(),
@@ -706,8 +710,8 @@ impl<'a> Unsure<'a> {
 /// A swing with its events: frames × skeleton joints at `hz`.
 #[derive(Clone, Copy, Debug)]
 pub struct Detected<'a> {
-    /// The frames, frame-major.
-    pub positions: &'a [Vec3],
+    /// The frames.
+    pub positions: Frames<'a>,
     /// Their rate.
     pub hz: f32,
     /// Its events, as [`events::detect`] finds them in `positions`.
@@ -721,7 +725,7 @@ impl<'a> Detected<'a> {
     ///
     /// # Errors
     /// [`EventError`] when they cannot be found.
-    pub fn new(skeleton: &Skeleton, positions: &'a [Vec3], hz: f32) -> Result<Self, EventError> {
+    pub fn new(skeleton: &Skeleton, positions: Frames<'a>, hz: f32) -> Result<Self, EventError> {
         let events = events::detect(skeleton, positions, hz)?;
         Ok(Detected {
             positions,
@@ -773,7 +777,7 @@ pub fn compare(
         coach_hz,
     );
     let student_events = takeaway.map_or(student_events, |t| student_events.with_takeaway(t.time));
-    let (n, m) = (student.len() / joints, coach.len() / joints);
+    let (n, m) = (student.len(), coach.len());
     for frames in [n, m] {
         if frames > MAX_SWING_FRAMES {
             return Err(ScoreError::TooLong { frames });
@@ -808,8 +812,8 @@ pub fn compare(
     let mut path = HVec::new();
     let _ = path.resize((n + m - 1).min(MAX_PATH), (0, 0));
     let alignment = dtw::align(
-        &Sequence::rooted(student, joints)?,
-        &Sequence::rooted(coach, joints)?,
+        &Sequence::rooted(student)?,
+        &Sequence::rooted(coach)?,
         &[],
         &window,
         cost,
@@ -821,16 +825,13 @@ pub fn compare(
     // Spatial deviations at each event, in each swing's stance frame, the student's pose at its
     // event time against the coach's at its own (a pure offset keeps its direction), both
     // smoothed over ±SPATIAL_SMOOTHING_S.
-    let stance_s = Stance::new(
+    let stance_s = stance_at(
         skeleton,
-        frame(student, joints, student_events.address()),
+        student,
+        student_events.address(),
         student_events.lead,
     );
-    let stance_c = Stance::new(
-        skeleton,
-        frame(coach, joints, coach_events.address()),
-        coach_events.lead,
-    );
+    let stance_c = stance_at(skeleton, coach, coach_events.address(), coach_events.lead);
     let ratio = coach_hz / student_hz;
     let time_map = TimeMap::new(&student_events, &coach_events, ratio);
     let (half_s, half_c) = (
@@ -840,23 +841,23 @@ pub fn compare(
 
     // An input that holds the root still shows the body about its pelvis: the coach is then
     // compared the same way, its root held at address.
-    let root_held = (0..n).all(|f| norm(&(student[f * joints] - student[0])) < HELD_ROOT_M);
+    let root_held = (0..n).all(|f| norm(&(student.at(f, 0) - student.at(0, 0))) < HELD_ROOT_M);
     let coach_address = coach_events.time(Event::Address).unwrap_or(0.0);
     // The coach's root at address, once for each smoothing it is read with (single frames,
     // and ±SPATIAL_SMOOTHING_S).
-    let anchors = [0, half_c].map(|half| smoothed(coach, joints, coach_address, 0, half));
+    let anchors = [0, half_c].map(|half| smoothed(coach, coach_address, 0, half));
     let coach_at = |k: usize, x: f32, half: usize| {
-        let p = smoothed(coach, joints, x, k, half);
+        let p = smoothed(coach, x, k, half);
         if root_held {
             let anchor = anchors[usize::from(half == half_c)];
-            p - (smoothed(coach, joints, x, 0, half) - anchor)
+            p - (smoothed(coach, x, 0, half) - anchor)
         } else {
             p
         }
     };
     let offset = |k: usize, x: f32, (hs, hc): (usize, usize)| {
         let c = time_map.at(x);
-        stance_s.local(smoothed(student, joints, x, k, hs)) - stance_c.local(coach_at(k, c, hc))
+        stance_s.local(smoothed(student, x, k, hs)) - stance_c.local(coach_at(k, c, hc))
     };
     // Each joint's usual offset from the coach over the swing, takeaway to finish (per axis the
     // median: a keypoint's constant bias, or a joint another format places elsewhere), and how
@@ -950,9 +951,7 @@ pub fn compare(
         .zip(skeleton.find(&[Joint::RightWrist, Joint::RightHand]));
     if let (Some((l, r)), Some(takeaway)) = (hands, student_events.time(Event::Address)) {
         let half = libm::roundf(events::SMOOTHING_S * student_hz) as usize;
-        let at = |x: f32| {
-            (smoothed(student, joints, x, l, half) + smoothed(student, joints, x, r, half)) * 0.5
-        };
+        let at = |x: f32| (smoothed(student, x, l, half) + smoothed(student, x, r, half)) * 0.5;
         let velocity = |x: f32| (at(x + 1.0) - at(x - 1.0)) * (0.5 * student_hz);
         let still = libm::floorf(takeaway) as usize;
         let noise = libm::sqrtf(
@@ -1150,7 +1149,7 @@ pub fn compare(
     let body = body_checks(
         skeleton,
         &Swing {
-            at: &|k, x| smoothed(student, joints, x, k, half_s),
+            at: &|k, x| smoothed(student, x, k, half_s),
             events: &student_events,
             stance: &stance_s,
         },

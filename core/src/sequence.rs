@@ -19,6 +19,7 @@
 
 use crate::body::{Body, BodyError, Link};
 use crate::events::{Position, SwingEvents, SwingKind};
+use crate::frames::Frames;
 use crate::math::median;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
@@ -86,7 +87,7 @@ impl KinematicSequence {
 /// [`BodyError::MissingJoint`] as [`Body::new`].
 pub fn kinematic_sequence(
     skeleton: &Skeleton,
-    swing: &[Vec3],
+    swing: Frames<'_>,
     hz: f32,
     events: &SwingEvents,
 ) -> Result<Option<KinematicSequence>, BodyError> {
@@ -104,7 +105,7 @@ pub fn kinematic_sequence(
 
 /// Each link's fastest rotation (see [`kinematic_sequence`]) between frames `from` and `to`
 /// of `swing` (frames × the skeleton's joints at `hz`, a positive rate), as `body` measures it.
-pub fn peaks(body: &Body, swing: &[Vec3], hz: f32, from: usize, to: usize) -> KinematicSequence {
+pub fn peaks(body: &Body, swing: Frames<'_>, hz: f32, from: usize, to: usize) -> KinematicSequence {
     let mut sequence = KinematicSequence::default();
     let window = body.window(hz);
     for link in Link::ALL {
@@ -373,7 +374,7 @@ pub struct Downswing<'a> {
     /// How it is measured.
     pub body: &'a Body,
     /// Its frames.
-    pub positions: &'a [Vec3],
+    pub positions: Frames<'a>,
     /// Frames per second.
     pub hz: f32,
     /// Its events.
@@ -526,7 +527,7 @@ mod tests {
         let from = (STILL_S * hz) as usize;
         peaks(
             &body,
-            &positions,
+            Frames::metres(&positions, skeleton.len()),
             hz,
             from,
             positions.len() / skeleton.len() - 1,
@@ -556,7 +557,12 @@ mod tests {
             hz,
             events: &events,
         };
-        gaps(&downswing(&s), &downswing(&c), &|_, _, _| false)
+        let joints = skeleton.len();
+        gaps(
+            &downswing(Frames::metres(&s, joints)),
+            &downswing(Frames::metres(&c, joints)),
+            &|_, _, _| false,
+        )
     }
 
     const IN_ORDER: [(Link, f32, f32); 3] = [

@@ -17,7 +17,9 @@
 //! ```
 
 use crate::body::Stance;
+use crate::config::MAX_JOINTS;
 use crate::events::Side;
+use crate::frames::Frames;
 use crate::joint::Joint;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
@@ -35,12 +37,15 @@ pub struct Setup {
 }
 
 impl Setup {
-    /// The set-up of `frames` (frame-major, skeleton joints), each measured in the stance of the
-    /// first (a golfer whose lead side is `lead`) and averaged: the still frames before a
-    /// takeaway. `None` without feet or wrists, or without frames.
-    pub fn new(skeleton: &Skeleton, frames: &[Vec3], lead: Side) -> Option<Setup> {
-        let joints = skeleton.len();
-        let first = frames.get(..joints)?;
+    /// The set-up of `frames` (of skeleton joints), each measured in the stance of the first (a
+    /// golfer whose lead side is `lead`) and averaged: the still frames before a takeaway.
+    /// `None` without feet or wrists, or without frames.
+    pub fn new(skeleton: &Skeleton, frames: Frames<'_>, lead: Side) -> Option<Setup> {
+        if frames.is_empty() || frames.joints() != skeleton.len() {
+            return None;
+        }
+        let mut first = [Vec3::zeros(); MAX_JOINTS];
+        let first = frames.frame(0, &mut first);
         let feet = [
             skeleton.find(&[Joint::LeftAnkle, Joint::LeftToe])?,
             skeleton.find(&[Joint::RightAnkle, Joint::RightToe])?,
@@ -52,12 +57,13 @@ impl Setup {
         let head = skeleton.index_of(Joint::ClubHead);
         let stance = Stance::new(skeleton, first, lead);
         let (mut sum, mut count) = ([0.0f32; 3], 0.0f32);
-        for frame in frames.chunks_exact(joints) {
-            let apart = frame[feet[0]] - frame[feet[1]];
-            let hands = stance.local((frame[wrists[0]] + frame[wrists[1]]) * 0.5);
+        for f in 0..frames.len() {
+            let at = |k: usize| frames.at(f, k);
+            let apart = at(feet[0]) - at(feet[1]);
+            let hands = stance.local((at(wrists[0]) + at(wrists[1])) * 0.5);
             sum[0] += libm::hypotf(apart.x, apart.z);
             sum[1] += hands.y;
-            sum[2] += head.map_or(0.0, |k| stance.local(frame[k]).y);
+            sum[2] += head.map_or(0.0, |k| stance.local(at(k)).y);
             count += 1.0;
         }
         Some(Setup {
@@ -119,11 +125,14 @@ mod tests {
         frame[at(Joint::LeftWrist)] = Vec3::new(0.05, 0.8, 0.3);
         frame[at(Joint::RightWrist)] = Vec3::new(-0.05, 0.8, 0.3);
         let frames: std::vec::Vec<Vec3> = frame.iter().chain(frame.iter()).copied().collect();
-        let setup = Setup::new(&skeleton, &frames, Side::Left).unwrap();
+        let setup = Setup::new(&skeleton, Frames::metres(&frames, 17), Side::Left).unwrap();
         assert!((setup.stance_m - 0.6).abs() < 1e-5, "{setup:?}");
         assert!((setup.hands_out_m - 0.3).abs() < 1e-5, "{setup:?}");
         assert_eq!(setup.head_out_m, None);
-        assert_eq!(Setup::new(&skeleton, &frames[..5], Side::Left), None);
+        assert_eq!(
+            Setup::new(&skeleton, Frames::metres(&frames[..5], 17), Side::Left),
+            None
+        );
     }
 
     #[test]

@@ -14,6 +14,7 @@ use base64::Engine;
 use posecoach_adapters::session::Compared;
 use posecoach_core::body::{self, Link, Metrics, Stance};
 use posecoach_core::events::{Event, Position, SwingEvents};
+use posecoach_core::frames::Frames;
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{Advice, Report, SPATIAL_THRESHOLD_M};
 use posecoach_core::sequence::{self, KinematicSequence, GAP_TOLERANCE_S};
@@ -64,18 +65,24 @@ impl Scored {
         Scored {
             report: report.clone(),
             skeleton: compared.skeleton.clone(),
-            student: compared.student.to_vec(),
+            student: compared.student.iter().collect(),
             student_hz: compared.student_hz,
-            coach: compared.coach.to_vec(),
+            coach: compared.coach.iter().collect(),
             coach_hz: compared.coach_hz,
         }
+    }
+
+    /// `swing` (the student's or the coach's), as the core's readers take it.
+    fn as_frames<'s>(&self, swing: &'s [Vec3]) -> Frames<'s> {
+        Frames::metres(swing, self.skeleton.len())
     }
 
     /// Both swings' body metrics at each P-position either has: (position, student's,
     /// coach's).
     pub fn body_table(&self) -> Vec<(Position, Option<Metrics>, Option<Metrics>)> {
         let table = |swing: &[Vec3], events: &SwingEvents| {
-            body::at_positions(&self.skeleton, swing, events).unwrap_or([None; Position::ALL.len()])
+            body::at_positions(&self.skeleton, self.as_frames(swing), events)
+                .unwrap_or([None; Position::ALL.len()])
         };
         let (student, coach) = (
             table(&self.student, &self.report.student_events),
@@ -95,7 +102,8 @@ impl Scored {
         let of = |swing: &[Vec3], hz: f32, events: &SwingEvents| {
             let top = events.time(Position::P4)?;
             let sequence =
-                sequence::kinematic_sequence(&self.skeleton, swing, hz, events).ok()??;
+                sequence::kinematic_sequence(&self.skeleton, self.as_frames(swing), hz, events)
+                    .ok()??;
             Some((sequence, top, hz))
         };
         [
@@ -348,7 +356,7 @@ fn sequence_chart(out: &mut String, n: usize, s: &Scored, sequences: [Sequenced;
             .map(|&link| {
                 (first..=last)
                     .filter_map(|t| {
-                        let v = body.speed(link, swing, hz, t)?;
+                        let v = body.speed(link, s.as_frames(swing), hz, t)?;
                         Some((ms(t as f32), v))
                     })
                     .collect()

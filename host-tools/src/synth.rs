@@ -20,6 +20,7 @@ use posecoach_core::body::Stance;
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, SwingEvents, SwingKind};
 use posecoach_core::format::{Format, Source};
+use posecoach_core::frames::Frames;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{self, Config, Message, StudentProfile, MAX_FRAME};
 use posecoach_core::Vec3;
@@ -239,9 +240,13 @@ pub fn run(args: &Args) -> Result<String> {
         .iter()
         .map(|p| {
             let swing = onto_body(p)?;
-            let top = events::detect(&swing.skeleton, &swing.positions, TIMELINE_HZ)
-                .with_context(|| format!("events of {}", p.display()))?
-                .top();
+            let top = events::detect(
+                &swing.skeleton,
+                Frames::metres(&swing.positions, swing.skeleton.len()),
+                TIMELINE_HZ,
+            )
+            .with_context(|| format!("events of {}", p.display()))?
+            .top();
             Ok((p.clone(), stretch(&swing, top, args.backswing_tempo)))
         })
         .collect::<Result<_>>()?;
@@ -464,7 +469,7 @@ pub fn lay_out(
     for (n, (path, swing)) in swings.iter().enumerate() {
         let address = swing.frame(0).to_vec();
         walk_to(&mut t, address[0]);
-        let events = events::detect(skeleton, &swing.positions, rate)
+        let events = events::detect(skeleton, swing.swing(), rate)
             .with_context(|| format!("events of {}", path.display()))?;
         if events.kind != SwingKind::Full {
             bail!(

@@ -8,6 +8,7 @@ use crate::units::Units;
 use posecoach_core::contacts::{self, ContactError, Contacts, Swing};
 use posecoach_core::events;
 use posecoach_core::format::Format;
+use posecoach_core::frames::Frames;
 use posecoach_core::joint::Joint;
 use posecoach_core::reference::{self, Reference, ReferenceError};
 use posecoach_core::resample;
@@ -36,6 +37,11 @@ impl Motion {
     /// Number of frames.
     pub fn frames(&self) -> usize {
         self.positions.len() / self.skeleton.len()
+    }
+
+    /// The frames, as the core's readers take them.
+    pub fn swing(&self) -> Frames<'_> {
+        Frames::metres(&self.positions, self.skeleton.len())
     }
 
     /// Joint positions of frame `i`.
@@ -91,7 +97,7 @@ impl Motion {
                 student: self.frames(),
             });
         }
-        let swing = events::detect(&coach.skeleton, &coach.positions, coach.rate_hz)
+        let swing = events::detect(&coach.skeleton, coach.swing(), coach.rate_hz)
             .ok()
             .map(|s| Swing::from(&s));
         Contacts::new(&coach.skeleton, &self.skeleton).apply(

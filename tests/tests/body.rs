@@ -8,8 +8,8 @@ use posecoach_io as io;
 use posecoach_tests::{fixture, left_handed};
 
 fn table(swing: &io::Motion) -> [Option<Metrics>; 10] {
-    let events = detect(&swing.skeleton, &swing.positions, swing.rate_hz).unwrap();
-    at_positions(&swing.skeleton, &swing.positions, &events).unwrap()
+    let events = detect(&swing.skeleton, swing.swing(), swing.rate_hz).unwrap();
+    at_positions(&swing.skeleton, swing.swing(), &events).unwrap()
 }
 
 fn at(table: &[Option<Metrics>; 10], p: Position) -> Metrics {
@@ -57,7 +57,7 @@ fn a_left_handed_golfer_reads_like_the_right_handed_one() {
     for name in SWINGS {
         let swing = io::load(&fixture(name)).unwrap();
         let lefty = left_handed(&swing);
-        let events = detect(&lefty.skeleton, &lefty.positions, lefty.rate_hz).unwrap();
+        let events = detect(&lefty.skeleton, lefty.swing(), lefty.rate_hz).unwrap();
         assert_eq!(events.lead, Side::Right);
         let (right, left) = (table(&swing), table(&lefty));
         for p in Position::ALL {
@@ -85,11 +85,10 @@ fn tour_swings_speed_up_from_the_hips_to_the_club() {
     use posecoach_core::sequence::kinematic_sequence;
     for name in SWINGS {
         let swing = io::load(&fixture(name)).unwrap();
-        let events = detect(&swing.skeleton, &swing.positions, swing.rate_hz).unwrap();
-        let sequence =
-            kinematic_sequence(&swing.skeleton, &swing.positions, swing.rate_hz, &events)
-                .unwrap()
-                .unwrap();
+        let events = detect(&swing.skeleton, swing.swing(), swing.rate_hz).unwrap();
+        let sequence = kinematic_sequence(&swing.skeleton, swing.swing(), swing.rate_hz, &events)
+            .unwrap()
+            .unwrap();
         let peak = |l| sequence.peak(l).unwrap();
         // Tour players' peaks, degrees per second (about 500, 700, 1000 and 2300 in published
         // K-Vest norms): each link faster than the one before.

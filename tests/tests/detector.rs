@@ -4,6 +4,7 @@
 
 use posecoach_core::detector::{DetectorConfig, SwingDetector};
 use posecoach_core::events::{detect, SwingKind};
+use posecoach_core::frames::Frames;
 use posecoach_core::Vec3;
 use posecoach_io::{self as io, Motion};
 use posecoach_tests::fixture;
@@ -93,7 +94,9 @@ fn only_the_real_swings_come_out_of_a_stream() {
     let mut swings = Vec::new();
     for frame in stream.chunks_exact(j) {
         if let Some(window) = detector.push(frame).unwrap() {
-            let out = detector.with_window(&window, <[Vec3]>::to_vec).unwrap();
+            let out: Vec<Vec3> = detector
+                .with_window(&window, |f| f.iter().collect())
+                .unwrap();
             swings.push((window, out));
         }
     }
@@ -106,10 +109,10 @@ fn only_the_real_swings_come_out_of_a_stream() {
     for ((window, frames), (at, swing)) in
         swings.iter().zip([(driver_at, &driver), (iron_at, &iron)])
     {
-        let events = detect(&driver.skeleton, frames, RATE_HZ).unwrap();
+        let events = detect(&driver.skeleton, Frames::metres(frames, j), RATE_HZ).unwrap();
         assert_eq!(events.kind, SwingKind::Full);
         // The window holds the whole swing from its set-up to its finish.
-        let truth = detect(&driver.skeleton, &swing.positions, RATE_HZ).unwrap();
+        let truth = detect(&driver.skeleton, swing.swing(), RATE_HZ).unwrap();
         let start = window.start as usize;
         assert!(
             start <= at + truth.address(),

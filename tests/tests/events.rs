@@ -33,7 +33,7 @@ fn labels() -> Vec<(String, Vec<i32>)> {
 fn positions_on_both_tour_swings_are_within_two_frames_of_the_hand_labels() {
     for (name, expected) in labels() {
         let swing = io::load(&fixture(&name)).unwrap();
-        let events = detect(&swing.skeleton, &swing.positions, swing.rate_hz).unwrap();
+        let events = detect(&swing.skeleton, swing.swing(), swing.rate_hz).unwrap();
         assert_eq!(events.lead, Side::Left, "{name}: a right-handed golfer");
         assert!(events.club);
         for (position, &label) in Position::ALL.iter().zip(&expected) {
@@ -58,7 +58,7 @@ fn driver() -> (io::Motion, Vec<i32>) {
 }
 
 fn detected(swing: &io::Motion) -> posecoach_core::events::SwingEvents {
-    detect(&swing.skeleton, &swing.positions, swing.rate_hz).unwrap()
+    detect(&swing.skeleton, swing.swing(), swing.rate_hz).unwrap()
 }
 
 fn assert_near(events: &posecoach_core::events::SwingEvents, expected: &[f32], what: &str) {
@@ -236,10 +236,10 @@ fn a_takeaway_timed_against_the_coach_follows_a_slow_backswing_through_noise() {
     let s_hz = student.rate_hz;
     let found = takeaway_against(
         &coach.skeleton,
-        &student.positions,
+        student.swing(),
         &s,
         s_hz,
-        &coach.positions,
+        coach.swing(),
         &c,
         coach.rate_hz,
     )
@@ -270,7 +270,7 @@ fn someone_walking_makes_no_stroke() {
         let along = 1.2 * f as f32 / swing.rate_hz;
         frame.iter_mut().for_each(|p| p.x += along);
     }
-    let e = detect(&walking.skeleton, &walking.positions, walking.rate_hz).unwrap_err();
+    let e = detect(&walking.skeleton, walking.swing(), walking.rate_hz).unwrap_err();
     assert_eq!(e, posecoach_core::events::EventError::NoSwing);
     // Real walking, which the hands' small rise made a putt.
     let Some(data) = posecoach_tests::shared_data("someone_walking_makes_no_stroke") else {
@@ -279,7 +279,7 @@ fn someone_walking_makes_no_stroke() {
     for name in ["walk_normal_001", "walk-left_normal_001", "walk_giant_001"] {
         let path = data.join(format!("bvh/bandai/dataset-1_{name}.bvh"));
         let walk = io::load(&path).unwrap().resampled(60.0).unwrap();
-        let found = detect(&walk.skeleton, &walk.positions, walk.rate_hz);
+        let found = detect(&walk.skeleton, walk.swing(), walk.rate_hz);
         assert!(found.is_err(), "{name}: {found:?}");
     }
 }
@@ -320,10 +320,10 @@ fn a_pause_at_the_top_belongs_to_the_backswing() {
     let against = |e: &posecoach_core::events::SwingEvents, m: &io::Motion| {
         posecoach_core::events::takeaway_against(
             &m.skeleton,
-            &m.positions,
+            m.swing(),
             e,
             m.rate_hz,
-            &swing.positions,
+            swing.swing(),
             &plain,
             swing.rate_hz,
         )

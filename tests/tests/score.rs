@@ -280,7 +280,7 @@ fn a_joint_the_stream_was_unsure_of_is_not_judged_there() {
     let student = plant(&coach, Joint::LeftWrist, top, axes[2] * -0.12);
     let wrist = coach.skeleton.index_of(Joint::LeftWrist).unwrap();
     fn detected(m: &Motion) -> Detected<'_> {
-        Detected::new(&m.skeleton, &m.positions, m.rate_hz).unwrap()
+        Detected::new(&m.skeleton, m.swing(), m.rate_hz).unwrap()
     }
     // The wrist unsure for a quarter second around the top.
     let masks: Vec<u64> = (0..student.frames())
@@ -475,7 +475,7 @@ fn a_pause_at_the_top_makes_the_backswing_slow_and_nothing_else() {
     // The driver held still at its top for 0.3 s, against itself: the backswing is slow by
     // the pause, the downswing is the coach's, and nothing else is off.
     let coach = driver();
-    let top = posecoach_core::events::detect(&coach.skeleton, &coach.positions, coach.rate_hz)
+    let top = posecoach_core::events::detect(&coach.skeleton, coach.swing(), coach.rate_hz)
         .unwrap()
         .top();
     let report = run(&paused(&coach, top, (0.3 * coach.rate_hz) as usize), &coach);

@@ -127,7 +127,7 @@ impl Clip {
             return Ok(coach);
         }
         let recording = self.on_skeleton(&self.skeleton)?;
-        let swing = events::detect(&self.skeleton, &recording.positions, self.rate_hz)?;
+        let swing = events::detect(&self.skeleton, recording.swing(), self.rate_hz)?;
         let swing = Some(Swing::from(&swing));
         Contacts::new(&self.skeleton, &coach.skeleton)
             .keeping(Kept::CLUB)

@@ -1194,7 +1194,7 @@ mod tests {
                 }
                 let swing = generate(&skeleton, &params, &mut rng).unwrap();
                 let m = &swing.motion;
-                let events = detect(&m.skeleton, &m.positions, m.rate_hz)
+                let events = detect(&m.skeleton, m.swing(), m.rate_hz)
                     .unwrap_or_else(|e| panic!("seed {seed}: {e} ({params:?})"));
                 (params, swing, events)
             })

@@ -83,7 +83,7 @@ pub fn evaluate(pair: &Pair, retargeted: &Motion) -> Result<Metrics, Error> {
     let height = truth.skeleton.height();
     // The coach's address and impact, where its club is at the ball; the ground truth's for
     // a coach whose swing the detector does not find.
-    let detect = |m: &Motion| events::detect(&m.skeleton, &m.positions, m.rate_hz);
+    let detect = |m: &Motion| events::detect(&m.skeleton, m.swing(), m.rate_hz);
     let swing = match pair.golf {
         true => Some(detect(coach).or_else(|_| detect(truth))?),
         false => None,
@@ -274,7 +274,7 @@ impl Method<'_> {
                 let coach = &pair.source;
                 // A coach without a detectable swing keeps only its feet, as on the device.
                 let events = match pair.golf {
-                    true => events::detect(&coach.skeleton, &coach.positions, coach.rate_hz)
+                    true => events::detect(&coach.skeleton, coach.swing(), coach.rate_hz)
                         .ok()
                         .map(|s| Swing::from(&s)),
                     false => None,
@@ -895,7 +895,7 @@ mod tests {
             Character::new(body, posecoach_core::format::Format::Canonical, true).unwrap();
         pair.ground_truth = clip.on(&pair.target).unwrap();
         let (truth, coach) = (&pair.ground_truth, &pair.source);
-        let swing = events::detect(&coach.skeleton, &coach.positions, coach.rate_hz).unwrap();
+        let swing = events::detect(&coach.skeleton, coach.swing(), coach.rate_hz).unwrap();
         let reference = |f: usize| match coach.skeleton.index_of(Joint::ClubHead) {
             Some(h) => coach.frame(f)[h].y,
             None => CLUB_HEAD_CLEARANCE_M,

@@ -6,6 +6,7 @@ use super::Refusal;
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::contacts::{Contacts, Swing};
 use posecoach_core::events;
+use posecoach_core::frames::Frames;
 #[cfg(feature = "network")]
 use posecoach_core::network::{self, NetworkError};
 use posecoach_core::reference::Reference;
@@ -111,7 +112,7 @@ impl Coach<'_> {
         out: &mut [Vec3],
     ) -> Result<(), Refusal> {
         let rate = self.rate_at(rate_hz);
-        let swing = events::detect(student, out, rate)
+        let swing = events::detect(student, Frames::metres(out, student.len()), rate)
             .ok()
             .map(|s| Swing::from(&s));
         Contacts::new(self.skeleton, student)

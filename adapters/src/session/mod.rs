@@ -54,6 +54,7 @@ use posecoach_core::detector::{DetectorConfig, SwingDetector, SwingWindow};
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, EventError, Side, SwingEvents, STILL_S};
 use posecoach_core::format::Format;
+use posecoach_core::frames::Frames;
 use posecoach_core::math::norm;
 use posecoach_core::plausible;
 use posecoach_core::retarget::Fit;
@@ -379,6 +380,7 @@ impl<'b> Session<'b> {
                         *setup = made.ok().and_then(|(swing, events)| {
                             let address = swing.start + events.address();
                             let out = &self.virtual_coach[..swing.end * joints];
+                            let out = Frames::metres(out, joints);
                             setup_of(&skeleton, out, address, events.lead, c.rate_at(rate))
                         });
                     }
@@ -627,16 +629,19 @@ impl<'b> Session<'b> {
             else {
                 return;
             };
-            let student = &frames[span.start * joints..span.end * joints];
+            let Some(student) = frames.get(span.clone()) else {
+                return;
+            };
             let coach = &mut virtual_coach[coach_swing.start * joints..coach_swing.end * joints];
-            let address = events.address() * joints;
-            let stance = Stance::new(skeleton, &student[address..address + joints], events.lead);
+            let mut address = [Vec3::zeros(); MAX_JOINTS];
+            let address = student.frame(events.address(), &mut address);
+            let stance = Stance::new(skeleton, address, events.lead);
             score::face(skeleton, coach, coach_events, stance.toward_target());
             let compared = Compared {
                 skeleton,
                 student,
                 student_hz: rate,
-                coach,
+                coach: Frames::metres(coach, joints),
                 coach_hz,
             };
             let coach = Detected {
@@ -699,7 +704,8 @@ fn make_virtual(
     if let Some(imu) = imu {
         seen_by(imu, skeleton, out)?;
     }
-    swing_span(skeleton, out, coach.rate_at(rate)).map_err(Refusal::CoachSwing)
+    swing_span(skeleton, Frames::metres(out, joints), coach.rate_at(rate))
+        .map_err(Refusal::CoachSwing)
 }
 
 /// `frames` (whole frames of `skeleton`) as the student's IMUs would see them: the coach seen
@@ -720,15 +726,13 @@ fn seen_by(imu: &ImuAdapter, skeleton: &Skeleton, frames: &mut [Vec3]) -> Result
 /// `address`: over the [`SETUP_S`] before it.
 fn setup_of(
     skeleton: &Skeleton,
-    positions: &[Vec3],
+    positions: Frames<'_>,
     address: usize,
     lead: Side,
     rate_hz: f32,
 ) -> Option<Setup> {
-    let joints = skeleton.len();
     let from = address.saturating_sub((SETUP_S * rate_hz) as usize);
-    let still = positions.get(from * joints..(address + 1) * joints)?;
-    Setup::new(skeleton, still, lead)
+    Setup::new(skeleton, positions.get(from..address + 1)?, lead)
 }
 
 /// The swing in `positions`: its frames from [`SWING_MARGIN_S`] before the set-up to as long
@@ -736,12 +740,12 @@ fn setup_of(
 /// `positions`).
 fn swing_span(
     skeleton: &Skeleton,
-    positions: &[Vec3],
+    positions: Frames<'_>,
     rate_hz: f32,
 ) -> Result<(Range<usize>, SwingEvents), EventError> {
     let events = events::detect(skeleton, positions, rate_hz)?;
     let margin = (SWING_MARGIN_S * rate_hz) as usize;
-    let frames = positions.len() / skeleton.len().max(1);
+    let frames = positions.len();
     let start = events.address().saturating_sub(margin);
     let span = start..(events.finish() + margin + 1).min(frames);
     Ok((span, events.from_frame(start)))

@@ -2,10 +2,10 @@
 //! back for it.
 
 use super::Refusal;
+use posecoach_core::frames::Frames;
 use posecoach_core::score::{Report, ScoreError};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::Message;
-use posecoach_core::Vec3;
 
 /// Where a swing sits in the stream.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -26,12 +26,12 @@ pub struct Swing {
 pub struct Compared<'r> {
     /// The student's skeleton.
     pub skeleton: &'r Skeleton,
-    /// The student's swing, frame-major.
-    pub student: &'r [Vec3],
+    /// The student's swing (as the detector's ring keeps it, in millimetres).
+    pub student: Frames<'r>,
     /// Its frame rate.
     pub student_hz: f32,
-    /// The virtual coach's swing (the coach retargeted onto the student), frame-major.
-    pub coach: &'r [Vec3],
+    /// The virtual coach's swing (the coach retargeted onto the student).
+    pub coach: Frames<'r>,
     /// Its frame rate.
     pub coach_hz: f32,
 }

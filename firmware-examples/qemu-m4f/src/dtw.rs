@@ -3,6 +3,7 @@
 use crate::count;
 use posecoach_core::blob::Aligned;
 use posecoach_core::dtw::{self, Band, Sequence, Window};
+use posecoach_core::frames::Frames;
 use posecoach_core::reference::Reference;
 
 /// A real swing: the driver coach retargeted onto a 17-joint student by the int8 network, 55
@@ -21,7 +22,8 @@ const DTW_RADIUS: u16 = 10;
 pub fn per_cell_centi() -> Result<(u64, usize), &'static str> {
     let swing = Reference::from_bytes(&SWING.0).map_err(|_| "the DTW's swing is damaged")?;
     let (frames, joints) = (swing.frames(), swing.skeleton().len());
-    let a = Sequence::rooted(swing.positions(), joints).map_err(|_| "the DTW's swing's shape")?;
+    let a = Sequence::rooted(Frames::metres(swing.positions(), joints))
+        .map_err(|_| "the DTW's swing's shape")?;
     let window = Window::new(Band::global(DTW_RADIUS), &[]).map_err(|_| "band")?;
     let len = dtw::scratch_len(frames, frames, &window).map_err(|_| "band")?;
     let mut cost = [0.0f32; 128];

@@ -298,7 +298,7 @@ fn sequence_truths(flawed: &Motion, clean: &Motion, times: &Times, lead: Side) -
         };
         let k = sequence::peaks(
             &body,
-            &m.positions,
+            m.swing(),
             m.rate_hz,
             frame(Event::Top),
             frame(Event::Impact),
@@ -691,7 +691,7 @@ mod tests {
     fn clean() -> (Motion, Times, Side) {
         let source =
             csv::read(include_str!("../../../tests/fixtures/golf_driver_60hz.csv")).unwrap();
-        let found = events::detect(&source.skeleton, &source.positions, source.rate_hz).unwrap();
+        let found = events::detect(&source.skeleton, source.swing(), source.rate_hz).unwrap();
         let body = csv::read(include_str!("../../../tests/fixtures/h36m17_tpose.csv")).unwrap();
         let mut swing = source.retarget_analytic(&body).unwrap();
         swing.keep_contacts(&source).unwrap();

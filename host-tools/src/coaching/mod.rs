@@ -217,7 +217,7 @@ pub fn run(args: &Args) -> Result<String> {
             );
         };
         let motion = io::load(path).with_context(|| format!("reading {}", path.display()))?;
-        let found = events::detect(&motion.skeleton, &motion.positions, motion.rate_hz)
+        let found = events::detect(&motion.skeleton, motion.swing(), motion.rate_hz)
             .with_context(|| format!("events of {}", path.display()))?;
         let times = flaws::times(&found, motion.rate_hz);
         for body in &bodies {
@@ -489,9 +489,9 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     // The truth: the planted swing's own metrics (none, and no errors counted, should its
     // events not be found: that says nothing of the device's).
     let swing = &planted.swing;
-    let truth_table = events::detect(&swing.skeleton, &swing.positions, swing.rate_hz)
+    let truth_table = events::detect(&swing.skeleton, swing.swing(), swing.rate_hz)
         .ok()
-        .and_then(|found| body::at_positions(&swing.skeleton, &swing.positions, &found).ok())
+        .and_then(|found| body::at_positions(&swing.skeleton, swing.swing(), &found).ok())
         .unwrap_or([None; Position::ALL.len()]);
     outcome.body_errors = table
         .iter()

@@ -1,0 +1,220 @@
+//! A swing as it is stored, frame after frame of joint positions, and how it is read.
+//!
+//! Positions are kept either as `f32` metres (a motion read from a file, a virtual coach) or as
+//! 16-bit millimetres ([`Mm`]: a device's ring of live frames, in half the RAM); every reader
+//! of a swing (events, body metrics, the sequence, the alignment, the score) takes [`Frames`]
+//! and sees metres either way. A millimetre position is the metre one rounded to the nearest
+//! millimetre, so it is off by at most 0.5 mm an axis (0.87 mm in all); [`to_mm`] refuses what
+//! is not finite or lies beyond ±32.767 m.
+//!
+//! ```
+//! use posecoach_core::frames::{to_mm, Frames};
+//! use posecoach_core::Vec3;
+//!
+//! let metres = [Vec3::new(0.1, 1.0, 0.0), Vec3::new(0.2, 1.5, -0.0004)];
+//! let mm = [to_mm(&metres[0]).unwrap(), to_mm(&metres[1]).unwrap()];
+//! let swing = Frames::millimetres(&mm, 2);
+//! assert_eq!(swing.len(), 1);
+//! assert!((swing.at(0, 1) - metres[1]).norm() < 1e-3);
+//! ```
+
+use crate::config::MAX_JOINTS;
+use crate::Vec3;
+use core::ops::Range;
+
+/// A position in millimetres, x, y and z.
+pub type Mm = [i16; 3];
+
+/// `p` (metres) to the nearest millimetre; `None` when an axis is not finite or beyond
+/// ±32.767 m.
+pub fn to_mm(p: &Vec3) -> Option<Mm> {
+    let axis = |v: f32| {
+        let mm = libm::roundf(v * 1000.0);
+        // NaN fails both comparisons.
+        (mm >= f32::from(i16::MIN) && mm <= f32::from(i16::MAX)).then_some(mm as i16)
+    };
+    Some([axis(p.x)?, axis(p.y)?, axis(p.z)?])
+}
+
+/// `p` in metres: each axis the `f32` nearest its millimetres.
+pub fn from_mm(p: Mm) -> Vec3 {
+    Vec3::new(
+        f32::from(p[0]) / 1000.0,
+        f32::from(p[1]) / 1000.0,
+        f32::from(p[2]) / 1000.0,
+    )
+}
+
+/// Whole frames of `joints` positions each, frame-major, as they are stored; a partial frame
+/// at the end is not read.
+#[derive(Clone, Copy, Debug)]
+pub struct Frames<'a> {
+    stored: Stored<'a>,
+    joints: usize,
+}
+
+/// How the positions are stored.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Stored<'a> {
+    /// `f32` metres.
+    Metres(&'a [Vec3]),
+    /// 16-bit millimetres.
+    Millimetres(&'a [Mm]),
+}
+
+impl<'a> Frames<'a> {
+    /// `positions` in metres, `joints` to a frame.
+    pub fn metres(positions: &'a [Vec3], joints: usize) -> Frames<'a> {
+        Frames {
+            stored: Stored::Metres(positions),
+            joints,
+        }
+    }
+
+    /// `positions` in millimetres, `joints` to a frame.
+    pub fn millimetres(positions: &'a [Mm], joints: usize) -> Frames<'a> {
+        Frames {
+            stored: Stored::Millimetres(positions),
+            joints,
+        }
+    }
+
+    /// Positions in a frame.
+    pub fn joints(&self) -> usize {
+        self.joints
+    }
+
+    /// Positions stored, whole frames or not.
+    fn stored_len(&self) -> usize {
+        match self.stored {
+            Stored::Metres(p) => p.len(),
+            Stored::Millimetres(p) => p.len(),
+        }
+    }
+
+    /// Whole frames.
+    pub fn len(&self) -> usize {
+        self.stored_len().checked_div(self.joints).unwrap_or(0)
+    }
+
+    /// Whether there is no whole frame.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Whether the positions are a whole number of frames, at least one joint to a frame.
+    pub fn is_whole(&self) -> bool {
+        self.joints > 0 && self.stored_len().is_multiple_of(self.joints)
+    }
+
+    /// Whether every position is finite (millimetres always are).
+    pub fn is_finite(&self) -> bool {
+        match self.stored {
+            Stored::Metres(p) => p.iter().all(|p| p.iter().all(|v| v.is_finite())),
+            Stored::Millimetres(_) => true,
+        }
+    }
+
+    /// Joint `joint` of frame `frame`, metres.
+    ///
+    /// # Panics
+    /// When the frame or joint is out of range: callers index within [`Frames::len`] and
+    /// [`Frames::joints`].
+    #[inline]
+    pub fn at(&self, frame: usize, joint: usize) -> Vec3 {
+        let k = frame * self.joints + joint;
+        match self.stored {
+            Stored::Metres(p) => p[k],
+            Stored::Millimetres(p) => from_mm(p[k]),
+        }
+    }
+
+    /// Frame `frame`, metres, in `out`'s first [`Frames::joints`] positions.
+    ///
+    /// # Panics
+    /// As [`Frames::at`].
+    pub fn frame<'o>(&self, frame: usize, out: &'o mut [Vec3; MAX_JOINTS]) -> &'o [Vec3] {
+        let out = &mut out[..self.joints];
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = self.at(frame, k);
+        }
+        out
+    }
+
+    /// Every position of the whole frames, frame after frame, metres.
+    pub fn iter(&self) -> impl Iterator<Item = Vec3> + 'a {
+        let (frames, joints) = (*self, self.joints);
+        (0..frames.len() * joints).map(move |k| frames.at(k / joints, k % joints))
+    }
+
+    /// The frames in `frames`; `None` when they are not all here.
+    pub fn get(&self, frames: Range<usize>) -> Option<Frames<'a>> {
+        let (from, to) = (frames.start * self.joints, frames.end * self.joints);
+        let stored = match self.stored {
+            Stored::Metres(p) => Stored::Metres(p.get(from..to)?),
+            Stored::Millimetres(p) => Stored::Millimetres(p.get(from..to)?),
+        };
+        Some(Frames {
+            stored,
+            joints: self.joints,
+        })
+    }
+
+    /// How the positions are stored, for readers with a loop for each.
+    pub(crate) fn stored(&self) -> Stored<'a> {
+        self.stored
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn out_of_range_or_non_finite_positions_have_no_millimetres() {
+        assert_eq!(
+            to_mm(&Vec3::new(32.767, -32.768, 0.0)),
+            Some([32767, -32768, 0])
+        );
+        assert_eq!(to_mm(&Vec3::new(32.768, 0.0, 0.0)), None);
+        assert_eq!(to_mm(&Vec3::new(0.0, -32.7686, 0.0)), None);
+        assert_eq!(to_mm(&Vec3::new(0.0, 0.0, f32::NAN)), None);
+        assert_eq!(to_mm(&Vec3::new(f32::INFINITY, 0.0, 0.0)), None);
+    }
+
+    #[test]
+    fn both_storages_read_alike_and_cut_whole_frames() {
+        let metres: [Vec3; 7] = core::array::from_fn(|k| Vec3::new(k as f32, -0.5, 0.25));
+        let mm = metres.map(|p| to_mm(&p).unwrap());
+        for frames in [Frames::metres(&metres, 3), Frames::millimetres(&mm, 3)] {
+            assert_eq!(
+                (frames.len(), frames.joints(), frames.is_whole()),
+                (2, 3, false)
+            );
+            assert_eq!(frames.at(1, 2), metres[5]);
+            let mut out = [Vec3::zeros(); MAX_JOINTS];
+            assert_eq!(frames.frame(1, &mut out), &metres[3..6]);
+            assert!(frames.iter().eq(metres[..6].iter().copied()));
+            let cut = frames.get(1..2).unwrap();
+            assert_eq!((cut.len(), cut.at(0, 0)), (1, metres[3]));
+            assert!(frames.get(1..3).is_none());
+        }
+        assert!(Frames::metres(&metres[..6], 3).is_whole());
+        assert!(!Frames::metres(&metres, 0).is_whole());
+        assert_eq!(Frames::metres(&metres, 0).len(), 0);
+    }
+
+    proptest! {
+        #[test]
+        fn a_position_comes_back_within_half_a_millimetre_an_axis(
+            x in -32.7f32..32.7, y in -32.7f32..32.7, z in -32.7f32..32.7,
+        ) {
+            let p = Vec3::new(x, y, z);
+            let back = from_mm(to_mm(&p).unwrap());
+            for axis in 0..3 {
+                prop_assert!((back[axis] - p[axis]).abs() <= 0.5e-3 + 4e-6);
+            }
+        }
+    }
+}
