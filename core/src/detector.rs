@@ -1,6 +1,7 @@
 //! Streaming swing detection: which stretch of a live pose stream is a swing.
 //!
-//! [`SwingDetector`] keeps the latest frames in a ring buffer the caller owns. The hands'
+//! [`SwingDetector`] keeps the latest frames in a ring buffer the caller owns, in 16-bit
+//! millimetres ([`Mm`]: half the RAM of `f32` metres, within 0.5 mm an axis). The hands'
 //! speed (over [`SPEED_WINDOW_S`]) opens a candidate when it passes `open_speed`, with `pre_s`
 //! of history kept before it for the set-up; the candidate closes once the hands have stayed
 //! under `close_speed` for `settle_s` (a frame above it takes back [`SETTLE_SETBACK`]
@@ -16,14 +17,15 @@
 //! use posecoach_core::Vec3;
 //!
 //! let skeleton = Skeleton::standard(Format::H36m17).unwrap();
-//! let mut storage = [Vec3::zeros(); 17 * 240];
+//! let mut storage = [[0i16; 3]; 17 * 240];
 //! let mut detector = SwingDetector::new(&skeleton, DetectorConfig::full_swing(60.0), &mut storage).unwrap();
 //! let mut rest = [Vec3::zeros(); 17];
 //! skeleton.rest_positions(&mut rest);
 //! assert_eq!(detector.push(&rest), Ok(None));
 //! ```
 
-use crate::frames::Frames;
+use crate::config::MAX_JOINTS;
+use crate::frames::{from_mm, to_mm, Frames, Mm};
 use crate::joint::Joint;
 use crate::math::norm;
 use crate::skeleton::Skeleton;
@@ -110,7 +112,8 @@ pub enum DetectorError {
     /// The storage holds less than two seconds of frames, or a rate or threshold is not a
     /// positive number.
     Config,
-    /// A frame has the wrong number of joints or a non-finite position.
+    /// A frame has the wrong number of joints, or a position that is not finite or lies
+    /// beyond ±32.767 m (no millimetres to keep it in).
     Frame,
     /// The window no longer is in the ring buffer, or `out` is too short.
     Window,
@@ -123,9 +126,9 @@ impl core::fmt::Display for DetectorError {
             DetectorError::Config => {
                 f.write_str("storage under two seconds of frames, or a non-positive setting")
             }
-            DetectorError::Frame => {
-                f.write_str("a frame has the wrong joint count or a non-finite position")
-            }
+            DetectorError::Frame => f.write_str(
+                "a frame has the wrong joint count, or a position not finite or beyond 32 m",
+            ),
             DetectorError::Window => {
                 f.write_str("the window has left the buffer, or the output is too short")
             }
@@ -148,7 +151,7 @@ struct Candidate {
 /// The streaming detector over caller-owned frame storage.
 #[derive(Debug)]
 pub struct SwingDetector<'s> {
-    storage: &'s mut [Vec3],
+    storage: &'s mut [Mm],
     joints: usize,
     wrists: [usize; 2],
     config: DetectorConfig,
@@ -169,7 +172,7 @@ impl<'s> SwingDetector<'s> {
     pub fn new(
         skeleton: &Skeleton,
         config: DetectorConfig,
-        storage: &'s mut [Vec3],
+        storage: &'s mut [Mm],
     ) -> Result<Self, DetectorError> {
         let wrists = Self::check(skeleton, config, storage.len())?;
         let joints = skeleton.len();
@@ -224,7 +227,7 @@ impl<'s> SwingDetector<'s> {
     }
 
     /// Gives the storage back.
-    pub fn into_storage(self) -> &'s mut [Vec3] {
+    pub fn into_storage(self) -> &'s mut [Mm] {
         self.storage
     }
 
@@ -246,7 +249,8 @@ impl<'s> SwingDetector<'s> {
 
     fn hands(&self, frame: u64) -> Vec3 {
         let at = self.slot(frame);
-        (self.storage[at + self.wrists[0]] + self.storage[at + self.wrists[1]]) * 0.5
+        let wrist = |k: usize| from_mm(self.storage[at + k]);
+        (wrist(self.wrists[0]) + wrist(self.wrists[1])) * 0.5
     }
 
     /// The hands averaged over the `span` frames ending at `frame`.
@@ -260,8 +264,8 @@ impl<'s> SwingDetector<'s> {
     /// speed over [`SPEED_WINDOW_S`].
     ///
     /// # Errors
-    /// [`DetectorError::Frame`] for a frame of the wrong length or with a non-finite position
-    /// (it is not stored).
+    /// [`DetectorError::Frame`] for a frame of the wrong length or with a position not finite
+    /// or beyond ±32.767 m (it is not stored).
     pub fn push(&mut self, frame: &[Vec3]) -> Result<Option<SwingWindow>, DetectorError> {
         self.step(frame, None)
     }
@@ -288,12 +292,16 @@ impl<'s> SwingDetector<'s> {
         frame: &[Vec3],
         activity: Option<f32>,
     ) -> Result<Option<SwingWindow>, DetectorError> {
-        if frame.len() != self.joints || !frame.iter().all(|p| p.iter().all(|v| v.is_finite())) {
+        if frame.len() != self.joints {
             return Err(DetectorError::Frame);
+        }
+        let mut mm = [[0; 3]; MAX_JOINTS];
+        for (m, p) in mm.iter_mut().zip(frame) {
+            *m = to_mm(p).ok_or(DetectorError::Frame)?;
         }
         let now = self.seen;
         let at = self.slot(now);
-        self.storage[at..at + self.joints].copy_from_slice(frame);
+        self.storage[at..at + self.joints].copy_from_slice(&mm[..self.joints]);
         self.seen += 1;
 
         let rate = self.config.rate_hz;
@@ -382,7 +390,7 @@ impl<'s> SwingDetector<'s> {
         let ring = &mut self.storage[..self.capacity * self.joints];
         let turn = (window.start % self.capacity as u64) as usize * self.joints;
         ring.rotate_left(turn);
-        let result = f(Frames::metres(
+        let result = f(Frames::millimetres(
             &ring[..window.len * self.joints],
             self.joints,
         ));
@@ -401,12 +409,12 @@ mod tests {
     #[test]
     fn bad_setup_and_frames_are_errors() {
         let s = Skeleton::standard(Format::H36m17).unwrap();
-        let mut small = [Vec3::zeros(); 17 * 60];
+        let mut small = [[0i16; 3]; 17 * 60];
         assert_eq!(
             SwingDetector::new(&s, DetectorConfig::full_swing(RATE_HZ), &mut small).err(),
             Some(DetectorError::Config)
         );
-        let mut storage = [Vec3::zeros(); 17 * 200];
+        let mut storage = [[0i16; 3]; 17 * 200];
         let bad_rate = DetectorConfig {
             rate_hz: f32::NAN,
             ..DetectorConfig::full_swing(RATE_HZ)
@@ -421,6 +429,9 @@ mod tests {
         let mut nan = [Vec3::zeros(); 17];
         nan[4].z = f32::INFINITY;
         assert_eq!(d.push(&nan), Err(DetectorError::Frame));
+        let mut far = [Vec3::zeros(); 17];
+        far[16].x = 40.0;
+        assert_eq!(d.push(&far), Err(DetectorError::Frame));
         assert_eq!(d.frames_seen(), 0);
         assert_eq!(
             d.with_window(&SwingWindow { start: 0, len: 1 }, |_| ()),
@@ -432,11 +443,11 @@ mod tests {
     fn a_window_across_the_ring_s_end_reads_in_order_and_the_ring_is_restored() {
         let s = Skeleton::standard(Format::H36m17).unwrap();
         let capacity = (2.0 * RATE_HZ) as usize;
-        let mut storage = vec![Vec3::zeros(); capacity * 17];
+        let mut storage = vec![[0i16; 3]; capacity * 17];
         let mut d =
             SwingDetector::new(&s, DetectorConfig::full_swing(RATE_HZ), &mut storage).unwrap();
-        // Still frames, each marked with its number: far more than the ring holds.
-        let frame = |n: usize| [Vec3::new(n as f32, 1.0, 0.0); 17];
+        // Still frames, each marked with its number (centimetres): far more than the ring holds.
+        let frame = |n: usize| [Vec3::new(n as f32 / 100.0, 1.0, 0.0); 17];
         for n in 0..capacity + capacity / 2 {
             d.push(&frame(n)).unwrap();
         }
@@ -445,12 +456,14 @@ mod tests {
             len: 30,
         };
         let before = d.storage.to_vec();
-        let seen: Vec<f32> = d
+        let seen: Vec<usize> = d
             .with_window(&window, |frames| {
-                (0..frames.len()).map(|f| frames.at(f, 0).x).collect()
+                (0..frames.len())
+                    .map(|f| (frames.at(f, 0).x * 100.0).round() as usize)
+                    .collect()
             })
             .unwrap();
-        let expected: Vec<f32> = (capacity - 10..capacity + 20).map(|n| n as f32).collect();
+        let expected: Vec<usize> = (capacity - 10..capacity + 20).collect();
         assert_eq!(seen, expected);
         assert_eq!(d.storage, &before[..]);
         let gone = SwingWindow { start: 0, len: 5 };

@@ -84,7 +84,7 @@ fn only_the_real_swings_come_out_of_a_stream() {
     let done = last(&stream, j);
     hold(&mut stream, &done, 1.0);
 
-    let mut storage = vec![Vec3::zeros(); j * (6.0 * RATE_HZ) as usize];
+    let mut storage = vec![[0i16; 3]; j * (6.0 * RATE_HZ) as usize];
     let mut detector = SwingDetector::new(
         &driver.skeleton,
         DetectorConfig::full_swing(RATE_HZ),

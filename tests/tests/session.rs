@@ -235,9 +235,9 @@ fn a_stream_in_another_format_is_mapped_onto_the_profile() {
     }
 }
 
-/// With int8 weights the session asks for a ring that also holds the network's input and
-/// scratch (at the device's 30 Hz the detector's own ring is already longer), and works at the
-/// network's rate and, with the analytic retargeter, at others.
+/// With int8 weights the session asks for a ring that also holds the network's input (`f32`
+/// metres from a 4-byte boundary) and scratch, counted in the ring's 6-byte millimetre
+/// positions, and works at the network's rate and, with the analytic retargeter, at others.
 #[test]
 fn a_network_borrows_the_ring_at_its_rate() {
     let path =
@@ -253,9 +253,9 @@ fn a_network_borrows_the_ring_at_its_rate() {
     }];
     let (n, frames) = (coach.skeleton.len(), coaches[0].frames_at(30));
     let plain = BufferLens::new(17, frames, 30);
-    let need = |joints, coach_joints, frames| {
+    let need = |joints, coach_joints, frames: usize| {
         let scratch = posecoach_core::network::scratch_len(a, coach_joints, joints);
-        frames * coach_joints + scratch.div_ceil(12)
+        (frames * coach_joints * 12 + scratch.next_multiple_of(12) + 4usize).div_ceil(6)
     };
     let lens = plain.with_network(a, 17, n, frames);
     assert_eq!(lens.ring, plain.ring.max(need(17, n, frames)));

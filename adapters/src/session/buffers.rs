@@ -3,6 +3,7 @@
 
 use super::RING_S;
 use posecoach_core::config::MAX_SWING_FRAMES;
+use posecoach_core::frames::Mm;
 use posecoach_core::network;
 use posecoach_core::score;
 use posecoach_core::weights::Architecture;
@@ -11,7 +12,7 @@ use posecoach_core::Vec3;
 /// Lengths of the buffers a session needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BufferLens {
-    /// Positions of the detector's history.
+    /// Positions of the detector's history, in millimetres.
     pub ring: usize,
     /// Positions of the virtual coach.
     pub coach: usize,
@@ -45,8 +46,9 @@ impl BufferLens {
     }
 
     /// These lengths with a ring that also holds, while the session is set up, the int8
-    /// network `a`'s input (`coach_frames` frames of a coach of `coach_joints` joints) and
-    /// its scratch, for students of up to `joints` joints.
+    /// network `a`'s input (`coach_frames` frames of a coach of `coach_joints` joints, `f32`
+    /// metres from the ring's first 4-byte boundary) and its scratch, for students of up to
+    /// `joints` joints.
     pub const fn with_network(
         self,
         a: &Architecture,
@@ -55,7 +57,10 @@ impl BufferLens {
         coach_frames: usize,
     ) -> BufferLens {
         let bytes = network::scratch_len(a, coach_joints, joints);
-        let ring = coach_frames * coach_joints + bytes.div_ceil(core::mem::size_of::<Vec3>());
+        let room = coach_frames * coach_joints * core::mem::size_of::<Vec3>()
+            + bytes.next_multiple_of(core::mem::size_of::<Vec3>())
+            + core::mem::align_of::<Vec3>();
+        let ring = room.div_ceil(core::mem::size_of::<Mm>());
         BufferLens {
             ring: if ring > self.ring { ring } else { self.ring },
             ..self
@@ -66,8 +71,9 @@ impl BufferLens {
 /// The caller's buffers, at least [`BufferLens`] long.
 #[derive(Debug)]
 pub struct Buffers<'b> {
-    /// The detector's history.
-    pub ring: &'b mut [Vec3],
+    /// The detector's history, in millimetres (and the network's room while a session is set
+    /// up).
+    pub ring: &'b mut [Mm],
     /// The virtual coach.
     pub coach: &'b mut [Vec3],
     /// Scoring floats.
@@ -82,7 +88,7 @@ pub struct Buffers<'b> {
 #[cfg(feature = "std")]
 #[derive(Clone, Debug)]
 pub struct OwnedBuffers {
-    ring: std::vec::Vec<Vec3>,
+    ring: std::vec::Vec<Mm>,
     coach: std::vec::Vec<Vec3>,
     floats: std::vec::Vec<f32>,
     bytes: std::vec::Vec<u8>,
@@ -94,7 +100,7 @@ impl OwnedBuffers {
     /// Zeroed buffers of `lens`.
     pub fn new(lens: BufferLens) -> OwnedBuffers {
         OwnedBuffers {
-            ring: std::vec![Vec3::zeros(); lens.ring],
+            ring: std::vec![[0; 3]; lens.ring],
             coach: std::vec![Vec3::zeros(); lens.coach],
             floats: std::vec![0.0; lens.floats],
             bytes: std::vec![0; lens.bytes],

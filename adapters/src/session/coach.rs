@@ -151,12 +151,14 @@ impl Coach<'_> {
         weights: &Weights<'_>,
         student: &Skeleton,
         rate_hz: u16,
-        ring: &mut [Vec3],
+        ring: &mut [posecoach_core::frames::Mm],
         out: &mut [Vec3],
     ) -> Result<(), Refusal> {
         let n = self.skeleton.len();
         let frames = out.len() / student.len().max(1);
-        let (source, rest) = ring
+        // The ring's room as positions in metres (from its first word boundary).
+        let (_, room, _) = bytemuck::pod_align_to_mut::<u8, Vec3>(bytemuck::cast_slice_mut(ring));
+        let (source, rest) = room
             .split_at_mut_checked(frames * n)
             .ok_or(Refusal::Buffers)?;
         let mut between = [Vec3::zeros(); MAX_JOINTS];

@@ -54,7 +54,7 @@ use posecoach_core::detector::{DetectorConfig, SwingDetector, SwingWindow};
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, EventError, Side, SwingEvents, STILL_S};
 use posecoach_core::format::Format;
-use posecoach_core::frames::Frames;
+use posecoach_core::frames::{Frames, Mm};
 use posecoach_core::math::norm;
 use posecoach_core::plausible;
 use posecoach_core::retarget::Fit;
@@ -133,7 +133,7 @@ pub struct Session<'b> {
     layout: Option<SensorLayout>,
     student: Option<Student<'b>>,
     /// The ring while no detector holds it.
-    spare: &'b mut [Vec3],
+    spare: &'b mut [Mm],
     virtual_coach: &'b mut [Vec3],
     floats: &'b mut [f32],
     bytes: &'b mut [u8],
@@ -687,7 +687,7 @@ fn make_virtual(
     coach: &Coach<'_>,
     skeleton: &Skeleton,
     rate: u16,
-    network: Option<(&Weights<'_>, &mut [Vec3])>,
+    network: Option<(&Weights<'_>, &mut [Mm])>,
     imu: Option<&ImuAdapter>,
     out: &mut [Vec3],
 ) -> Result<(Range<usize>, SwingEvents), Refusal> {

@@ -7,8 +7,8 @@
 use posecoach_adapters::log::LogReader;
 use posecoach_adapters::session::{Buffers, Session};
 use posecoach_core::format::Format;
-use posecoach_core::skeleton::Skeleton;
 use posecoach_core::retarget::Analytic;
+use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
 
 /// Retargets the default CMU rest pose onto the default H36M skeleton; returns the output's
@@ -41,7 +41,7 @@ pub extern "C" fn posecoach_no_alloc_replay(log: &[u8; 64]) -> i32 {
     let Ok(reader) = LogReader::new(log) else {
         return -1;
     };
-    let (mut ring, mut coach) = ([Vec3::zeros(); 8], [Vec3::zeros(); 8]);
+    let (mut ring, mut coach) = ([[0i16; 3]; 8], [Vec3::zeros(); 8]);
     let (mut floats, mut bytes, mut unsure) = ([0.0; 8], [0u8; 8], [0u64; 8]);
     let mut session = Session::new(
         &[],

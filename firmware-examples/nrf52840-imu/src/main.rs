@@ -24,6 +24,7 @@ use panic_probe as _;
 use posecoach_adapters::lsm6ds3::{Lsm6ds3, ADDRESS};
 use posecoach_adapters::session::{BufferLens, Buffers, Coach, Session, DEFAULT_CONFIG};
 use posecoach_core::blob::Aligned;
+use posecoach_core::frames::Mm;
 use posecoach_core::reference::Reference;
 use posecoach_core::resample;
 use posecoach_core::wire::{encode, Config, Decoder, Message, MAX_FRAME};
@@ -47,8 +48,7 @@ const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RAT
 /// Microseconds a UART read waits for a byte before the loop polls the IMU again.
 const UART_WAIT_US: u32 = 200;
 
-static RING: ConstStaticCell<[Vec3; LENS.ring]> =
-    ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.ring]);
+static RING: ConstStaticCell<[Mm; LENS.ring]> = ConstStaticCell::new([[0; 3]; LENS.ring]);
 static VIRTUAL_COACH: ConstStaticCell<[Vec3; LENS.coach]> =
     ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.coach]);
 static FLOATS: ConstStaticCell<[f32; LENS.floats]> = ConstStaticCell::new([0.0; LENS.floats]);

@@ -34,6 +34,7 @@ use defmt_semihosting as _;
 use posecoach_adapters::log::LogReader;
 use posecoach_adapters::session::{BufferLens, Buffers, Coach, Outcome, Session, DEFAULT_CONFIG};
 use posecoach_core::blob::Aligned;
+use posecoach_core::frames::Mm;
 use posecoach_core::reference::Reference;
 use posecoach_core::resample;
 use posecoach_core::weights::Weights;
@@ -97,8 +98,7 @@ const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RAT
     COACH_FRAMES,
 );
 
-static RING: ConstStaticCell<[Vec3; LENS.ring]> =
-    ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.ring]);
+static RING: ConstStaticCell<[Mm; LENS.ring]> = ConstStaticCell::new([[0; 3]; LENS.ring]);
 static VIRTUAL_COACH: ConstStaticCell<[Vec3; LENS.coach]> =
     ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.coach]);
 static FLOATS: ConstStaticCell<[f32; LENS.floats]> = ConstStaticCell::new([0.0; LENS.floats]);
@@ -190,7 +190,7 @@ fn run() -> Result<(), &'static str> {
     let vec3 = core::mem::size_of::<Vec3>();
     defmt::println!(
         "RAM ring {=usize} coach {=usize} floats {=usize} bytes {=usize} unsure {=usize} stack {=usize}",
-        LENS.ring * vec3,
+        LENS.ring * core::mem::size_of::<Mm>(),
         LENS.coach * vec3,
         LENS.floats * core::mem::size_of::<f32>(),
         LENS.bytes,

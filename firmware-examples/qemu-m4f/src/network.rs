@@ -4,6 +4,7 @@
 use crate::NETWORK;
 use crate::{count, kernels};
 use posecoach_core::blob::Aligned;
+use posecoach_core::frames::Mm;
 use posecoach_core::network;
 use posecoach_core::reference::Reference;
 use posecoach_core::weights::Weights;
@@ -21,7 +22,7 @@ use crate::dtw::SWING as GOLDEN_OUT;
 /// The embedded weights, once their kernels are counted and their golden vectors checked with
 /// `scratch` and `out` (see [`check_golden`]); prints what each took.
 #[inline(never)]
-pub fn checked(scratch: &mut [Vec3], out: &mut [Vec3]) -> Result<Weights<'static>, &'static str> {
+pub fn checked(scratch: &mut [Mm], out: &mut [Vec3]) -> Result<Weights<'static>, &'static str> {
     let weights = Weights::from_bytes(&WEIGHTS.0).map_err(|_| "the weights are damaged")?;
     if *weights.architecture() != NETWORK {
         return Err("the weights are not the network the buffers were sized for");
@@ -53,7 +54,7 @@ pub fn golden_bytes() -> usize {
 #[inline(never)]
 fn check_golden(
     weights: &Weights<'_>,
-    scratch: &mut [Vec3],
+    scratch: &mut [Mm],
     out: &mut [Vec3],
 ) -> Result<u64, &'static str> {
     let input = Reference::from_bytes(&GOLDEN_IN.0).map_err(|_| "golden input damaged")?;
@@ -62,13 +63,15 @@ fn check_golden(
     let out = out
         .get_mut(..expected.positions().len())
         .ok_or("virtual coach buffer shorter than the golden output")?;
+    // The ring's room from its first word boundary, as the session takes it.
+    let (_, room, _) = bytemuck::pod_align_to_mut::<u8, u32>(bytemuck::cast_slice_mut(scratch));
     let start = count::now();
     network::retarget(
         weights,
         input.skeleton(),
         student,
         input.positions(),
-        bytemuck::cast_slice_mut(scratch),
+        bytemuck::cast_slice_mut(room),
         out,
     )
     .map_err(|_| "the network refused the golden input")?;
