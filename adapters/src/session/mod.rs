@@ -268,6 +268,7 @@ impl<'b> Session<'b> {
         }
     }
 
+    #[inline(never)]
     fn profile(&mut self, profile: &StudentProfile) -> Result<(), Refusal> {
         let format = profile.format;
         let table = format.joints();
@@ -422,6 +423,7 @@ impl<'b> Session<'b> {
         Ok(())
     }
 
+    #[inline(never)]
     fn pose(&mut self, frame: &PoseFrame, on: &mut impl FnMut(Outcome<'_>)) -> Result<(), Refusal> {
         let student = self.student.as_mut().ok_or(Refusal::NoProfile)?;
         if student.imu.is_some() {
@@ -500,6 +502,7 @@ impl<'b> Session<'b> {
         Ok(())
     }
 
+    #[inline(never)]
     fn imu(&mut self, sample: &ImuSample, on: &mut impl FnMut(Outcome<'_>)) -> Result<(), Refusal> {
         let student = self.student.as_mut().ok_or(Refusal::NoProfile)?;
         let Student {
