@@ -129,12 +129,13 @@ impl<'a> Frames<'a> {
         }
     }
 
-    /// Frame `frame`, metres, in `out`'s first [`Frames::joints`] positions.
+    /// Frame `frame`, metres, in `out`'s first [`Frames::joints`] positions (at most
+    /// [`MAX_JOINTS`]).
     ///
     /// # Panics
     /// As [`Frames::at`].
     pub fn frame<'o>(&self, frame: usize, out: &'o mut [Vec3; MAX_JOINTS]) -> &'o [Vec3] {
-        let out = &mut out[..self.joints];
+        let out = &mut out[..self.joints.min(MAX_JOINTS)];
         for (k, o) in out.iter_mut().enumerate() {
             *o = self.at(frame, k);
         }

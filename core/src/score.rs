@@ -763,6 +763,12 @@ pub fn compare(
         events: coach_events,
         ..
     } = *coach;
+    for (frames, student) in [(student, true), (coach, false)] {
+        if !frames.is_whole() || frames.joints() != joints {
+            let error = EventError::Length;
+            return Err(ScoreError::Events { student, error });
+        }
+    }
     if student_events.kind != coach_events.kind {
         return Err(ScoreError::KindMismatch);
     }

@@ -272,7 +272,9 @@ fn a_10_cm_fault_or_a_30_percent_phase_costs_at_least_5_points() {
 
 #[test]
 fn a_joint_the_stream_was_unsure_of_is_not_judged_there() {
-    use posecoach_core::score::{compare, Detected, Unsure};
+    use posecoach_core::events::EventError;
+    use posecoach_core::frames::Frames;
+    use posecoach_core::score::{compare, Detected, ScoreError, Unsure};
     let coach = driver();
     let events = run(&coach, &coach).coach_events;
     let axes = stance_axes(&coach, events.frame(Event::Address).unwrap());
@@ -308,6 +310,26 @@ fn a_joint_the_stream_was_unsure_of_is_not_judged_there() {
             .all(|d| d.joint != Joint::LeftWrist || d.event != Event::Top),
         "{:?}",
         report.spatial
+    );
+    // A coach read with the wrong joint count is refused, not misread.
+    let misread = Detected {
+        positions: Frames::metres(&coach.positions, coach.skeleton.len() - 1),
+        ..detected(&coach)
+    };
+    assert_eq!(
+        compare(
+            &coach.skeleton,
+            &unsure,
+            &misread,
+            BAND,
+            &mut floats,
+            &mut bytes
+        )
+        .err(),
+        Some(ScoreError::Events {
+            student: false,
+            error: EventError::Length
+        })
     );
     // Sure of it, the same swing is told.
     let sure = run(&student, &coach);
