@@ -113,7 +113,7 @@ pub enum DetectorError {
     /// positive number.
     Config,
     /// A frame has the wrong number of joints, or a position that is not finite or lies
-    /// beyond ±32.767 m (no millimetres to keep it in).
+    /// outside −32.768 m to 32.767 m (no millimetres to keep it in).
     Frame,
     /// The window no longer is in the ring buffer, or `out` is too short.
     Window,
@@ -127,7 +127,7 @@ impl core::fmt::Display for DetectorError {
                 f.write_str("storage under two seconds of frames, or a non-positive setting")
             }
             DetectorError::Frame => f.write_str(
-                "a frame has the wrong joint count, or a position not finite or beyond 32 m",
+                "a frame has the wrong joint count, or a position not finite or beyond ±32.7 m",
             ),
             DetectorError::Window => {
                 f.write_str("the window has left the buffer, or the output is too short")
@@ -265,7 +265,7 @@ impl<'s> SwingDetector<'s> {
     ///
     /// # Errors
     /// [`DetectorError::Frame`] for a frame of the wrong length or with a position not finite
-    /// or beyond ±32.767 m (it is not stored).
+    /// or outside −32.768 m to 32.767 m (it is not stored).
     pub fn push(&mut self, frame: &[Vec3]) -> Result<Option<SwingWindow>, DetectorError> {
         self.step(frame, None)
     }

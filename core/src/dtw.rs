@@ -723,6 +723,7 @@ impl CellCost<'_> {
     /// same order (each joint's root-relative position, the squared distance summed x, y, z,
     /// joints added in order from zero, then scaled), so the costs equal the channel-major
     /// ones to the bit.
+    ///
     /// `b`'s frames are read as they are stored: `f32` metres as they are, millimetres each
     /// turned into metres ([`from_mm`]) where it is used.
     #[inline(always)]

@@ -609,8 +609,8 @@ pub struct Takeaway {
 /// the top ([`SwingEvents::arrival`]: a pause there is no part of the pace); the takeaway that fits
 /// them best (least squares, each crossing weighted by how sharply the progress passes it) is
 /// the student's. It uses half a second of the backswing where
-/// [`detect`] uses a fifth, so pose noise moves it less. `None` when a swing lacks the joints,
-/// the events or a crossing.
+/// [`detect`] uses a fifth, so pose noise moves it less. `None` when a swing lacks the joints
+/// (or is not read in the skeleton's), the events or a crossing.
 pub fn takeaway_against(
     skeleton: &Skeleton,
     student: Frames<'_>,
@@ -627,6 +627,9 @@ pub fn takeaway_against(
         skeleton.index_of(Joint::LeftElbow)?,
         skeleton.index_of(Joint::RightElbow)?,
     ];
+    if student.joints() != skeleton.len() || coach.joints() != skeleton.len() {
+        return None;
+    }
     let (s, c) = (Track::new(student, student_hz), Track::new(coach, coach_hz));
     if s.frames == 0 || c.frames == 0 {
         return None;

@@ -5,7 +5,7 @@
 //! of a swing (events, body metrics, the sequence, the alignment, the score) takes [`Frames`]
 //! and sees metres either way. A millimetre position is the metre one rounded to the nearest
 //! millimetre, so it is off by at most 0.5 mm an axis (0.87 mm in all); [`to_mm`] refuses what
-//! is not finite or lies beyond ±32.767 m.
+//! is not finite or lies outside −32.768 m to 32.767 m.
 //!
 //! ```
 //! use posecoach_core::frames::{to_mm, Frames};
@@ -25,8 +25,8 @@ use core::ops::Range;
 /// A position in millimetres, x, y and z.
 pub type Mm = [i16; 3];
 
-/// `p` (metres) to the nearest millimetre; `None` when an axis is not finite or beyond
-/// ±32.767 m.
+/// `p` (metres) to the nearest millimetre; `None` when an axis is not finite or its
+/// millimetres lie outside `i16` (−32.768 m to 32.767 m).
 pub fn to_mm(p: &Vec3) -> Option<Mm> {
     let axis = |v: f32| {
         let mm = libm::roundf(v * 1000.0);
@@ -115,11 +115,11 @@ impl<'a> Frames<'a> {
         }
     }
 
-    /// Joint `joint` of frame `frame`, metres.
+    /// Joint `joint` (below [`Frames::joints`]) of frame `frame`, metres.
     ///
     /// # Panics
-    /// When the frame or joint is out of range: callers index within [`Frames::len`] and
-    /// [`Frames::joints`].
+    /// When the position lies beyond the storage: callers index within [`Frames::len`] and
+    /// [`Frames::joints`] (a joint beyond a frame's would read the next frame's).
     #[inline]
     pub fn at(&self, frame: usize, joint: usize) -> Vec3 {
         let k = frame * self.joints + joint;

@@ -20,7 +20,6 @@ use posecoach_core::body::Stance;
 use posecoach_core::dtw::Band;
 use posecoach_core::events::{self, SwingEvents, SwingKind};
 use posecoach_core::format::{Format, Source};
-use posecoach_core::frames::Frames;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{self, Config, Message, StudentProfile, MAX_FRAME};
 use posecoach_core::Vec3;
@@ -240,13 +239,9 @@ pub fn run(args: &Args) -> Result<String> {
         .iter()
         .map(|p| {
             let swing = onto_body(p)?;
-            let top = events::detect(
-                &swing.skeleton,
-                Frames::metres(&swing.positions, swing.skeleton.len()),
-                TIMELINE_HZ,
-            )
-            .with_context(|| format!("events of {}", p.display()))?
-            .top();
+            let top = events::detect(&swing.skeleton, swing.swing(), TIMELINE_HZ)
+                .with_context(|| format!("events of {}", p.display()))?
+                .top();
             Ok((p.clone(), stretch(&swing, top, args.backswing_tempo)))
         })
         .collect::<Result<_>>()?;

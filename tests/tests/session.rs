@@ -2,7 +2,7 @@
 //! as it was.
 
 use posecoach_adapters::session::{
-    BufferLens, Coach, Outcome, OwnedBuffers, Refusal, Session, MAX_FRAMES_PER_MESSAGE,
+    BufferLens, Buffers, Coach, Outcome, OwnedBuffers, Refusal, Session, MAX_FRAMES_PER_MESSAGE,
 };
 use posecoach_core::dtw::Band;
 use posecoach_core::format::Format;
@@ -274,6 +274,28 @@ fn a_network_borrows_the_ring_at_its_rate() {
             .unwrap()
             .with_network(&weights);
         assert_eq!(outcomes(&mut session, &profile(1.75)), [], "{rate} Hz");
+        // A ring starting 2 bytes past a 4-byte boundary: the network's room starts at the
+        // next one, within the length asked for.
+        let mut ring = vec![[0i16; 3]; lens.ring + 1];
+        let (mut coach, mut floats) = (vec![Vec3::zeros(); lens.coach], vec![0.0; lens.floats]);
+        let (mut bytes, mut unsure) = (vec![0u8; lens.bytes], vec![0u64; lens.unsure]);
+        let ring = &mut ring[1..];
+        assert_eq!(ring.as_ptr() as usize % 4, 2);
+        let buffers = Buffers {
+            ring,
+            coach: &mut coach,
+            floats: &mut floats,
+            bytes: &mut bytes,
+            unsure: &mut unsure,
+        };
+        let mut session = Session::with_config(&coaches, buffers, config)
+            .unwrap()
+            .with_network(&weights);
+        assert_eq!(
+            outcomes(&mut session, &profile(1.75)),
+            [],
+            "{rate} Hz, off a word"
+        );
     }
 }
 

@@ -8,6 +8,8 @@ use posecoach_core::contacts::{Contacts, Swing};
 use posecoach_core::events;
 use posecoach_core::frames::Frames;
 #[cfg(feature = "network")]
+use posecoach_core::frames::Mm;
+#[cfg(feature = "network")]
 use posecoach_core::network::{self, NetworkError};
 use posecoach_core::reference::Reference;
 use posecoach_core::resample;
@@ -151,7 +153,7 @@ impl Coach<'_> {
         weights: &Weights<'_>,
         student: &Skeleton,
         rate_hz: u16,
-        ring: &mut [posecoach_core::frames::Mm],
+        ring: &mut [Mm],
         out: &mut [Vec3],
     ) -> Result<(), Refusal> {
         let n = self.skeleton.len();
