@@ -25,7 +25,7 @@
 //! ```
 
 use crate::config::MAX_JOINTS;
-use crate::frames::{from_mm, to_mm, Frames, Mm};
+use crate::frames::{to_mm, Frames, Mm};
 use crate::joint::Joint;
 use crate::math::norm;
 use crate::skeleton::Skeleton;
@@ -248,16 +248,28 @@ impl<'s> SwingDetector<'s> {
     }
 
     fn hands(&self, frame: u64) -> Vec3 {
+        metres(self.wrists_mm(frame), 2)
+    }
+
+    /// Both wrists' millimetres at `frame`, summed.
+    fn wrists_mm(&self, frame: u64) -> [i32; 3] {
         let at = self.slot(frame);
-        let wrist = |k: usize| from_mm(self.storage[at + k]);
-        (wrist(self.wrists[0]) + wrist(self.wrists[1])) * 0.5
+        let (a, b) = (
+            self.storage[at + self.wrists[0]],
+            self.storage[at + self.wrists[1]],
+        );
+        core::array::from_fn(|i| i32::from(a[i]) + i32::from(b[i]))
     }
 
     /// The hands averaged over the `span` frames ending at `frame`.
     fn mean_hands(&self, frame: u64, span: u64) -> Vec3 {
         let span = span.min(frame + 1).max(1);
-        let sum = (frame + 1 - span..=frame).fold(Vec3::zeros(), |s, f| s + self.hands(f));
-        sum / span as f32
+        // Summed exactly in millimetres, turned into metres once.
+        let sum = (frame + 1 - span..=frame).fold([0i32; 3], |s, f| {
+            let w = self.wrists_mm(f);
+            core::array::from_fn(|i| s[i].saturating_add(w[i]))
+        });
+        metres(sum, 2 * span)
     }
 
     /// Takes the next frame; returns a window when it closes a swing. Activity is the hands'
@@ -397,6 +409,16 @@ impl<'s> SwingDetector<'s> {
         ring.rotate_right(turn);
         Ok(result)
     }
+}
+
+/// The mean position, metres, of `count` positions whose millimetres sum to `sum`.
+fn metres(sum: [i32; 3], count: u64) -> Vec3 {
+    let per = 1000.0 * count as f32;
+    Vec3::new(
+        sum[0] as f32 / per,
+        sum[1] as f32 / per,
+        sum[2] as f32 / per,
+    )
 }
 
 #[cfg(test)]
