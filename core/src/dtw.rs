@@ -35,7 +35,7 @@
 
 use crate::config::MAX_JOINTS;
 use crate::frames::{from_mm, Frames, Stored};
-use crate::math::{sqrt, sum_sqrt};
+use crate::math::{rooted_distance, sqrt};
 use crate::Vec3;
 
 /// Largest number of anchors a band may have.
@@ -725,7 +725,7 @@ impl CellCost<'_> {
     /// ones to the bit.
     ///
     /// `b`'s frames are read as they are stored: `f32` metres as they are, millimetres each
-    /// turned into metres ([`from_mm`]) where it is used.
+    /// turned into metres ([`from_mm`]) first.
     #[inline(always)]
     fn sum_rooted(
         &self,
@@ -742,47 +742,40 @@ impl CellCost<'_> {
         for (k, h) in here.iter_mut().enumerate().take(joints) {
             *h = a.at(i, k) - root;
         }
+        let here = &here[..joints];
         match b.stored() {
             Stored::Metres(p) => {
-                let frames = p[first * joints..].chunks_exact(joints);
-                self.rooted_costs(&here[..joints], frames, |p| *p, out, weigh);
+                for (o, frame) in out.iter_mut().zip(p[first * joints..].chunks_exact(joints)) {
+                    *o = self.rooted_cost(here, frame, &weigh);
+                }
             }
             Stored::Millimetres(p) => {
-                let frames = p[first * joints..].chunks_exact(joints);
-                self.rooted_costs(&here[..joints], frames, |p| from_mm(*p), out, weigh);
+                let mut metres = [Vec3::zeros(); MAX_JOINTS];
+                for (o, frame) in out.iter_mut().zip(p[first * joints..].chunks_exact(joints)) {
+                    for (m, p) in metres.iter_mut().zip(frame) {
+                        *m = from_mm(*p);
+                    }
+                    *o = self.rooted_cost(here, &metres[..joints], &weigh);
+                }
             }
         }
     }
 
-    /// The costs of `here` (root-relative positions) against each of `frames`, read through
-    /// `metres`, into `out`.
+    /// The cost of `here` (root-relative positions) against `frame` (taken relative to its
+    /// first joint).
     #[inline(always)]
-    fn rooted_costs<'p, P: 'p>(
-        &self,
-        here: &[Vec3],
-        frames: impl Iterator<Item = &'p [P]>,
-        metres: impl Fn(&P) -> Vec3,
-        out: &mut [f32],
-        weigh: impl Fn(f32, f32) -> f32,
-    ) {
-        let mut squares = [0.0; MAX_JOINTS];
-        let squares = &mut squares[..here.len()];
-        for (o, other) in out.iter_mut().zip(frames) {
-            let Some(root) = other.first().map(&metres) else {
-                return;
-            };
-            for ((s, h), p) in squares.iter_mut().zip(here).zip(other) {
-                let d = h - (metres(p) - root);
-                *s = d.x * d.x + d.y * d.y + d.z * d.z;
-            }
-            let sum = if self.unit {
-                sum_sqrt(squares)
-            } else {
-                let weighed = self.weights.iter().zip(&*squares);
-                weighed.fold(0.0, |sum, (&w, &s)| sum + weigh(w, sqrt(s)))
-            };
-            *o = sum * self.scale;
-        }
+    fn rooted_cost(&self, here: &[Vec3], frame: &[Vec3], weigh: &impl Fn(f32, f32) -> f32) -> f32 {
+        let sum = if self.unit {
+            rooted_distance(here, frame)
+        } else {
+            let root = frame.first().copied().unwrap_or_else(Vec3::zeros);
+            let joints = here.iter().zip(frame).zip(self.weights);
+            joints.fold(0.0, |sum, ((h, p), &w)| {
+                let d = h - (p - root);
+                sum + weigh(w, sqrt(d.x * d.x + d.y * d.y + d.z * d.z))
+            })
+        };
+        sum * self.scale
     }
 }
 

@@ -20,12 +20,14 @@ pub fn norm(v: &crate::Vec3) -> f32 {
     sqrt(v.norm_squared())
 }
 
-/// `Σ √squares[i]`, added in order from 0.0: a sum of lengths from their squares, the same
-/// bits as adding [`sqrt`]s one by one. On an ARM FPU eight at a time in one `asm!` block
-/// (three instructions a root where one [`sqrt`] and its addition take seven).
+/// `Σ |here[k] − (frame[k] − frame[0])|` over the joints `k` both hold, added in order from
+/// 0.0, each length the square root of `dx·dx + dy·dy + dz·dz`: the summed joint distances
+/// between a root-relative pose and a frame taken relative to its first joint (a DTW cell's
+/// cost). On an ARM FPU one `asm!` loop of 15 instructions a joint (23.5 when compiled: the
+/// loads one by one and each root through [`sqrt`]'s register moves); the same bits everywhere.
 #[inline]
-pub fn sum_sqrt(squares: &[f32]) -> f32 {
-    imp::sum_sqrt(squares)
+pub fn rooted_distance(here: &[crate::Vec3], frame: &[crate::Vec3]) -> f32 {
+    imp::rooted_distance(here, frame)
 }
 
 /// The median of `values` (reordered; the upper one of an even count), 0 for none.
@@ -79,8 +81,14 @@ mod imp {
     }
 
     #[inline(always)]
-    pub(super) fn sum_sqrt(squares: &[f32]) -> f32 {
-        squares.iter().fold(0.0, |sum, &q| sum + sqrt(q))
+    pub(super) fn rooted_distance(here: &[crate::Vec3], frame: &[crate::Vec3]) -> f32 {
+        let Some(&root) = frame.first() else {
+            return 0.0;
+        };
+        here.iter().zip(frame).fold(0.0, |sum, (h, p)| {
+            let d = h - (p - root);
+            sum + sqrt(d.x * d.x + d.y * d.y + d.z * d.z)
+        })
     }
 }
 
@@ -120,51 +128,52 @@ mod imp {
         f32::from_bits(root)
     }
 
+    /// [`super::rooted_distance`]: the root in `s0`–`s2`, each joint's position and pose value
+    /// loaded three at a time (`VLDM`), the square summed as the compiled code does (`VMUL`, then
+    /// `VMLA`, which rounds the product before adding), `s0`–`s11` pushed before and popped after.
     #[inline(always)]
-    pub(super) fn sum_sqrt(squares: &[f32]) -> f32 {
-        let (eights, rest) = squares.as_chunks::<8>();
-        let sum = eights.iter().fold(0.0, sqrt8);
-        rest.iter().fold(sum, |sum, &q| sum + sqrt(q))
-    }
-
-    /// `sum + √q[0] + √q[1] + … + √q[7]`, added in that order: the eight values go into
-    /// `s0`–`s7` and the sum into `s8`, which are saved on the stack and restored (`VPUSH`,
-    /// `VPOP`).
-    #[inline(always)]
-    fn sqrt8(sum: f32, q: &[f32; 8]) -> f32 {
+    pub(super) fn rooted_distance(here: &[crate::Vec3], frame: &[crate::Vec3]) -> f32 {
+        let joints = here.len().min(frame.len());
+        if joints == 0 {
+            return 0.0;
+        }
         let out: u32;
-        // SAFETY: reads the eight floats of `q` (a valid, 4-byte-aligned array, as `VLDM`
-        // needs); `s0`–`s8` are pushed before use and popped after, so every FPU register the
+        // SAFETY: reads `joints` (at least one) whole positions of 3 floats from each of
+        // `frame` and `here`, both valid for that many (`joints` is the shorter length) and
+        // 4-byte aligned (`f32`s), as `VLDM` needs; the loop counts `joints` down to zero, so it
+        // ends. `s0`–`s11` are pushed before use and popped after, so every FPU register the
         // compiler allocated keeps its value; the stack is used only between the push and the
-        // pop, below `sp` as the ABI allows; no flags (VSQRT may set FPSCR's sticky exception
-        // bits, which nothing here reads).
+        // pop, below `sp` as the ABI allows. `SUBS` sets the flags (not preserved); VSQRT may
+        // set FPSCR's sticky exception bits, which nothing here reads.
         unsafe {
             core::arch::asm!(
-                "vpush {{s0-s8}}",
-                "vldmia {q}, {{s0-s7}}",
-                "vmov s8, {sum}",
-                "vsqrt.f32 s0, s0",
-                "vadd.f32 s8, s8, s0",
-                "vsqrt.f32 s1, s1",
-                "vadd.f32 s8, s8, s1",
-                "vsqrt.f32 s2, s2",
-                "vadd.f32 s8, s8, s2",
-                "vsqrt.f32 s3, s3",
-                "vadd.f32 s8, s8, s3",
-                "vsqrt.f32 s4, s4",
-                "vadd.f32 s8, s8, s4",
-                "vsqrt.f32 s5, s5",
-                "vadd.f32 s8, s8, s5",
-                "vsqrt.f32 s6, s6",
-                "vadd.f32 s8, s8, s6",
-                "vsqrt.f32 s7, s7",
-                "vadd.f32 s8, s8, s7",
-                "vmov {out}, s8",
-                "vpop {{s0-s8}}",
-                q = in(reg) q.as_ptr(),
-                sum = in(reg) sum.to_bits(),
+                "vpush {{s0-s11}}",
+                "vldmia {frame}, {{s0-s2}}",
+                "vmov s11, {zero}",
+                "2:",
+                "vldmia {frame}!, {{s3-s5}}",
+                "vldmia {here}!, {{s6-s8}}",
+                "vsub.f32 s3, s3, s0",
+                "vsub.f32 s4, s4, s1",
+                "vsub.f32 s5, s5, s2",
+                "vsub.f32 s6, s6, s3",
+                "vsub.f32 s7, s7, s4",
+                "vsub.f32 s8, s8, s5",
+                "vmul.f32 s9, s6, s6",
+                "vmla.f32 s9, s7, s7",
+                "vmla.f32 s9, s8, s8",
+                "vsqrt.f32 s9, s9",
+                "vadd.f32 s11, s11, s9",
+                "subs {joints}, {joints}, #1",
+                "bne 2b",
+                "vmov {out}, s11",
+                "vpop {{s0-s11}}",
+                frame = inout(reg) frame.as_ptr() => _,
+                here = inout(reg) here.as_ptr() => _,
+                joints = inout(reg) joints => _,
+                zero = in(reg) 0u32,
                 out = lateout(reg) out,
-                options(readonly, preserves_flags)
+                options(readonly)
             );
         }
         f32::from_bits(out)
