@@ -35,7 +35,7 @@
 
 use crate::config::MAX_JOINTS;
 use crate::frames::{from_mm, Frames, Stored};
-use crate::math::{rooted_distance, sqrt};
+use crate::math::{rooted_distances, sqrt};
 use crate::Vec3;
 
 /// Largest number of anchors a band may have.
@@ -744,38 +744,42 @@ impl CellCost<'_> {
         }
         let here = &here[..joints];
         match b.stored() {
-            Stored::Metres(p) => {
-                for (o, frame) in out.iter_mut().zip(p[first * joints..].chunks_exact(joints)) {
-                    *o = self.rooted_cost(here, frame, &weigh);
-                }
-            }
+            Stored::Metres(p) => self.rooted_costs(here, &p[first * joints..], out, &weigh),
             Stored::Millimetres(p) => {
                 let mut metres = [Vec3::zeros(); MAX_JOINTS];
                 for (o, frame) in out.iter_mut().zip(p[first * joints..].chunks_exact(joints)) {
                     for (m, p) in metres.iter_mut().zip(frame) {
                         *m = from_mm(*p);
                     }
-                    *o = self.rooted_cost(here, &metres[..joints], &weigh);
+                    let o = core::slice::from_mut(o);
+                    self.rooted_costs(here, &metres[..joints], o, &weigh);
                 }
             }
         }
     }
 
-    /// The cost of `here` (root-relative positions) against `frame` (taken relative to its
-    /// first joint).
+    /// The costs of `here` (root-relative positions) against consecutive whole frames of
+    /// `frames` (each taken relative to its first joint), into `out`.
     #[inline(always)]
-    fn rooted_cost(&self, here: &[Vec3], frame: &[Vec3], weigh: &impl Fn(f32, f32) -> f32) -> f32 {
-        let sum = if self.unit {
-            rooted_distance(here, frame)
-        } else {
-            let root = frame.first().copied().unwrap_or_else(Vec3::zeros);
+    fn rooted_costs(
+        &self,
+        here: &[Vec3],
+        frames: &[Vec3],
+        out: &mut [f32],
+        weigh: &impl Fn(f32, f32) -> f32,
+    ) {
+        if self.unit {
+            return rooted_distances(here, frames, self.scale, out);
+        }
+        for (o, frame) in out.iter_mut().zip(frames.chunks_exact(here.len())) {
+            let root = frame[0];
             let joints = here.iter().zip(frame).zip(self.weights);
-            joints.fold(0.0, |sum, ((h, p), &w)| {
+            let sum = joints.fold(0.0, |sum, ((h, p), &w)| {
                 let d = h - (p - root);
                 sum + weigh(w, sqrt(d.x * d.x + d.y * d.y + d.z * d.z))
-            })
-        };
-        sum * self.scale
+            });
+            *o = sum * self.scale;
+        }
     }
 }
 

@@ -20,14 +20,17 @@ pub fn norm(v: &crate::Vec3) -> f32 {
     sqrt(v.norm_squared())
 }
 
-/// `Σ |here[k] − (frame[k] − frame[0])|` over the joints `k` both hold, added in order from
-/// 0.0, each length the square root of `dx·dx + dy·dy + dz·dz`: the summed joint distances
-/// between a root-relative pose and a frame taken relative to its first joint (a DTW cell's
-/// cost). On an ARM FPU one `asm!` loop of 15 instructions a joint (23.5 when compiled: the
-/// loads one by one and each root through [`sqrt`]'s register moves); the same bits everywhere.
+/// The costs of `here` against consecutive frames of `here.len()` joints: for each whole frame
+/// `f` of `frames`, as many as `out` holds, `out[f] = scale · Σ |here[k] − (f[k] − f[0])|`, the
+/// sum over the joints added in order from 0.0, each length the square root of
+/// `dx·dx + dy·dy + dz·dz`: the summed joint distances between a root-relative pose and each
+/// frame taken relative to its first joint (a row of DTW cells). Nothing for an empty `here`.
+/// On an ARM FPU one `asm!` loop for the whole row, 14 instructions a joint and 11 a frame
+/// (23.5 a joint when compiled: the loads one by one and each root through [`sqrt`]'s register
+/// moves); the same bits everywhere.
 #[inline]
-pub fn rooted_distance(here: &[crate::Vec3], frame: &[crate::Vec3]) -> f32 {
-    imp::rooted_distance(here, frame)
+pub fn rooted_distances(here: &[crate::Vec3], frames: &[crate::Vec3], scale: f32, out: &mut [f32]) {
+    imp::rooted_distances(here, frames, scale, out);
 }
 
 /// The median of `values` (reordered; the upper one of an even count), 0 for none.
@@ -81,14 +84,23 @@ mod imp {
     }
 
     #[inline(always)]
-    pub(super) fn rooted_distance(here: &[crate::Vec3], frame: &[crate::Vec3]) -> f32 {
-        let Some(&root) = frame.first() else {
-            return 0.0;
-        };
-        here.iter().zip(frame).fold(0.0, |sum, (h, p)| {
-            let d = h - (p - root);
-            sum + sqrt(d.x * d.x + d.y * d.y + d.z * d.z)
-        })
+    pub(super) fn rooted_distances(
+        here: &[crate::Vec3],
+        frames: &[crate::Vec3],
+        scale: f32,
+        out: &mut [f32],
+    ) {
+        if here.is_empty() {
+            return;
+        }
+        for (o, frame) in out.iter_mut().zip(frames.chunks_exact(here.len())) {
+            let root = frame[0];
+            let sum = here.iter().zip(frame).fold(0.0, |sum, (h, p)| {
+                let d = h - (p - root);
+                sum + sqrt(d.x * d.x + d.y * d.y + d.z * d.z)
+            });
+            *o = sum * scale;
+        }
     }
 }
 
@@ -128,61 +140,119 @@ mod imp {
         f32::from_bits(root)
     }
 
-    /// [`super::rooted_distance`]: the root in `s0`–`s2`, each joint's position and pose value
-    /// loaded three at a time (`VLDM`), the square summed as the compiled code does (`VMUL`, then
-    /// `VMLA`, which rounds the product before adding), `s0`–`s11` pushed before and popped after.
+    /// One joint of [`rooted_distances`]: its position in the frame and its pose value loaded,
+    /// the difference of the two root-relative positions squared, rooted and added to `s11`.
+    macro_rules! joint {
+        () => {
+            concat!(
+                "vldmia {frame}!, {{s3-s5}}\n",
+                "vldmia {here_at}!, {{s6-s8}}\n",
+                "vsub.f32 s3, s3, s0\n",
+                "vsub.f32 s4, s4, s1\n",
+                "vsub.f32 s5, s5, s2\n",
+                "vsub.f32 s6, s6, s3\n",
+                "vsub.f32 s7, s7, s4\n",
+                "vsub.f32 s8, s8, s5\n",
+                "vmul.f32 s9, s6, s6\n",
+                "vmla.f32 s9, s7, s7\n",
+                "vmla.f32 s9, s8, s8\n",
+                "vsqrt.f32 s9, s9\n",
+                "vadd.f32 s11, s11, s9",
+            )
+        };
+    }
+
+    /// [`super::rooted_distances`]: for each frame its root in `s0`–`s2` and the sum in `s11`;
+    /// each joint's position and pose value loaded three at a time (`VLDM`), the square summed as
+    /// the compiled code does (`VMUL`, then `VMLA`, which rounds the product before adding);
+    /// the scale in `s12`, zero in `s13`; `s0`–`s13` pushed before and popped after.
     #[inline(always)]
-    pub(super) fn rooted_distance(here: &[crate::Vec3], frame: &[crate::Vec3]) -> f32 {
-        let joints = here.len().min(frame.len());
-        if joints == 0 {
-            return 0.0;
+    pub(super) fn rooted_distances(
+        here: &[crate::Vec3],
+        frames: &[crate::Vec3],
+        scale: f32,
+        out: &mut [f32],
+    ) {
+        let joints = here.len();
+        let cells = frames.len().checked_div(joints).unwrap_or(0).min(out.len());
+        if cells == 0 {
+            return;
         }
-        let out: u32;
-        // SAFETY: reads `joints` (at least one) whole positions of 3 floats from each of
-        // `frame` and `here`, both valid for that many (`joints` is the shorter length) and
-        // 4-byte aligned (`f32`s), as `VLDM` needs; the loop counts `joints` down to zero, so it
-        // ends. `s0`–`s11` are pushed before use and popped after, so every FPU register the
-        // compiler allocated keeps its value; the stack is used only between the push and the
-        // pop, below `sp` as the ABI allows. `SUBS` sets the flags (not preserved); VSQRT may
-        // set FPSCR's sticky exception bits, which nothing here reads.
+        // SAFETY: `joints` and `cells` are at least one. The loops read `cells` frames of
+        // `joints` whole positions (3 floats each) from `frames` and, for each, `joints`
+        // positions from `here`: both hold that many (`cells` is at most `frames.len() /
+        // joints`), 4-byte aligned (`f32`s), as `VLDM` needs; it writes `cells` floats to `out`,
+        // which holds that many: per frame one joint when `joints` is odd, then `joints / 2`
+        // pairs (none when it is 1). The loops count down to zero, so they end. `s0`–`s13` are
+        // pushed before use and popped after, so every FPU register the compiler allocated keeps
+        // its value; the stack is used only between the push and the pop, below `sp` as the ABI
+        // allows. `SUBS` sets the flags (not preserved); VSQRT may set FPSCR's sticky exception
+        // bits, which nothing here reads.
         unsafe {
             core::arch::asm!(
-                "vpush {{s0-s11}}",
+                "vpush {{s0-s13}}",
+                "vmov s12, {k}",
+                "vmov s13, {here_at}",
+                "3:",
                 "vldmia {frame}, {{s0-s2}}",
-                "vmov s11, {zero}",
+                "vmov.f32 s11, s13",
+                "mov {here_at}, {here}",
+                // Half the joints in pairs; an odd one (the carry) first, on its own.
+                "lsrs {k}, {joints}, #1",
+                "bcc 4f",
+                joint!(),
+                "4:",
+                "cmp {k}, #0",
+                "beq 5f",
                 "2:",
-                "vldmia {frame}!, {{s3-s5}}",
-                "vldmia {here}!, {{s6-s8}}",
-                "vsub.f32 s3, s3, s0",
-                "vsub.f32 s4, s4, s1",
-                "vsub.f32 s5, s5, s2",
-                "vsub.f32 s6, s6, s3",
-                "vsub.f32 s7, s7, s4",
-                "vsub.f32 s8, s8, s5",
-                "vmul.f32 s9, s6, s6",
-                "vmla.f32 s9, s7, s7",
-                "vmla.f32 s9, s8, s8",
-                "vsqrt.f32 s9, s9",
-                "vadd.f32 s11, s11, s9",
-                "subs {joints}, {joints}, #1",
+                joint!(),
+                joint!(),
+                "subs {k}, {k}, #1",
                 "bne 2b",
-                "vmov {out}, s11",
-                "vpop {{s0-s11}}",
-                frame = inout(reg) frame.as_ptr() => _,
-                here = inout(reg) here.as_ptr() => _,
-                joints = inout(reg) joints => _,
-                zero = in(reg) 0u32,
-                out = lateout(reg) out,
-                options(readonly)
+                "5:",
+                "vmul.f32 s11, s11, s12",
+                "vstmia {out}!, {{s11}}",
+                "subs {cells}, {cells}, #1",
+                "bne 3b",
+                "vpop {{s0-s13}}",
+                frame = inout(reg) frames.as_ptr() => _,
+                here = in(reg) here.as_ptr(),
+                joints = in(reg) joints,
+                // The scale's bits going in, then the pairs of joints left of a frame.
+                k = inout(reg) scale.to_bits() => _,
+                // Zero's bits going in, then the pose value being read.
+                here_at = inout(reg) 0u32 => _,
+                out = inout(reg) out.as_mut_ptr() => _,
+                cells = inout(reg) cells => _,
             );
         }
-        f32::from_bits(out)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rooted_distances_sum_each_frames_joint_distances_from_its_root_scaled() {
+        use crate::Vec3;
+        let here = [Vec3::zeros(), Vec3::new(3.0, 4.0, 0.0)];
+        let frames = [
+            Vec3::new(1.0, 1.0, 1.0),
+            Vec3::new(1.0, 1.0, 1.0), // at its root: 5 from (3, 4, 0)
+            Vec3::new(2.0, 2.0, 2.0),
+            Vec3::new(2.0, 6.0, 2.0), // (0, 4, 0) from its root: 3
+            Vec3::new(9.0, 9.0, 9.0), // half a frame: not read
+        ];
+        let mut out = [-1.0; 3];
+        rooted_distances(&here, &frames, 0.5, &mut out);
+        assert_eq!(out, [2.5, 1.5, -1.0]);
+        let mut short = [-1.0; 1];
+        rooted_distances(&here, &frames, 1.0, &mut short);
+        assert_eq!(short, [5.0]);
+        rooted_distances(&[], &frames, 1.0, &mut out);
+        assert_eq!(out, [2.5, 1.5, -1.0]);
+    }
 
     proptest::proptest! {
         #[test]

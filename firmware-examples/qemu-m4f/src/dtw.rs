@@ -4,7 +4,9 @@ use crate::count;
 use posecoach_core::blob::Aligned;
 use posecoach_core::dtw::{self, Band, Sequence, Window};
 use posecoach_core::frames::{to_mm, Frames};
+use posecoach_core::math;
 use posecoach_core::reference::Reference;
+use posecoach_core::Vec3;
 
 /// A real swing: the driver coach retargeted onto a 17-joint student by the int8 network, 55
 /// frames at 30 Hz (the network's golden output, `posecoach export`).
@@ -57,4 +59,50 @@ pub fn per_cell_centi() -> Result<(u64, usize), &'static str> {
         return Err("a swing aligned with its millimetres is not near the diagonal");
     }
     Ok((spent * 100 / len.cells as u64, len.cells))
+}
+
+/// Joint counts [`check_rooted_distances`] tries: one alone, pairs only, a pair and one, the
+/// product's 17.
+const KERNEL_JOINTS: [usize; 5] = [1, 2, 3, 16, 17];
+
+/// Frames of [`SWING`] [`check_rooted_distances`] measures against its first.
+const KERNEL_FRAMES: usize = 8;
+
+/// Checks `math::rooted_distances` (an `asm!` loop on this FPU) against the same sum written
+/// out in Rust, to the bit: [`SWING`]'s first frame against its next frames,
+/// keeping each frame's first joints for each count of [`KERNEL_JOINTS`] (odd and even counts
+/// take different paths through the loop). Returns how many costs were compared.
+#[inline(never)]
+pub fn check_rooted_distances() -> Result<usize, &'static str> {
+    let swing = Reference::from_bytes(&SWING.0).map_err(|_| "the DTW's swing is damaged")?;
+    let joints = swing.skeleton().len();
+    let (positions, scale) = (swing.positions(), 1.0 / 3.0);
+    let mut compared = 0;
+    for n in KERNEL_JOINTS {
+        let frame = |f: usize| positions.get(f * joints..f * joints + n);
+        let first = frame(0).ok_or("the DTW's swing is too short for the kernel check")?;
+        let mut here = [Vec3::zeros(); 17];
+        let here = here.get_mut(..n).ok_or("too many joints for the kernel check")?;
+        // Not root-relative, so that every joint's distance counts, the first's too.
+        here.copy_from_slice(first);
+        let mut frames = [Vec3::zeros(); KERNEL_FRAMES * 17];
+        let mut expected = [0.0f32; KERNEL_FRAMES];
+        for (f, (chunk, e)) in frames.chunks_exact_mut(n).zip(&mut expected).enumerate() {
+            let other = frame(f + 1).ok_or("the DTW's swing is too short for the kernel check")?;
+            chunk.copy_from_slice(other);
+            let mut sum = 0.0f32;
+            for (h, p) in here.iter().zip(other) {
+                let d = h - (p - other[0]);
+                sum += math::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+            }
+            *e = sum * scale;
+        }
+        let mut out = [f32::NAN; KERNEL_FRAMES];
+        math::rooted_distances(here, &frames[..KERNEL_FRAMES * n], scale, &mut out);
+        if out.iter().zip(&expected).any(|(o, e)| o.to_bits() != e.to_bits()) {
+            return Err("math::rooted_distances differs from the compiled sum");
+        }
+        compared += KERNEL_FRAMES;
+    }
+    Ok(compared)
 }

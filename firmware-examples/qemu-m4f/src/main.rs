@@ -148,6 +148,11 @@ fn main() -> ! {
 
 fn run() -> Result<(), &'static str> {
     count::check()?;
+    let compared = dtw::check_rooted_distances()?;
+    defmt::println!(
+        "KERNEL rooted distances: {=usize} costs of 1 to 17 joints equal to the compiled sum",
+        compared
+    );
     let (per_cell, cells) = dtw::per_cell_centi()?;
     defmt::println!(
         "KERNEL DTW cell ({=usize} cells): {=u64}.{=u64:02} instructions per cell",
