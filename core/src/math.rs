@@ -180,10 +180,10 @@ mod imp {
         }
         // SAFETY: `joints` and `cells` are at least one. The loops read `cells` frames of
         // `joints` whole positions (3 floats each) from `frames` and, for each, `joints`
-        // positions from `here`: both hold that many (`cells` is at most `frames.len() /
-        // joints`), 4-byte aligned (`f32`s), as `VLDM` needs; it writes `cells` floats to `out`,
-        // which holds that many: per frame one joint when `joints` is odd, then `joints / 2`
-        // pairs (none when it is 1). The loops count down to zero, so they end. `s0`–`s13` are
+        // positions from `here` (one joint when `joints` is odd, then `joints / 2` pairs, none
+        // when it is 1): both hold that many (`cells` is at most `frames.len() / joints`), 4-byte
+        // aligned (`f32`s), as `VLDM` needs; they write `cells` floats to `out`, which holds that
+        // many. The loops count down to zero, so they end. `s0`–`s13` are
         // pushed before use and popped after, so every FPU register the compiler allocated keeps
         // its value; the stack is used only between the push and the pop, below `sp` as the ABI
         // allows. `SUBS` sets the flags (not preserved); VSQRT may set FPSCR's sticky exception
