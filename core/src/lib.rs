@@ -41,8 +41,9 @@
 //! - [`network`]: the quantized retargeter itself, on those weights.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 // `deny`, not `forbid`: `asm!` is the exception, in two modules, each block with its proof:
-// the FPU's square root, and the summed joint distances of a DTW cell (`math`), and, with the `dsp` feature, the
-// int8 kernels' DSP instructions (`int8`), which read only the slices they are given.
+// the FPU's square root and a row of DTW cells' summed joint distances (`math`), and, with the
+// `dsp` feature, the int8 kernels' DSP instructions (`int8`), which read only the slices they
+// are given.
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 

@@ -183,11 +183,11 @@ mod imp {
         // positions from `here` (one joint when `joints` is odd, then `joints / 2` pairs, none
         // when it is 1): both hold that many (`cells` is at most `frames.len() / joints`), 4-byte
         // aligned (`f32`s), as `VLDM` needs; they write `cells` floats to `out`, which holds that
-        // many. The loops count down to zero, so they end. `s0`–`s13` are
-        // pushed before use and popped after, so every FPU register the compiler allocated keeps
-        // its value; the stack is used only between the push and the pop, below `sp` as the ABI
-        // allows. `SUBS` sets the flags (not preserved); VSQRT may set FPSCR's sticky exception
-        // bits, which nothing here reads.
+        // many. The loops count down to zero, so they end. `s0`–`s13` are pushed before use and
+        // popped after, so every FPU register the compiler allocated keeps its value; the stack
+        // is used only between the push and the pop, below `sp` as the ABI allows. `SUBS` sets
+        // the flags (not preserved); VSQRT may set FPSCR's sticky exception bits, which nothing
+        // here reads.
         unsafe {
             core::arch::asm!(
                 "vpush {{s0-s13}}",

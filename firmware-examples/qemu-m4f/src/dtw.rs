@@ -61,9 +61,12 @@ pub fn per_cell_centi() -> Result<(u64, usize), &'static str> {
     Ok((spent * 100 / len.cells as u64, len.cells))
 }
 
-/// Joint counts [`check_rooted_distances`] tries: one alone, pairs only, a pair and one, the
-/// product's 17.
-const KERNEL_JOINTS: [usize; 5] = [1, 2, 3, 16, 17];
+/// Joint counts [`check_rooted_distances`] tries: one alone, pairs only, a pair and one, and
+/// up to the product's [`KERNEL_MOST_JOINTS`].
+const KERNEL_JOINTS: [usize; 5] = [1, 2, 3, 16, KERNEL_MOST_JOINTS];
+
+/// The most joints [`check_rooted_distances`] tries: the product's student.
+const KERNEL_MOST_JOINTS: usize = 17;
 
 /// Frames of [`SWING`] [`check_rooted_distances`] measures against its first.
 const KERNEL_FRAMES: usize = 8;
@@ -81,11 +84,11 @@ pub fn check_rooted_distances() -> Result<usize, &'static str> {
     for n in KERNEL_JOINTS {
         let frame = |f: usize| positions.get(f * joints..f * joints + n);
         let first = frame(0).ok_or("the DTW's swing is too short for the kernel check")?;
-        let mut here = [Vec3::zeros(); 17];
+        let mut here = [Vec3::zeros(); KERNEL_MOST_JOINTS];
         let here = here.get_mut(..n).ok_or("too many joints for the kernel check")?;
         // Not root-relative, so that every joint's distance counts, the first's too.
         here.copy_from_slice(first);
-        let mut frames = [Vec3::zeros(); KERNEL_FRAMES * 17];
+        let mut frames = [Vec3::zeros(); KERNEL_FRAMES * KERNEL_MOST_JOINTS];
         let mut expected = [0.0f32; KERNEL_FRAMES];
         for (f, (chunk, e)) in frames.chunks_exact_mut(n).zip(&mut expected).enumerate() {
             let other = frame(f + 1).ok_or("the DTW's swing is too short for the kernel check")?;
