@@ -186,7 +186,7 @@ impl Workspace {
         }
     }
 
-    /// Takes `inputs`, each at most [`MAX_FIELD`] long, for [`Workspace::dots`].
+    /// Takes `inputs`, each at most [`MAX_FIELD`] long, for [`Workspace::rows`].
     #[inline(always)]
     fn load(&mut self, inputs: &[&[i8]; LANES]) {
         #[cfg(all(feature = "dsp", target_arch = "arm"))]
@@ -201,20 +201,27 @@ impl Workspace {
         let _ = inputs;
     }
 
-    /// `start[l] + Σ_k row[k] · inputs[l][k]` for each of the loaded `inputs` (wrapping), over
-    /// the row's length (the inputs' length).
+    /// The loaded vectors' kernel for rows of `n` values: on the DSP path, when the rows are
+    /// whole four-byte groups, `SMLAD` on the widened groups; otherwise [`dots`].
     #[inline(always)]
-    fn dots(&self, inputs: &[&[i8]; LANES], row: &[i8], start: [i32; LANES]) -> [i32; LANES] {
+    fn rows<'a>(&'a self, inputs: &'a [&[i8]; LANES], n: usize) -> Kernel<'a> {
         #[cfg(all(feature = "dsp", target_arch = "arm"))]
-        if let (groups, []) = row.as_chunks::<4>() {
-            return dsp::row(
-                start,
-                &self.widened[..groups.len().min(MAX_FIELD / 4)],
-                groups,
-            );
+        if n.is_multiple_of(4) {
+            return Kernel::Widened(&self.widened[..(n / 4).min(MAX_FIELD / 4)]);
         }
-        dots(inputs, row, start)
+        let _ = n;
+        Kernel::Bytes(inputs)
     }
+}
+
+/// How a group of vectors meets each row: see [`Workspace::rows`].
+#[derive(Clone, Copy)]
+enum Kernel<'a> {
+    /// The vectors as they are, through [`dots`].
+    Bytes(&'a [&'a [i8]; LANES]),
+    /// The vectors widened for `SMLAD`, through `dsp::row`.
+    #[cfg(all(feature = "dsp", target_arch = "arm"))]
+    Widened(&'a [[u32; 2 * LANES]]),
 }
 
 /// `start[l] + Σ_k row[k] · inputs[l][k]` for each lane (wrapping), by [`dot`]: the portable
@@ -434,9 +441,9 @@ pub fn accumulate<'x, 'b>(
 
 /// What becomes of a row's sums, one per lane.
 trait Finish {
-    type Out: Copy;
-    /// Output `c` of each lane from its sum.
-    fn finish(&self, c: usize, sums: [i32; LANES]) -> [Self::Out; LANES];
+    type Out: Copy + Default;
+    /// Output `c` of each lane from its sum, written to the lane's `out`.
+    fn finish(&self, c: usize, sums: [i32; LANES], out: [&mut Self::Out; LANES]);
 }
 
 /// Requantized to int8, then the leaky slope applied (`LEAKY`) or not.
@@ -448,20 +455,17 @@ impl<const LEAKY: bool> Finish for Requantize<'_, LEAKY> {
     type Out = i8;
 
     #[inline(always)]
-    fn finish(&self, c: usize, sums: [i32; LANES]) -> [i8; LANES] {
+    fn finish(&self, c: usize, sums: [i32; LANES], out: [&mut i8; LANES]) {
         let activation = if LEAKY {
             Activation::Leaky
         } else {
             Activation::Identity
         };
         let requant = self.requant[c];
-        let mut out = [0; LANES];
-        let outs = out.iter_mut().zip(sums);
         match requant.small() {
-            Some(small) => outs.for_each(|(o, acc)| *o = activation.activate(small.scale(acc))),
-            None => outs.for_each(|(o, acc)| *o = activation.apply(requant, acc)),
+            Some(small) => each(out, sums, |acc| activation.activate(small.scale(acc))),
+            None => each(out, sums, |acc| activation.apply(requant, acc)),
         }
-        out
     }
 }
 
@@ -472,9 +476,19 @@ impl Finish for Raw {
     type Out = i32;
 
     #[inline(always)]
-    fn finish(&self, _: usize, sums: [i32; LANES]) -> [i32; LANES] {
-        sums
+    fn finish(&self, _: usize, sums: [i32; LANES], out: [&mut i32; LANES]) {
+        each(out, sums, |sum| sum);
     }
+}
+
+/// `*out[l] = f(sums[l])` for each lane, written out so that the lanes stay in registers.
+#[inline(always)]
+fn each<T>(out: [&mut T; LANES], sums: [i32; LANES], f: impl Fn(i32) -> T) {
+    let [a, b, c, d] = out;
+    *a = f(sums[0]);
+    *b = f(sums[1]);
+    *c = f(sums[2]);
+    *d = f(sums[3]);
 }
 
 /// `out[i·m + c] = finish(c, sums)[l]` for every vector `i` and output `c`, where `sums[l] =
@@ -521,28 +535,70 @@ fn rows<'x, 'b, F: Finish>(
             }
         }
         work.load(&inputs);
-        let row = |c: usize, row: &[i8]| work.dots(&inputs, row, biases.map(|b| b[c]));
-        let rows = weights.chunks_exact(n).enumerate();
-        if let Some(block) = out.get_mut(start * m..(start + LANES) * m) {
-            // Four whole vectors: each lane's outputs in a slice of its own.
-            let (o0, rest) = block.split_at_mut(m);
-            let (o1, rest) = rest.split_at_mut(m);
-            let (o2, o3) = rest.split_at_mut(m);
-            let lanes = o0.iter_mut().zip(o1).zip(o2).zip(o3);
-            for ((c, w), (((a, b), c_), d)) in rows.zip(lanes) {
-                [*a, *b, *c_, *d] = finish.finish(c, row(c, w));
-            }
-        } else {
-            for (c, w) in rows {
-                let values = finish.finish(c, row(c, w));
-                for (o, v) in out[c..].iter_mut().step_by(m).zip(values) {
-                    *o = v;
-                }
-            }
+        let rows = weights.chunks_exact(n);
+        match work.rows(&inputs, n) {
+            Kernel::Bytes(inputs) => bytes(inputs, rows, biases, out, start, finish),
+            #[cfg(all(feature = "dsp", target_arch = "arm"))]
+            Kernel::Widened(widened) => group(rows, biases, out, start, finish, |row, start| {
+                dsp::row(start, widened, row.as_chunks::<4>().0)
+            }),
         }
         first = start + LANES;
     }
     Ok(())
+}
+
+/// [`group`] through [`dots`]: out of line, as on the DSP path only rows of no whole
+/// four-byte groups take it.
+#[inline(never)]
+fn bytes<'w, F: Finish>(
+    inputs: &[&[i8]; LANES],
+    rows: impl Iterator<Item = &'w [i8]>,
+    biases: [&[i32]; LANES],
+    out: &mut [F::Out],
+    start: usize,
+    finish: &F,
+) {
+    group(rows, biases, out, start, finish, |row, start| {
+        dots(inputs, row, start)
+    });
+}
+
+/// [`rows`] for the group of vectors from `start` (the last repeated past the end), their
+/// rows' sums by `kernel` from the biases `biases[l][c]`.
+#[inline(always)]
+fn group<'w, F: Finish>(
+    rows: impl Iterator<Item = &'w [i8]>,
+    biases: [&[i32]; LANES],
+    out: &mut [F::Out],
+    start: usize,
+    finish: &F,
+    kernel: impl Fn(&[i8], [i32; LANES]) -> [i32; LANES],
+) {
+    let m = biases[0].len();
+    let [b0, b1, b2, b3] = biases;
+    let starts = b0.iter().zip(b1).zip(b2).zip(b3);
+    let rows = rows.zip(starts).enumerate();
+    if let Some(block) = out.get_mut(start * m..(start + LANES) * m) {
+        // Four whole vectors: each lane's outputs in a slice of its own.
+        let (o0, rest) = block.split_at_mut(m);
+        let (o1, rest) = rest.split_at_mut(m);
+        let (o2, o3) = rest.split_at_mut(m);
+        let lanes = o0.iter_mut().zip(o1).zip(o2).zip(o3);
+        for ((c, (row, (((&s0, &s1), &s2), &s3))), (((a, b), c_), d)) in rows.zip(lanes) {
+            finish.finish(c, kernel(row, [s0, s1, s2, s3]), [a, b, c_, d]);
+        }
+    } else {
+        // Fewer vectors than lanes: each output is stored once per lane that holds it.
+        for (c, (row, (((&s0, &s1), &s2), &s3))) in rows {
+            let mut values = [F::Out::default(); LANES];
+            let [a, b, c_, d] = &mut values;
+            finish.finish(c, kernel(row, [s0, s1, s2, s3]), [a, b, c_, d]);
+            for (o, v) in out[c..].iter_mut().step_by(m).zip(values) {
+                *o = v;
+            }
+        }
+    }
 }
 
 /// The shape of a [`conv1d`]: 1-D convolution over time within channel groups.
