@@ -24,8 +24,8 @@
 
 use crate::config::MAX_JOINTS;
 use crate::skeleton::Skeleton;
-use crate::{Quat, Vec3};
-use nalgebra::{Quaternion, Unit};
+use crate::{math, Quat, Vec3};
+use nalgebra::Quaternion;
 
 /// Bones shorter than this (metres) have no direction: they keep their parent's rotation.
 pub const MIN_BONE: f32 = 1e-6;
@@ -108,7 +108,10 @@ pub fn inverse(
     let primary = (1..skeleton.len())
         .filter(|&c| skeleton.parent(c) == Some(0))
         .max_by(|&a, &b| {
-            let (la, lb) = (skeleton.offset(a).norm(), skeleton.offset(b).norm());
+            let (la, lb) = (
+                math::norm(&skeleton.offset(a)),
+                math::norm(&skeleton.offset(b)),
+            );
             la.total_cmp(&lb)
         });
     global[0] = match primary {
@@ -139,7 +142,7 @@ pub fn inverse(
 /// `a · b`, renormalized: an unnormalized product's norm error would grow geometrically down a
 /// chain of compositions.
 fn compose(a: Quat, b: Quat) -> Quat {
-    Quat::new_normalize(a.into_inner() * b.into_inner())
+    math::rotation(a.into_inner() * b.into_inner())
 }
 
 /// Rotates `base` by the swing taking `rest` onto `observed`, then twists it about `observed`
@@ -152,11 +155,11 @@ fn fit(
     rest: Vec3,
     observed: Vec3,
 ) -> Quat {
-    if rest.norm() < MIN_BONE || observed.norm() < MIN_BONE {
+    if math::norm(&rest) < MIN_BONE || math::norm(&observed) < MIN_BONE {
         return base;
     }
     let swung = swing(rest, observed) * base;
-    let axis = observed.normalize();
+    let axis = observed / math::norm(&observed);
     let (mut sin, mut cos) = (0.0f32, 0.0f32);
     for c in (k + 1)..skeleton.len() {
         if skeleton.parent(c) != Some(k) {
@@ -194,12 +197,12 @@ pub fn swing(from: Vec3, to: Vec3) -> Quat {
     let d = f.dot(&t);
     if d >= 0.0 {
         let c = f.cross(&t);
-        return Quat::new_normalize(Quaternion::new(1.0 + d, c.x, c.y, c.z));
+        return math::rotation(Quaternion::new(1.0 + d, c.x, c.y, c.z));
     }
     // Half turn about an axis perpendicular to f (in the f-t plane's normal where defined),
     // then the well-conditioned swing from -f to t.
     let mut axis = f.cross(&t);
-    if axis.norm() < 1e-3 {
+    if math::norm(&axis) < 1e-3 {
         axis = if f.x.abs() < 0.9 {
             Vec3::x()
         } else {
@@ -216,7 +219,7 @@ pub fn swing(from: Vec3, to: Vec3) -> Quat {
 }
 
 fn unit(v: Vec3) -> Option<Vec3> {
-    Unit::try_new(v, MIN_BONE).map(Unit::into_inner)
+    math::unit(v, MIN_BONE)
 }
 
 /// Random poses for property tests.
@@ -316,7 +319,7 @@ mod tests {
                 let mut local = [Quat::identity(); MAX_JOINTS];
                 local[0] = Quat::from_euler_angles(0.3, 1.1, -0.4);
                 let across = bone.cross(&Vec3::new(0.3, 0.5, 0.7)).normalize();
-                local[c] = Quat::from_axis_angle(&Unit::new_normalize(across), 0.5);
+                local[c] = Quat::from_axis_angle(&nalgebra::Unit::new_normalize(across), 0.5);
                 let mut posed = [Vec3::zeros(); MAX_JOINTS];
                 forward(&skeleton, &local[..n], Vec3::zeros(), &mut posed[..n]).unwrap();
                 let mut found = [Quat::identity(); MAX_JOINTS];

@@ -20,6 +20,23 @@ pub fn norm(v: &crate::Vec3) -> f32 {
     sqrt(v.norm_squared())
 }
 
+/// `v` over its length when that exceeds `min`: nalgebra's `Unit::try_new`, to the bit (the
+/// same sum of squares, compared with `min²`, and each coordinate divided by the root), with
+/// the root through [`sqrt`].
+#[inline]
+pub fn unit(v: crate::Vec3, min: f32) -> Option<crate::Vec3> {
+    let squared = v.norm_squared();
+    (squared > min * min).then(|| v / sqrt(squared))
+}
+
+/// `q` over its norm as a rotation: nalgebra's `UnitQuaternion::new_normalize`, to the bit,
+/// with the root through [`sqrt`].
+#[inline]
+pub fn rotation(q: nalgebra::Quaternion<f32>) -> crate::Quat {
+    let norm = sqrt(q.coords.norm_squared());
+    crate::Quat::new_unchecked(nalgebra::Quaternion::from(q.coords / norm))
+}
+
 /// The costs of `here` against consecutive frames of `here.len()` joints: for each whole frame
 /// `f` of `frames`, as many as `out` holds, `out[f] = scale · Σ |here[k] − (f[k] − f[0])|`, the
 /// sum over the joints added in order from 0.0, each length the square root of
@@ -276,6 +293,22 @@ mod tests {
             let k = ((values.len() - 1) as f64 * at) as usize;
             let mut work = values.clone();
             proptest::prop_assert_eq!(select(&mut work, k), sorted[k]);
+        }
+
+        #[test]
+        fn unit_and_rotation_are_nalgebras_to_the_bit(
+            v in proptest::array::uniform3(-2.0f32..2.0),
+            w in -2.0f32..2.0,
+            min in 0.0f32..1.0,
+        ) {
+            let v = crate::Vec3::from(v);
+            let bits = |v: crate::Vec3| v.map(f32::to_bits);
+            let theirs = nalgebra::Unit::try_new(v, min).map(nalgebra::Unit::into_inner);
+            proptest::prop_assert_eq!(unit(v, min).map(bits), theirs.map(bits));
+            let q = nalgebra::Quaternion::new(w, v.x, v.y, v.z);
+            proptest::prop_assume!(q.norm_squared() > 0.0);
+            let (ours, theirs) = (rotation(q), crate::Quat::new_normalize(q));
+            proptest::prop_assert_eq!(ours.coords.map(f32::to_bits), theirs.coords.map(f32::to_bits));
         }
     }
 }
