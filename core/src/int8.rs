@@ -719,13 +719,15 @@ pub fn upsample2(input: &[i8], channels: usize, out: &mut [i8]) -> Result<(), Sh
     if frames * channels != input.len() || out.len() != 2 * input.len() || frames == 0 {
         return Err(ShapeError::Mismatch);
     }
-    let at = |t: usize, c: usize| i32::from(input[t * channels + c]);
-    for t in 0..frames {
-        let (before, after) = (t.saturating_sub(1), (t + 1).min(frames - 1));
-        for c in 0..channels {
-            let x = 3 * at(t, c);
-            out[2 * t * channels + c] = ((at(before, c) + x + 2) >> 2) as i8;
-            out[(2 * t + 1) * channels + c] = ((x + at(after, c) + 2) >> 2) as i8;
+    let frame = |t: usize| &input[t * channels..(t + 1) * channels];
+    for (t, pair) in out.chunks_exact_mut(2 * channels).enumerate() {
+        let (even, odd) = pair.split_at_mut(channels);
+        let (before, after) = (frame(t.saturating_sub(1)), frame((t + 1).min(frames - 1)));
+        let outs = even.iter_mut().zip(odd);
+        for (((e, o), &b), (&x, &a)) in outs.zip(before).zip(frame(t).iter().zip(after)) {
+            let x = 3 * i32::from(x);
+            *e = ((i32::from(b) + x + 2) >> 2) as i8;
+            *o = ((x + i32::from(a) + 2) >> 2) as i8;
         }
     }
     Ok(())
