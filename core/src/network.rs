@@ -124,6 +124,62 @@ struct Buffers<'s> {
     work: int8::Workspace,
 }
 
+/// The arrays a frame of the encoder works in: made once for a window rather than cleared
+/// for every frame, as each frame writes the parts it reads first.
+struct Encoding {
+    /// Each source joint's quantized motion (its padding stays zero).
+    x: [[i8; MOTION_INPUTS]; MAX_JOINTS],
+    /// Each source joint's hidden features.
+    hidden: [i8; MAX_JOINTS * MAX_FEATURES],
+    /// Per segment and head: the weighted mean joint embedding.
+    means: [[[i8; MAX_FEATURES]; MAX_HEADS]; SEGMENTS],
+    /// Per segment and head: the token's and the joints' shares of the softmax.
+    shares: [[(f32, f32); MAX_HEADS]; SEGMENTS],
+    /// One token's attention.
+    attention: Attention,
+    /// Per head: the value layer's accumulators of every segment.
+    values: [i32; SEGMENTS * MAX_FEATURES],
+}
+
+impl Encoding {
+    fn new() -> Self {
+        Encoding {
+            x: [[0; MOTION_INPUTS]; MAX_JOINTS],
+            hidden: [0; MAX_JOINTS * MAX_FEATURES],
+            means: [[[0; MAX_FEATURES]; MAX_HEADS]; SEGMENTS],
+            shares: [[(0.0, 0.0); MAX_HEADS]; SEGMENTS],
+            attention: Attention::new(),
+            values: [0; SEGMENTS * MAX_FEATURES],
+        }
+    }
+}
+
+/// The arrays a frame of the decoder works in, as [`Encoding`] is the encoder's.
+struct Decoding {
+    /// Every segment's feature of the frame.
+    features: [i8; SEGMENTS * MAX_FEATURES],
+    /// Each target bone's hidden features.
+    hidden: [i8; MAX_JOINTS * MAX_FEATURES],
+    /// Each bone's raw correction.
+    raw: [i32; MAX_JOINTS * QUATERNION],
+    /// Each target joint's analytic rotation (the identity where none is fitted).
+    prior: [Quat; MAX_JOINTS],
+    /// Each target joint's global rotation.
+    global: [Quat; MAX_JOINTS],
+}
+
+impl Decoding {
+    fn new() -> Self {
+        Decoding {
+            features: [0; SEGMENTS * MAX_FEATURES],
+            hidden: [0; MAX_JOINTS * MAX_FEATURES],
+            raw: [0; MAX_JOINTS * QUATERNION],
+            prior: [Quat::identity(); MAX_JOINTS],
+            global: [Quat::identity(); MAX_JOINTS],
+        }
+    }
+}
+
 impl<'s> Buffers<'s> {
     fn carve(scratch: &'s mut [u8], d: usize, source: usize, target: usize) -> Option<Self> {
         fn words<'s, T: bytemuck::Pod>(rest: &mut &'s mut [u8], n: usize) -> Option<&'s mut [T]> {
@@ -371,6 +427,24 @@ impl Net<'_, '_> {
             let f = (start + t).min(count - 1);
             &frames[f * m..(f + 1) * m]
         };
+        self.encode(frame, buffers)?;
+        self.tokens(buffers)?;
+        self.convolve(buffers)?;
+        let n = self.target.len();
+        let poses = out[start * n..].chunks_exact_mut(n).take(WINDOW);
+        self.decode(frame, poses, buffers)
+    }
+
+    /// The motion encoder over the window's frames (`frame(t)`, source positions), leaving
+    /// each segment token's context in `buffers.b`. Out of line, as is [`Net::decode`], so
+    /// that the two phases' arrays share the stack.
+    #[inline(never)]
+    fn encode<'f>(
+        &self,
+        frame: impl Fn(usize) -> &'f [Vec3],
+        buffers: &mut Buffers<'_>,
+    ) -> Result<(), NetworkError> {
+        let m = self.source.len();
         let root = frame(0)[0];
         let origin = Vec3::new(root.x, 0.0, root.z);
         // Each joint's position relative to its parent (the root's to the window's origin),
@@ -386,24 +460,43 @@ impl Net<'_, '_> {
                 };
             }
         };
-        let (mut before, mut after) = ([Vec3::zeros(); MAX_JOINTS], [Vec3::zeros(); MAX_JOINTS]);
-        relative(0, &mut before);
+        let mut pair = [[Vec3::zeros(); MAX_JOINTS]; 2];
+        let [mut before, mut after] = pair.each_mut();
+        relative(0, before);
+        let mut encoding = Encoding::new();
         for t in 0..WINDOW {
             // Frame 0 moves as frame 1 does.
             if t > 1 {
                 core::mem::swap(&mut before, &mut after);
             }
             if t != 1 {
-                relative(t.max(1), &mut after);
+                relative(t.max(1), after);
             }
-            let here = if t == 0 { &before } else { &after };
-            self.encode_frame(&here[..m], &before[..m], &after[..m], t, buffers)?;
+            let here = if t == 0 { &*before } else { &*after };
+            self.encode_frame(
+                &here[..m],
+                &before[..m],
+                &after[..m],
+                t,
+                buffers,
+                &mut encoding,
+            )?;
         }
-        self.tokens(buffers)?;
-        self.convolve(buffers)?;
-        for t in 0..WINDOW.min(count - start) {
-            let pose = &mut out[(start + t) * self.target.len()..][..self.target.len()];
-            self.decode_frame(frame(t), t, buffers, pose)?;
+        Ok(())
+    }
+
+    /// The decoder's per-frame part over the window's frames (`frame(t)`, source positions),
+    /// one target pose of `poses` each.
+    #[inline(never)]
+    fn decode<'f, 'p>(
+        &self,
+        frame: impl Fn(usize) -> &'f [Vec3],
+        poses: impl Iterator<Item = &'p mut [Vec3]>,
+        buffers: &mut Buffers<'_>,
+    ) -> Result<(), NetworkError> {
+        let mut decoding = Decoding::new();
+        for (t, pose) in poses.enumerate() {
+            self.decode_frame(frame(t), t, buffers, &mut decoding, pose)?;
         }
         Ok(())
     }
@@ -419,10 +512,18 @@ impl Net<'_, '_> {
         after: &[Vec3],
         t: usize,
         buffers: &mut Buffers<'_>,
+        arrays: &mut Encoding,
     ) -> Result<(), NetworkError> {
         let (d, m) = (self.d, self.source.len());
         let scales = self.weights.scales();
-        let mut x = [[0i8; MOTION_INPUTS]; MAX_JOINTS];
+        let Encoding {
+            x,
+            hidden,
+            means,
+            shares,
+            attention,
+            values,
+        } = arrays;
         for (k, x) in x.iter_mut().enumerate().take(m) {
             let (p, v) = (here[k], after[k] - before[k]);
             for ((x, real), &scale) in x
@@ -434,7 +535,6 @@ impl Net<'_, '_> {
             }
         }
         let first = self.int8_layer(Dense::MotionFeatures, Activation::Leaky);
-        let mut hidden = [0i8; MAX_JOINTS * MAX_FEATURES];
         let motion_bias = &*buffers.motion_bias;
         int8::linear(
             &mut buffers.work,
@@ -455,17 +555,13 @@ impl Net<'_, '_> {
         let [logits, offsets, token_logits, token_values] =
             Table::ALL.map(|t| self.weights.table(t));
         // Per segment and head: the weighted mean joint embedding and the softmax's parts.
-        let mut means = [[[0i8; MAX_FEATURES]; MAX_HEADS]; SEGMENTS];
-        let mut shares = [[(0.0f32, 0.0f32); MAX_HEADS]; SEGMENTS];
-        let mut attention = Attention::new();
         for (s, seen) in self.seen.iter().enumerate() {
             let row = s * heads..(s + 1) * heads;
             // The root comes first: it starts the sums.
             for (first, k) in seen.iter().enumerate().map(|(i, k)| (i == 0, k)) {
-                let mut joint = [0.0; MAX_FEATURES];
-                for (x, &q) in joint.iter_mut().zip(&buffers.joints[k * d..(k + 1) * d]) {
-                    *x = f32::from(q);
-                }
+                let embedding = &buffers.joints[k * d..(k + 1) * d];
+                let joint: [f32; MAX_FEATURES] =
+                    core::array::from_fn(|i| embedding.get(i).map_or(0.0, |&q| f32::from(q)));
                 let joint = &joint[..d];
                 let mut logit = [0.0; MAX_HEADS];
                 for ((l, u), &offset) in logit
@@ -495,21 +591,20 @@ impl Net<'_, '_> {
         // Per head, for all segments at once: the value layer of the mean embedding, mixed
         // with the token's own value.
         let value = self.layer(Dense::Value);
-        let mut contexts = [[0i8; MAX_FEATURES]; SEGMENTS];
         for h in 0..heads {
             let span = h * width..(h + 1) * width;
-            let mut acc = [0i32; SEGMENTS * MAX_FEATURES];
+            let acc = &mut values[..SEGMENTS * width];
             int8::accumulate(
                 &mut buffers.work,
                 SEGMENTS,
                 |s| &means[s][h][..d],
                 |_| &value.bias[span.clone()],
                 &value.weights[span.start * d..span.end * d],
-                &mut acc[..SEGMENTS * width],
+                acc,
             )?;
-            for (s, (context, acc)) in contexts.iter_mut().zip(acc.chunks_exact(width)).enumerate()
-            {
+            for (s, acc) in acc.chunks_exact(width).enumerate() {
                 let (token, joints) = shares[s][h];
+                let context = &mut buffers.b[(s * WINDOW + t) * d..][..d];
                 for ((q, &a), at) in context[span.clone()].iter_mut().zip(acc).zip(span.clone()) {
                     let joint = a as f32 * value.scale[at];
                     let real =
@@ -517,10 +612,6 @@ impl Net<'_, '_> {
                     *q = int8::quantize(real, scales.context);
                 }
             }
-        }
-        for (s, context) in contexts.iter().enumerate() {
-            let at = (s * WINDOW + t) * d;
-            buffers.b[at..at + d].copy_from_slice(&context[..d]);
         }
         Ok(())
     }
@@ -638,17 +729,24 @@ impl Net<'_, '_> {
         source: &[Vec3],
         t: usize,
         buffers: &mut Buffers<'_>,
+        arrays: &mut Decoding,
         pose: &mut [Vec3],
     ) -> Result<(), NetworkError> {
         let (d, n) = (self.d, self.target.len());
+        let Decoding {
+            features,
+            hidden,
+            raw,
+            prior,
+            global,
+        } = arrays;
         let feature = |s: usize| &buffers.b[(s * WINDOW + t) * d..][..d];
-        let mut all = [0i8; SEGMENTS * MAX_FEATURES];
-        for (s, row) in all.chunks_exact_mut(d).enumerate().take(SEGMENTS) {
+        for (s, row) in features.chunks_exact_mut(d).enumerate().take(SEGMENTS) {
             row.copy_from_slice(feature(s));
         }
         let root = self.layer(Dense::Root);
         let mut acc = [0i32; 3];
-        let all = &all[..SEGMENTS * d];
+        let all = &features[..SEGMENTS * d];
         int8::accumulate(
             &mut buffers.work,
             1,
@@ -668,7 +766,6 @@ impl Net<'_, '_> {
         // Every bone's correction at once: bone `k` (row `k - 1`) reads its segment's feature.
         let bones = n - 1;
         let layer = self.int8_layer(Dense::DecoderFeatures, Activation::Leaky);
-        let mut hidden = [0i8; MAX_JOINTS * MAX_FEATURES];
         let input = |i: usize| feature(usize::from(self.bone_segments[i + 1]));
         let bias = |i: usize| &buffers.decoder_bias[(i + 1) * d..(i + 2) * d];
         int8::linear(
@@ -680,7 +777,6 @@ impl Net<'_, '_> {
             &mut hidden[..bones * d],
         )?;
         let output = self.layer(Dense::DecoderOutput);
-        let mut raw = [0i32; MAX_JOINTS * QUATERNION];
         let rows = |i: usize| &hidden[i * d..(i + 1) * d];
         let raw = &mut raw[..bones * QUATERNION];
         int8::accumulate(
@@ -691,8 +787,6 @@ impl Net<'_, '_> {
             output.weights,
             raw,
         )?;
-        let mut prior = [Quat::identity(); MAX_JOINTS];
-        let mut global = [Quat::identity(); MAX_JOINTS];
         for (k, raw) in (1..n).zip(raw.chunks_exact(QUATERNION)) {
             if let Some(chord) = self.prior.chord(k) {
                 let to = source[chord.to] - source[chord.from];
