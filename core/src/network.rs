@@ -137,6 +137,8 @@ struct Encoding {
     shares: [[(f32, f32); MAX_HEADS]; SEGMENTS],
     /// One token's attention.
     attention: Attention,
+    /// The attended joint's embedding as `f32`.
+    joint: [f32; MAX_FEATURES],
     /// Per head: the value layer's accumulators of every segment.
     values: [i32; SEGMENTS * MAX_FEATURES],
 }
@@ -149,6 +151,7 @@ impl Encoding {
             means: [[[0; MAX_FEATURES]; MAX_HEADS]; SEGMENTS],
             shares: [[(0.0, 0.0); MAX_HEADS]; SEGMENTS],
             attention: Attention::new(),
+            joint: [0.0; MAX_FEATURES],
             values: [0; SEGMENTS * MAX_FEATURES],
         }
     }
@@ -522,6 +525,7 @@ impl Net<'_, '_> {
             means,
             shares,
             attention,
+            joint,
             values,
         } = arrays;
         for (k, x) in x.iter_mut().enumerate().take(m) {
@@ -560,8 +564,9 @@ impl Net<'_, '_> {
             // The root comes first: it starts the sums.
             for (first, k) in seen.iter().enumerate().map(|(i, k)| (i == 0, k)) {
                 let embedding = &buffers.joints[k * d..(k + 1) * d];
-                let joint: [f32; MAX_FEATURES] =
-                    core::array::from_fn(|i| embedding.get(i).map_or(0.0, |&q| f32::from(q)));
+                for (x, &q) in joint.iter_mut().zip(embedding) {
+                    *x = f32::from(q);
+                }
                 let joint = &joint[..d];
                 let mut logit = [0.0; MAX_HEADS];
                 for ((l, u), &offset) in logit
@@ -602,13 +607,14 @@ impl Net<'_, '_> {
                 &value.weights[span.start * d..span.end * d],
                 acc,
             )?;
+            let scale = &value.scale[span.clone()];
             for (s, acc) in acc.chunks_exact(width).enumerate() {
                 let (token, joints) = shares[s][h];
-                let context = &mut buffers.b[(s * WINDOW + t) * d..][..d];
-                for ((q, &a), at) in context[span.clone()].iter_mut().zip(acc).zip(span.clone()) {
-                    let joint = a as f32 * value.scale[at];
-                    let real =
-                        (token * token_values[s * d + at] + joints * joint) / (token + joints);
+                let context = &mut buffers.b[(s * WINDOW + t) * d..][..d][span.clone()];
+                let own = &token_values[s * d..][span.clone()];
+                for (((q, &a), &scale), &own) in context.iter_mut().zip(acc).zip(scale).zip(own) {
+                    let joint = a as f32 * scale;
+                    let real = (token * own + joints * joint) / (token + joints);
                     *q = int8::quantize(real, scales.context);
                 }
             }
