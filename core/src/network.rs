@@ -316,11 +316,31 @@ fn rest_features(skeleton: &Skeleton, rest: &[Vec3], k: usize) -> [f32; REST_CHA
 fn dense_f32(t: &Tensors<'_>, x: &[f32], out: &mut [f32]) {
     let rows = t.weights.chunks_exact(x.len().max(1));
     for (((y, row), &b), &s) in out.iter_mut().zip(rows).zip(t.bias).zip(t.scale) {
-        let acc = row
-            .iter()
-            .zip(x)
-            .fold(0.0, |acc, (&w, &v)| acc + f32::from(w) * v);
-        *y = (acc + b as f32) * s;
+        *y = (dot_from(0.0, row, x) + b as f32) * s;
+    }
+}
+
+/// `start + Σ a[i] · b[i]` over the length of the shorter, added in order from `start` (the
+/// bits of a plain fold), four products to a step so that the loop's own work is shared.
+fn dot_from<A: Copy + Into<f32>>(start: f32, a: &[A], b: &[f32]) -> f32 {
+    let n = a.len().min(b.len());
+    let ((a4, a1), (b4, b1)) = (a[..n].as_chunks::<4>(), b[..n].as_chunks::<4>());
+    let f = |a: A| -> f32 { a.into() };
+    let sum = a4.iter().zip(b4).fold(start, |s, (a, b)| {
+        s + f(a[0]) * b[0] + f(a[1]) * b[1] + f(a[2]) * b[2] + f(a[3]) * b[3]
+    });
+    a1.iter().zip(b1).fold(sum, |s, (&a, b)| s + f(a) * b)
+}
+
+/// `sums[i] = f(sums[i], x[i])` over the length of the shorter, four to a step.
+fn each(sums: &mut [f32], x: &[f32], f: impl Fn(f32, f32) -> f32) {
+    let n = sums.len().min(x.len());
+    let ((s4, s1), (x4, x1)) = (sums[..n].as_chunks_mut::<4>(), x[..n].as_chunks::<4>());
+    for (s, x) in s4.iter_mut().zip(x4) {
+        *s = [f(s[0], x[0]), f(s[1], x[1]), f(s[2], x[2]), f(s[3], x[3])];
+    }
+    for (s, &x) in s1.iter_mut().zip(x1) {
+        *s = f(*s, x);
     }
 }
 
@@ -564,7 +584,12 @@ impl Net<'_, '_> {
             // The root comes first: it starts the sums.
             for (first, k) in seen.iter().enumerate().map(|(i, k)| (i == 0, k)) {
                 let embedding = &buffers.joints[k * d..(k + 1) * d];
-                for (x, &q) in joint.iter_mut().zip(embedding) {
+                let (e4, e1) = embedding.as_chunks::<4>();
+                let (j4, j1) = joint[..d].as_chunks_mut::<4>();
+                for (x, q) in j4.iter_mut().zip(e4) {
+                    *x = q.map(f32::from);
+                }
+                for (x, &q) in j1.iter_mut().zip(e1) {
                     *x = f32::from(q);
                 }
                 let joint = &joint[..d];
@@ -574,10 +599,7 @@ impl Net<'_, '_> {
                     .zip(logits[s * heads * d..].chunks_exact(d))
                     .zip(&offsets[row.clone()])
                 {
-                    *l = u
-                        .iter()
-                        .zip(joint)
-                        .fold(offset, |acc, (&u, &x)| acc + u * x);
+                    *l = dot_from(offset, u, joint);
                 }
                 if first {
                     attention.start(&token_logits[row.clone()], &logit[..heads], joint);
@@ -839,18 +861,18 @@ impl Attention {
     /// without clearing them first.
     fn start(&mut self, token_logits: &[f32], logits: &[f32], x: &[f32]) {
         for (h, (&own, &logit)) in token_logits.iter().zip(logits).enumerate() {
-            let sums = self.sums[h].iter_mut().zip(x);
+            let sums = &mut self.sums[h];
             if logit > own {
                 self.max[h] = logit;
                 self.token[h] = libm::expf(own - logit);
                 self.joints[h] = 1.0;
-                sums.for_each(|(sum, &v)| *sum = v);
+                each(sums, x, |_, v| v);
             } else {
                 let new = libm::expf(logit - own);
                 self.max[h] = own;
                 self.token[h] = 1.0;
                 self.joints[h] = new;
-                sums.for_each(|(sum, &v)| *sum = new * v);
+                each(sums, x, |_, v| new * v);
             }
         }
     }
@@ -860,17 +882,17 @@ impl Attention {
     /// `new` (the factor of 1 on the other side skipped: exact).
     fn add(&mut self, logits: &[f32], x: &[f32]) {
         for (h, &logit) in logits.iter().enumerate() {
-            let sums = self.sums[h].iter_mut().zip(x);
+            let sums = &mut self.sums[h];
             if logit > self.max[h] {
                 let old = libm::expf(self.max[h] - logit);
                 self.max[h] = logit;
                 self.token[h] *= old;
                 self.joints[h] = self.joints[h] * old + 1.0;
-                sums.for_each(|(sum, &v)| *sum = *sum * old + v);
+                each(sums, x, |sum, v| sum * old + v);
             } else {
                 let new = libm::expf(logit - self.max[h]);
                 self.joints[h] += new;
-                sums.for_each(|(sum, &v)| *sum += new * v);
+                each(sums, x, |sum, v| sum + new * v);
             }
         }
     }
@@ -978,6 +1000,25 @@ mod tests {
                     "joint {k}"
                 );
             }
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn four_step_loops_match_plain_folds_to_the_bit(
+            a in proptest::collection::vec(-100.0f32..100.0, 0..23),
+            b in proptest::collection::vec(-100.0f32..100.0, 0..23),
+            start in -100.0f32..100.0,
+        ) {
+            let plain = a.iter().zip(&b).fold(start, |s, (a, b)| s + a * b);
+            proptest::prop_assert_eq!(dot_from(start, &a, &b).to_bits(), plain.to_bits());
+            let mut sums = a.clone();
+            each(&mut sums, &b, |s, x| s * start + x);
+            let n = a.len().min(b.len());
+            for (k, (s, (a, x))) in sums.iter().zip(a.iter().zip(&b)).enumerate() {
+                proptest::prop_assert_eq!(s.to_bits(), (a * start + x).to_bits(), "value {}", k);
+            }
+            proptest::prop_assert_eq!(&sums[n..], &a[n..]);
         }
     }
 
