@@ -322,6 +322,7 @@ fn dense_f32(t: &Tensors<'_>, x: &[f32], out: &mut [f32]) {
 
 /// `start + Σ a[i] · b[i]` over the length of the shorter, added in order from `start` (the
 /// bits of a plain fold), four products to a step so that the loop's own work is shared.
+#[inline(never)]
 fn dot_from<A: Copy + Into<f32>>(start: f32, a: &[A], b: &[f32]) -> f32 {
     let n = a.len().min(b.len());
     let ((a4, a1), (b4, b1)) = (a[..n].as_chunks::<4>(), b[..n].as_chunks::<4>());
@@ -333,6 +334,7 @@ fn dot_from<A: Copy + Into<f32>>(start: f32, a: &[A], b: &[f32]) -> f32 {
 }
 
 /// `sums[i] = f(sums[i], x[i])` over the length of the shorter, four to a step.
+#[inline(never)]
 fn each(sums: &mut [f32], x: &[f32], f: impl Fn(f32, f32) -> f32) {
     let n = sums.len().min(x.len());
     let ((s4, s1), (x4, x1)) = (sums[..n].as_chunks_mut::<4>(), x[..n].as_chunks::<4>());
