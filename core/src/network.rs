@@ -335,7 +335,7 @@ fn dot_from<A: Copy + Into<f32>>(start: f32, a: &[A], b: &[f32]) -> f32 {
 
 /// `sums[i] = f(sums[i], x[i])` over the length of the shorter, four to a step.
 #[inline(never)]
-fn each(sums: &mut [f32], x: &[f32], f: impl Fn(f32, f32) -> f32) {
+fn update(sums: &mut [f32], x: &[f32], f: impl Fn(f32, f32) -> f32) {
     let n = sums.len().min(x.len());
     let ((s4, s1), (x4, x1)) = (sums[..n].as_chunks_mut::<4>(), x[..n].as_chunks::<4>());
     for (s, x) in s4.iter_mut().zip(x4) {
@@ -868,13 +868,13 @@ impl Attention {
                 self.max[h] = logit;
                 self.token[h] = libm::expf(own - logit);
                 self.joints[h] = 1.0;
-                each(sums, x, |_, v| v);
+                update(sums, x, |_, v| v);
             } else {
                 let new = libm::expf(logit - own);
                 self.max[h] = own;
                 self.token[h] = 1.0;
                 self.joints[h] = new;
-                each(sums, x, |_, v| new * v);
+                update(sums, x, |_, v| new * v);
             }
         }
     }
@@ -890,11 +890,11 @@ impl Attention {
                 self.max[h] = logit;
                 self.token[h] *= old;
                 self.joints[h] = self.joints[h] * old + 1.0;
-                each(sums, x, |sum, v| sum * old + v);
+                update(sums, x, |sum, v| sum * old + v);
             } else {
                 let new = libm::expf(logit - self.max[h]);
                 self.joints[h] += new;
-                each(sums, x, |sum, v| sum + new * v);
+                update(sums, x, |sum, v| sum + new * v);
             }
         }
     }
@@ -1015,7 +1015,7 @@ mod tests {
             let plain = a.iter().zip(&b).fold(start, |s, (a, b)| s + a * b);
             proptest::prop_assert_eq!(dot_from(start, &a, &b).to_bits(), plain.to_bits());
             let mut sums = a.clone();
-            each(&mut sums, &b, |s, x| s * start + x);
+            update(&mut sums, &b, |s, x| s * start + x);
             let n = a.len().min(b.len());
             for (k, (s, (a, x))) in sums.iter().zip(a.iter().zip(&b)).enumerate() {
                 proptest::prop_assert_eq!(s.to_bits(), (a * start + x).to_bits(), "value {}", k);
