@@ -639,6 +639,10 @@ pub fn takeaway_against(
         let f = (x.max(0.0) as usize).min(t.frames - 1);
         let g = (f + 1).min(t.frames - 1);
         let w = (x - f as f32).clamp(0.0, 1.0);
+        if w == 0.0 {
+            // At a frame: the next one's smoothed read would be weighed by zero.
+            return arms.map(|k| t.at(k, f));
+        }
         arms.map(|k| t.at(k, f) * (1.0 - w) + t.at(k, g) * w)
     };
     // Each backswing runs from the takeaway to the hands' arrival at the top (a pause there
