@@ -155,11 +155,12 @@ fn fit(
     rest: Vec3,
     observed: Vec3,
 ) -> Quat {
-    if math::norm(&rest) < MIN_BONE || math::norm(&observed) < MIN_BONE {
+    let length = math::norm(&observed);
+    if math::norm(&rest) < MIN_BONE || length < MIN_BONE {
         return base;
     }
     let swung = swing(rest, observed) * base;
-    let axis = observed / math::norm(&observed);
+    let axis = observed / length;
     let (mut sin, mut cos) = (0.0f32, 0.0f32);
     for c in (k + 1)..skeleton.len() {
         if skeleton.parent(c) != Some(k) {
