@@ -265,6 +265,34 @@ mod dsp {
         [even, odd]
     }
 
+    /// A row's sums: per four-byte group of its weights (`{pw}`), one load and two `SXTB16`
+    /// widen them, then per lane `l` one `LDRD` (the lane's widened group, `{px}`) and two
+    /// `SMLAD` add four products to `{sl}`; `{n}` groups, at least one.
+    macro_rules! sums {
+        () => {
+            concat!(
+                "2:\n",
+                "ldr {w}, [{pw}], #4\n",
+                "sxtb16 {t}, {w}, ror #8\n",
+                "sxtb16 {w}, {w}\n",
+                "ldrd {xe}, {xo}, [{px}], #8\n",
+                "smlad {s0}, {xe}, {w}, {s0}\n",
+                "smlad {s0}, {xo}, {t}, {s0}\n",
+                "ldrd {xe}, {xo}, [{px}], #8\n",
+                "smlad {s1}, {xe}, {w}, {s1}\n",
+                "smlad {s1}, {xo}, {t}, {s1}\n",
+                "ldrd {xe}, {xo}, [{px}], #8\n",
+                "smlad {s2}, {xe}, {w}, {s2}\n",
+                "smlad {s2}, {xo}, {t}, {s2}\n",
+                "ldrd {xe}, {xo}, [{px}], #8\n",
+                "smlad {s3}, {xe}, {w}, {s3}\n",
+                "smlad {s3}, {xo}, {t}, {s3}\n",
+                "subs {n}, {n}, #1\n",
+                "bne 2b\n",
+            )
+        };
+    }
+
     /// Each lane's `s[l] + Σ_g` of `row[g]`'s four int8 weights times the lane's widened group `g`
     /// (`widened[g][2l]`, `widened[g][2l + 1]`): per group one load and two `SXTB16` widen
     /// the weights, then per lane one `LDRD` and two `SMLAD` add four products (17
@@ -286,24 +314,7 @@ mod dsp {
         // flag, which nothing reads; the flags are clobbered (no `preserves_flags`).
         unsafe {
             core::arch::asm!(
-                "2:",
-                "ldr {w}, [{pw}], #4",
-                "sxtb16 {t}, {w}, ror #8",
-                "sxtb16 {w}, {w}",
-                "ldrd {xe}, {xo}, [{px}], #8",
-                "smlad {s0}, {xe}, {w}, {s0}",
-                "smlad {s0}, {xo}, {t}, {s0}",
-                "ldrd {xe}, {xo}, [{px}], #8",
-                "smlad {s1}, {xe}, {w}, {s1}",
-                "smlad {s1}, {xo}, {t}, {s1}",
-                "ldrd {xe}, {xo}, [{px}], #8",
-                "smlad {s2}, {xe}, {w}, {s2}",
-                "smlad {s2}, {xo}, {t}, {s2}",
-                "ldrd {xe}, {xo}, [{px}], #8",
-                "smlad {s3}, {xe}, {w}, {s3}",
-                "smlad {s3}, {xo}, {t}, {s3}",
-                "subs {n}, {n}, #1",
-                "bne 2b",
+                sums!(),
                 pw = inout(reg) row.as_ptr() => _,
                 px = inout(reg) widened.as_ptr() => _,
                 n = inout(reg) groups => _,
@@ -319,6 +330,181 @@ mod dsp {
             );
         }
         s
+    }
+
+    /// One lane's output from its sum `$s`: [`super::Small::scale`] by `{n}` and `{w}`
+    /// (`SMMUL`, the shift and the rounding), saturated to int8 (`SSAT`, which takes the last
+    /// halving) and stored at `$at`.
+    macro_rules! identity {
+        ($s:literal, $at:literal) => {
+            concat!(
+                "smmul {pw}, ",
+                $s,
+                ", {n}\n",
+                "asr {pw}, {pw}, {w}\n",
+                "adds {pw}, {pw}, #1\n",
+                "ssat {pw}, #8, {pw}, asr #1\n",
+                "strb {pw}, ",
+                $at,
+                "\n",
+            )
+        };
+    }
+
+    /// [`identity!`] with the leaky slope: a negative value is scaled by `LEAKY_SMALL`
+    /// (`{xo}` holds its multiplier; its shift is 0) before it saturates.
+    macro_rules! leaky {
+        ($s:literal, $at:literal) => {
+            concat!(
+                "smmul {pw}, ",
+                $s,
+                ", {n}\n",
+                "asr {pw}, {pw}, {w}\n",
+                "adds {pw}, {pw}, #1\n",
+                "asrs {pw}, {pw}, #1\n",
+                "bpl 5f\n",
+                "smmul {pw}, {pw}, {xo}\n",
+                "adds {pw}, {pw}, #1\n",
+                "asrs {pw}, {pw}, #1\n",
+                "5:\n",
+                "ssat {pw}, #8, {pw}\n",
+                "strb {pw}, ",
+                $at,
+                "\n",
+            )
+        };
+    }
+
+    /// The whole of [`requantize`] for one activation (`$lane`: [`identity!`] or
+    /// [`leaky!`]): the row loop's state kept below the stack pointer, each row's biases
+    /// loaded, its sums by [`row`]'s loop, its four outputs requantized and stored.
+    macro_rules! requantize {
+        ($lane:ident, $setup:literal, $weights:expr, $widened:expr, $groups:expr,
+         $bias:expr, $stride:expr, $requant:expr, $out:expr, $m:expr) => {
+            core::arch::asm!(
+                // State: 0 the row's weights, 4 widened, 8 groups, 12 the row's lane-0 bias,
+                // 16 the lanes' bias stride, 20 the row's requantization, 24 its lane-0
+                // output, 28 the lanes' output stride (m), 32 rows left.
+                "sub sp, sp, #40",
+                "str {pw}, [sp]",
+                "strd {px}, {n}, [sp, #4]",
+                "strd {s0}, {s1}, [sp, #12]",
+                "strd {s2}, {s3}, [sp, #20]",
+                "str {w}, [sp, #28]",
+                "str {w}, [sp, #32]",
+                "1:",
+                "ldr {pw}, [sp]",
+                "ldrd {px}, {n}, [sp, #4]",
+                "ldrd {w}, {t}, [sp, #12]",
+                "ldr {s0}, [{w}]",
+                "ldr {s1}, [{w}, {t}]",
+                "ldr {s2}, [{w}, {t}, lsl #1]",
+                "adds {xe}, {w}, #4",
+                "str {xe}, [sp, #12]",
+                "add {w}, {w}, {t}",
+                "ldr {s3}, [{w}, {t}, lsl #1]",
+                sums!(),
+                // The next row's weights follow this one's.
+                "str {pw}, [sp]",
+                "ldr {px}, [sp, #20]",
+                "ldrd {n}, {w}, [{px}], #8",
+                "str {px}, [sp, #20]",
+                // Small's shift: -2 - shift.
+                "mvn {w}, {w}",
+                "subs {w}, {w}, #1",
+                "ldrd {t}, {xe}, [sp, #24]",
+                $setup,
+                $lane!("{s0}", "[{t}]"),
+                $lane!("{s1}", "[{t}, {xe}]"),
+                "add {px}, {t}, {xe}, lsl #1",
+                $lane!("{s2}", "[{px}]"),
+                $lane!("{s3}", "[{px}, {xe}]"),
+                "adds {t}, {t}, #1",
+                "str {t}, [sp, #24]",
+                "ldr {t}, [sp, #32]",
+                "subs {t}, {t}, #1",
+                "str {t}, [sp, #32]",
+                "bne 1b",
+                "add sp, sp, #40",
+                pw = inout(reg) $weights => _,
+                px = inout(reg) $widened => _,
+                n = inout(reg) $groups => _,
+                s0 = inout(reg) $bias => _,
+                s1 = inout(reg) $stride => _,
+                s2 = inout(reg) $requant => _,
+                s3 = inout(reg) $out => _,
+                w = inout(reg) $m => _,
+                t = out(reg) _,
+                xe = out(reg) _,
+                xo = out(reg) _,
+            )
+        };
+    }
+
+    /// A group's rows on four widened vectors, each output requantized by a [`super::Small`]
+    /// (the leaky slope applied when `LEAKY`) and stored: `out[l·m + c]` for lane `l` and row
+    /// `c` (`weights[c·n..]`, `n = 4 · widened.len()`), its sum started from `biases[l][c]`.
+    /// One `asm!` loop over the rows, its state below the stack pointer, so that a row's sums
+    /// stay in registers from their biases to their outputs: 10 instructions to start a row,
+    /// [`row`]'s 17 per four-byte group, then 34 to requantize and store its four outputs
+    /// (43 with the leaky slope, and 3 more for each negative output).
+    ///
+    /// Every factor of `requant` must be below ¼ (each a [`super::Small`], as the caller
+    /// checks once per layer); otherwise the outputs are wrong. Returns `false` (and does
+    /// nothing) unless the shapes hold: `widened` not empty, `weights` `m` rows of `n`,
+    /// `requant` `m` long, `out` `4m` long, and the lanes' `m` biases each at `stride` after
+    /// the one before.
+    pub(super) fn requantize<const LEAKY: bool>(
+        widened: &[[u32; 2 * LANES]],
+        weights: &[i8],
+        biases: [&[i32]; LANES],
+        requant: &[super::Requant],
+        out: &mut [i8],
+    ) -> bool {
+        let (groups, m) = (widened.len(), requant.len());
+        let at = biases.map(|b| b.as_ptr() as usize);
+        let stride = at[1].wrapping_sub(at[0]);
+        if groups == 0
+            || m == 0
+            || weights.len() != 4 * groups * m
+            || out.len() != LANES * m
+            || biases.iter().any(|b| b.len() != m)
+            || at[2] != at[1].wrapping_add(stride)
+            || at[3] != at[2].wrapping_add(stride)
+        {
+            return false;
+        }
+        // SAFETY: the loop runs `m` rows (at least 1; it counts down to zero, so it ends), each
+        // reading the row's `n = 4 · groups` weights from `weights` (`m · n` long, rows in
+        // order), `groups` × 32 bytes from `widened` (word-aligned `u32`s, as `LDRD` needs) and
+        // lane `l`'s bias `c` at `biases[0] + l · stride + 4c` bytes, which is `biases[l][c]`
+        // (checked above: every lane's slice starts there and is `m` long); its two words of
+        // `requant[c]` (`repr(C)` multiplier and shift, 4-byte aligned); and writing lane `l`'s
+        // output at `out[l · m + c]`, inside `out` (`4m` long). The loop's state is kept in
+        // 40 bytes below the stack pointer, which it moves down before and back after (no
+        // `nostack`). SMLAD may set the Q flag, which nothing reads; the flags are
+        // clobbered (no `preserves_flags`).
+        unsafe {
+            let (weights, widened, bias) = (weights.as_ptr(), widened.as_ptr(), biases[0].as_ptr());
+            let (requant, out) = (requant.as_ptr(), out.as_mut_ptr());
+            if LEAKY {
+                requantize!(
+                    leaky,
+                    "mov {xo}, #0x66666666",
+                    weights,
+                    widened,
+                    groups,
+                    bias,
+                    stride,
+                    requant,
+                    out,
+                    m
+                );
+            } else {
+                requantize!(identity, "", weights, widened, groups, bias, stride, requant, out, m);
+            }
+        }
+        true
     }
 }
 
@@ -411,11 +597,11 @@ pub fn linear<'x, 'b>(
     let requant = layer.requant;
     match layer.activation {
         Activation::Identity => {
-            let finish = Requantize::<false> { requant };
+            let finish = Requantize::<false>::new(requant);
             rows(work, count, &input, &bias, layer.weights, out, &finish)
         }
         Activation::Leaky => {
-            let finish = Requantize::<true> { requant };
+            let finish = Requantize::<true>::new(requant);
             rows(work, count, &input, &bias, layer.weights, out, &finish)
         }
     }
@@ -444,11 +630,37 @@ trait Finish {
     type Out: Copy + Default;
     /// Output `c` of each lane from its sum, written to the lane's `out`.
     fn finish(&self, c: usize, sums: [i32; LANES], out: [&mut Self::Out; LANES]);
+
+    /// Runs a whole group's rows on widened vectors itself, outputs `block` (four lanes of
+    /// `m`), and says so; `false` leaves them to [`group`].
+    #[cfg(all(feature = "dsp", target_arch = "arm"))]
+    fn widened(
+        &self,
+        _widened: &[[u32; 2 * LANES]],
+        _weights: &[i8],
+        _biases: [&[i32]; LANES],
+        _block: &mut [Self::Out],
+    ) -> bool {
+        false
+    }
 }
 
 /// Requantized to int8, then the leaky slope applied (`LEAKY`) or not.
 struct Requantize<'r, const LEAKY: bool> {
     requant: &'r [Requant],
+    /// Whether every factor is below ¼, as `dsp::requantize` needs.
+    #[cfg(all(feature = "dsp", target_arch = "arm"))]
+    small: bool,
+}
+
+impl<'r, const LEAKY: bool> Requantize<'r, LEAKY> {
+    fn new(requant: &'r [Requant]) -> Self {
+        Requantize {
+            requant,
+            #[cfg(all(feature = "dsp", target_arch = "arm"))]
+            small: requant.iter().all(|r| r.small().is_some()),
+        }
+    }
 }
 
 impl<const LEAKY: bool> Finish for Requantize<'_, LEAKY> {
@@ -466,6 +678,20 @@ impl<const LEAKY: bool> Finish for Requantize<'_, LEAKY> {
             Some(small) => each(out, sums, |acc| activation.activate(small.scale(acc))),
             None => each(out, sums, |acc| activation.apply(requant, acc)),
         }
+    }
+
+    /// `dsp::requantize`'s one loop when every factor is below ¼ and the lanes' biases lie
+    /// at one stride.
+    #[cfg(all(feature = "dsp", target_arch = "arm"))]
+    #[inline(always)]
+    fn widened(
+        &self,
+        widened: &[[u32; 2 * LANES]],
+        weights: &[i8],
+        biases: [&[i32]; LANES],
+        block: &mut [i8],
+    ) -> bool {
+        self.small && dsp::requantize::<LEAKY>(widened, weights, biases, self.requant, block)
     }
 }
 
@@ -539,9 +765,14 @@ fn rows<'x, 'b, F: Finish>(
         match work.rows(&inputs, n) {
             Kernel::Bytes(inputs) => bytes(inputs, rows, biases, out, start, finish),
             #[cfg(all(feature = "dsp", target_arch = "arm"))]
-            Kernel::Widened(widened) => group(rows, biases, out, start, finish, |row, start| {
-                dsp::row(start, widened, row.as_chunks::<4>().0)
-            }),
+            Kernel::Widened(widened) => {
+                let whole = out.get_mut(start * m..(start + LANES) * m);
+                if !whole.is_some_and(|block| finish.widened(widened, weights, biases, block)) {
+                    group(rows, biases, out, start, finish, |row, start| {
+                        dsp::row(start, widened, row.as_chunks::<4>().0)
+                    });
+                }
+            }
         }
         first = start + LANES;
     }
