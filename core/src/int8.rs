@@ -574,20 +574,51 @@ pub struct Layer<'w> {
     pub activation: Activation,
 }
 
+/// Where a layer call finds vector `i` of its inputs, or of its biases.
+#[derive(Clone, Copy)]
+pub enum Vectors<'a, T> {
+    /// Vector `i` starts at `data[i · stride]` (a stride of 0: every vector is the same one).
+    /// Read in place, the common case.
+    Strided(&'a [T], usize),
+    /// Vector `i` is `f(i)`: a gather or a padded window, one call per vector.
+    Each(&'a dyn Fn(usize) -> &'a [T]),
+}
+
+impl<'a, T> Vectors<'a, T> {
+    /// The vectors `vectors`, each `len` long, or `None` where one is not.
+    #[inline(always)]
+    fn lanes(&self, vectors: &[usize; LANES], len: usize) -> Option<[&'a [T]; LANES]> {
+        let mut lanes: [&[T]; LANES] = [&[]; LANES];
+        match *self {
+            Vectors::Strided(data, stride) => {
+                for (lane, &i) in lanes.iter_mut().zip(vectors) {
+                    *lane = data.get(i * stride..)?.get(..len)?;
+                }
+            }
+            Vectors::Each(f) => {
+                for (lane, &i) in lanes.iter_mut().zip(vectors) {
+                    *lane = Some(f(i)).filter(|v| v.len() == len)?;
+                }
+            }
+        }
+        Some(lanes)
+    }
+}
+
 /// A fully connected layer on `count` vectors: for each `i < count`, `out[i·m + c] =
-/// act(requant[c](Σ_k weights[c·n + k] · input(i)[k] + bias(i)[c]))`, with `m` outputs (one per
+/// act(requant[c](Σ_k weights[c·n + k] · input_i[k] + bias_i[c]))`, with `m` outputs (one per
 /// requantization) and `n = weights.len() / m` inputs. Vectors go through the rows
 /// [`LANES`] at a time.
 ///
 /// # Errors
 /// [`ShapeError::Mismatch`] unless `weights` is `m × n` with `0 < n ≤` [`MAX_FIELD`], every
-/// `input(i)` is `n` long, every `bias(i)` `m` long and `out` is `count × m`.
+/// input vector is `n` long (at least), every bias vector `m` and `out` is `count × m`.
 #[inline]
-pub fn linear<'x, 'b>(
+pub fn linear(
     work: &mut Workspace,
     count: usize,
-    input: impl Fn(usize) -> &'x [i8],
-    bias: impl Fn(usize) -> &'b [i32],
+    input: Vectors<'_, i8>,
+    bias: Vectors<'_, i32>,
     layer: &Layer<'_>,
     out: &mut [i8],
 ) -> Result<(), ShapeError> {
@@ -598,31 +629,31 @@ pub fn linear<'x, 'b>(
     match layer.activation {
         Activation::Identity => {
             let finish = Requantize::<false>::new(requant);
-            rows(work, count, &input, &bias, layer.weights, out, &finish)
+            rows(work, count, input, bias, layer.weights, out, &finish)
         }
         Activation::Leaky => {
             let finish = Requantize::<true>::new(requant);
-            rows(work, count, &input, &bias, layer.weights, out, &finish)
+            rows(work, count, input, bias, layer.weights, out, &finish)
         }
     }
 }
 
 /// [`linear`]'s accumulators, not requantized, for a layer whose outputs go on in `f32`:
-/// `out[i·m + c] = Σ_k weights[c·n + k] · input(i)[k] + bias(i)[c]` with `m = out.len() / count`
+/// `out[i·m + c] = Σ_k weights[c·n + k] · input_i[k] + bias_i[c]` with `m = out.len() / count`
 /// (no vectors: nothing to do).
 ///
 /// # Errors
 /// As [`linear`].
 #[inline]
-pub fn accumulate<'x, 'b>(
+pub fn accumulate(
     work: &mut Workspace,
     count: usize,
-    input: impl Fn(usize) -> &'x [i8],
-    bias: impl Fn(usize) -> &'b [i32],
+    input: Vectors<'_, i8>,
+    bias: Vectors<'_, i32>,
     weights: &[i8],
     out: &mut [i32],
 ) -> Result<(), ShapeError> {
-    rows(work, count, &input, &bias, weights, out, &Raw)
+    rows(work, count, input, bias, weights, out, &Raw)
 }
 
 /// What becomes of a row's sums, one per lane.
@@ -718,21 +749,21 @@ fn each<T>(out: [&mut T; LANES], sums: [i32; LANES], f: impl Fn(i32) -> T) {
 }
 
 /// `out[i·m + c] = finish(c, sums)[l]` for every vector `i` and output `c`, where `sums[l] =
-/// bias(i)[c] + Σ_k weights[c·n + k] · input(i)[k]` for the vectors `i` of lane `l`: rows
+/// bias_i[c] + Σ_k weights[c·n + k] · input_i[k]` for the vectors `i` of lane `l`: rows
 /// outermost within each group of [`LANES`] vectors. With fewer vectors than lanes, the last
 /// repeats in the missing lanes; with more, the last group overlaps the one before (its
 /// vectors' outputs are stored twice, alike). The products' sum cannot overflow (127² ·
 /// [`MAX_FIELD`] is far below `i32::MAX`); the bias is the accumulator's start, so a bias
 /// within `2^30` of either end of `i32` wraps it around (the same on every target).
 ///
-/// One copy per kind of output (the vectors and biases are looked up through `dyn`, once
-/// per group), not one per layer: the kernel's code is flash.
+/// One copy per kind of output (the vectors and biases found through [`Vectors`], once per
+/// group), not one per layer: the kernel's code is flash.
 #[inline(never)]
-fn rows<'x, 'b, F: Finish>(
+fn rows<F: Finish>(
     work: &mut Workspace,
     count: usize,
-    input: &dyn Fn(usize) -> &'x [i8],
-    bias: &dyn Fn(usize) -> &'b [i32],
+    input: Vectors<'_, i8>,
+    bias: Vectors<'_, i32>,
     weights: &[i8],
     out: &mut [F::Out],
     finish: &F,
@@ -752,14 +783,10 @@ fn rows<'x, 'b, F: Finish>(
     while first < count {
         let start = first.min(count.saturating_sub(LANES));
         let vectors: [usize; LANES] = core::array::from_fn(|l| (start + l).min(count - 1));
-        let mut inputs: [&[i8]; LANES] = [&[]; LANES];
-        let mut biases: [&[i32]; LANES] = [&[]; LANES];
-        for ((x, b), &i) in inputs.iter_mut().zip(&mut biases).zip(&vectors) {
-            (*x, *b) = (input(i), bias(i));
-            if x.len() != n || b.len() != m {
-                return Err(ShapeError::Mismatch);
-            }
-        }
+        let (Some(inputs), Some(biases)) = (input.lanes(&vectors, n), bias.lanes(&vectors, m))
+        else {
+            return Err(ShapeError::Mismatch);
+        };
         work.load(&inputs);
         let rows = weights.chunks_exact(n);
         match work.rows(&inputs, n) {
@@ -931,7 +958,8 @@ pub fn conv1d(
             requant: &layer.requant[span.clone()],
             activation: layer.activation,
         };
-        linear(work, outputs, run, |_| &bias[span.clone()], &group, y)?;
+        let bias = Vectors::Strided(&bias[span.clone()], 0);
+        linear(work, outputs, Vectors::Each(&run), bias, &group, y)?;
     }
     Ok(())
 }
@@ -1162,7 +1190,8 @@ mod tests {
             let mut out = vec![0i32; count * m];
             let input = |i: usize| &inputs[i * n..(i + 1) * n];
             let bias = |i: usize| &biases[i * m..(i + 1) * m];
-            accumulate(&mut Workspace::new(), count, input, bias, &weights, &mut out).unwrap();
+            let (inputs, biases) = (Vectors::Strided(&inputs, n), Vectors::Strided(&biases, m));
+            accumulate(&mut Workspace::new(), count, inputs, biases, &weights, &mut out).unwrap();
             for i in 0..count {
                 for c in 0..m {
                     let expected = dot(&weights[c * n..(c + 1) * n], input(i)).wrapping_add(bias(i)[c]);
@@ -1172,7 +1201,7 @@ mod tests {
             let requant = vec![Requant::new(0.01).unwrap(); m];
             let layer = Layer { weights: &weights, requant: &requant, activation: Activation::Leaky };
             let mut q = vec![0i8; count * m];
-            linear(&mut Workspace::new(), count, input, bias, &layer, &mut q).unwrap();
+            linear(&mut Workspace::new(), count, Vectors::Each(&input), Vectors::Each(&bias), &layer, &mut q).unwrap();
             for (k, (&q, &acc)) in q.iter().zip(&out).enumerate() {
                 prop_assert_eq!(q, Activation::Leaky.apply(requant[k % m], acc));
             }
@@ -1211,7 +1240,8 @@ mod tests {
             requant: &rq,
             activation: Activation::Identity,
         };
-        linear(&mut Workspace::new(), 1, |_| &xq, |_| &bq, &layer, &mut out).unwrap();
+        let (xs, bs) = (Vectors::Strided(&xq, 0), Vectors::Strided(&bq, 0));
+        linear(&mut Workspace::new(), 1, xs, bs, &layer, &mut out).unwrap();
         for c in 0..2 {
             let real: f32 = w[c].iter().zip(&x).map(|(a, b)| a * b).sum::<f32>() + b[c];
             assert!(
@@ -1225,22 +1255,22 @@ mod tests {
             ..layer
         };
         assert_eq!(
-            linear(&mut Workspace::new(), 1, |_| &xq, |_| &bq, &short, &mut out),
+            linear(&mut Workspace::new(), 1, xs, bs, &short, &mut out),
             Err(ShapeError::Mismatch)
         );
         assert_eq!(
             linear(
                 &mut Workspace::new(),
                 1,
-                |_| &xq[1..],
-                |_| &bq,
+                Vectors::Strided(&xq[1..], 0),
+                bs,
                 &layer,
                 &mut out
             ),
             Err(ShapeError::Mismatch)
         );
         assert_eq!(
-            linear(&mut Workspace::new(), 2, |_| &xq, |_| &bq, &layer, &mut out),
+            linear(&mut Workspace::new(), 2, xs, bs, &layer, &mut out),
             Err(ShapeError::Mismatch)
         );
     }

@@ -24,7 +24,7 @@
 //! training.
 
 use crate::config::MAX_JOINTS;
-use crate::int8::{self, Activation, Layer, ShapeError};
+use crate::int8::{self, Activation, Layer, ShapeError, Vectors};
 use crate::math;
 use crate::retarget::{Analytic, RetargetError};
 use crate::skeleton::{Segment, Skeleton};
@@ -565,15 +565,17 @@ impl Net<'_, '_> {
         int8::linear(
             &mut buffers.work,
             m,
-            |k| &x[k],
-            |k| &motion_bias[k * d..(k + 1) * d],
+            Vectors::Strided(x.as_flattened(), MOTION_INPUTS),
+            Vectors::Strided(motion_bias, d),
             &first,
             &mut hidden[..m * d],
         )?;
         let output = self.layer(Dense::MotionOutput);
         let embed = self.int8_layer(Dense::MotionOutput, Activation::Identity);
-        let rows = |k: usize| &hidden[k * d..(k + 1) * d];
-        let bias = |_| output.bias_row(t);
+        let (rows, bias) = (
+            Vectors::Strided(hidden, d),
+            Vectors::Strided(output.bias_row(t), 0),
+        );
         int8::linear(&mut buffers.work, m, rows, bias, &embed, buffers.joints)?;
 
         let heads = usize::from(self.weights.architecture().heads);
@@ -620,18 +622,18 @@ impl Net<'_, '_> {
         // Per head, for all segments at once: the value layer of the mean embedding, mixed
         // with the token's own value.
         let value = self.layer(Dense::Value);
-        for h in 0..heads {
+        let means = means.as_flattened().as_flattened();
+        for (h, scale) in value.scale.chunks_exact(width).take(heads).enumerate() {
             let span = h * width..(h + 1) * width;
             let acc = &mut values[..SEGMENTS * width];
             int8::accumulate(
                 &mut buffers.work,
                 SEGMENTS,
-                |s| &means[s][h][..d],
-                |_| &value.bias[span.clone()],
+                Vectors::Strided(&means[h * MAX_FEATURES..], MAX_HEADS * MAX_FEATURES),
+                Vectors::Strided(&value.bias[span.clone()], 0),
                 &value.weights[span.start * d..span.end * d],
                 acc,
             )?;
-            let scale = &value.scale[span.clone()];
             for (s, acc) in acc.chunks_exact(width).enumerate() {
                 let (token, joints) = shares[s][h];
                 let context = &mut buffers.b[(s * WINDOW + t) * d..][..d][span.clone()];
@@ -657,9 +659,11 @@ impl Net<'_, '_> {
             .zip(buffers.a.chunks_exact_mut(WINDOW * d))
             .enumerate()
         {
-            let frame = |t: usize| &context[t * d..(t + 1) * d];
-            let bias = |_| output.bias_row(s);
-            int8::linear(&mut buffers.work, WINDOW, frame, bias, &layer, out)?;
+            let (frames, bias) = (
+                Vectors::Strided(context, d),
+                Vectors::Strided(output.bias_row(s), 0),
+            );
+            int8::linear(&mut buffers.work, WINDOW, frames, bias, &layer, out)?;
         }
         Ok(())
     }
@@ -780,8 +784,8 @@ impl Net<'_, '_> {
         int8::accumulate(
             &mut buffers.work,
             1,
-            |_| all,
-            |_| root.bias,
+            Vectors::Strided(all, 0),
+            Vectors::Strided(root.bias, 0),
             root.weights,
             &mut acc,
         )?;
@@ -797,23 +801,21 @@ impl Net<'_, '_> {
         let bones = n - 1;
         let layer = self.int8_layer(Dense::DecoderFeatures, Activation::Leaky);
         let input = |i: usize| feature(usize::from(self.bone_segments[i + 1]));
-        let bias = |i: usize| &buffers.decoder_bias[(i + 1) * d..(i + 2) * d];
         int8::linear(
             &mut buffers.work,
             bones,
-            input,
-            bias,
+            Vectors::Each(&input),
+            Vectors::Strided(&buffers.decoder_bias[d..], d),
             &layer,
             &mut hidden[..bones * d],
         )?;
         let output = self.layer(Dense::DecoderOutput);
-        let rows = |i: usize| &hidden[i * d..(i + 1) * d];
         let raw = &mut raw[..bones * QUATERNION];
         int8::accumulate(
             &mut buffers.work,
             bones,
-            rows,
-            |_| output.bias,
+            Vectors::Strided(hidden, d),
+            Vectors::Strided(output.bias, 0),
             output.weights,
             raw,
         )?;

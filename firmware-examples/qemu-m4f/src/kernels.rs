@@ -2,7 +2,7 @@
 //! layers (its widest convolution and a joint layer).
 
 use crate::count;
-use posecoach_core::int8::{self, Activation, Conv, Layer};
+use posecoach_core::int8::{self, Activation, Conv, Layer, Vectors};
 use posecoach_core::weights::{Dense, Weights};
 
 /// Deterministic bytes: a 32-bit LCG's high byte.
@@ -79,7 +79,8 @@ pub fn linear_per_mac_centi(weights: &Weights<'_>) -> Result<u64, &'static str> 
     let bias = |i: usize| &biases[i * N..(i + 1) * N];
     let mut work = int8::Workspace::new();
     let start = count::now();
-    int8::linear(&mut work, BONES, input, bias, &layer, &mut out).map_err(|_| "shape")?;
+    let vectors = (Vectors::Strided(&inputs, N), Vectors::Strided(&biases, N));
+    int8::linear(&mut work, BONES, vectors.0, vectors.1, &layer, &mut out).map_err(|_| "shape")?;
     let spent = count::now() - start;
     for (k, &o) in out.iter().enumerate() {
         let (i, c) = (k / N, k % N);
