@@ -623,6 +623,7 @@ impl Net<'_, '_> {
         // with the token's own value.
         let value = self.layer(Dense::Value);
         let means = means.as_flattened().as_flattened();
+        let context_scale = scales.context;
         for (h, scale) in value.scale.chunks_exact(width).take(heads).enumerate() {
             let span = h * width..(h + 1) * width;
             let acc = &mut values[..SEGMENTS * width];
@@ -641,7 +642,7 @@ impl Net<'_, '_> {
                 for (((q, &a), &scale), &own) in context.iter_mut().zip(acc).zip(scale).zip(own) {
                     let joint = a as f32 * scale;
                     let real = (token * own + joints * joint) / (token + joints);
-                    *q = int8::quantize(real, scales.context);
+                    *q = int8::quantize(real, context_scale);
                 }
             }
         }
