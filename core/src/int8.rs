@@ -190,13 +190,7 @@ impl Workspace {
     #[inline(always)]
     fn load(&mut self, inputs: &[&[i8]; LANES]) {
         #[cfg(all(feature = "dsp", target_arch = "arm"))]
-        for (l, x) in inputs.iter().enumerate() {
-            let (groups, _) = x.as_chunks::<4>();
-            for (w, g) in self.widened.iter_mut().zip(groups) {
-                let [even, odd] = dsp::widen(u32::from_le_bytes(g.map(|b| b as u8)));
-                (w[2 * l], w[2 * l + 1]) = (even, odd);
-            }
-        }
+        dsp::widen(&mut self.widened, inputs);
         #[cfg(not(all(feature = "dsp", target_arch = "arm")))]
         let _ = inputs;
     }
@@ -246,23 +240,54 @@ impl Default for Workspace {
 mod dsp {
     use super::LANES;
 
-    /// The int8 lanes of `x`: bytes 0 and 2, then bytes 1 and 3, sign-extended to 16 bits
-    /// (two `SXTB16`).
+    /// Each lane's whole four-byte groups (as many as the shortest lane has, at most
+    /// `widened.len()`), sign-extended to 16 bits: group `g` of lane `l` as `widened[g][2l]`
+    /// (bytes 0 and 2) and `widened[g][2l + 1]` (bytes 1 and 3). Per group, a load and two
+    /// `SXTB16` a lane and an `STM` for each two lanes: 16 instructions, loop included.
     #[inline(always)]
-    pub(super) fn widen(x: u32) -> [u32; 2] {
-        let (even, odd);
-        // SAFETY: register-only instructions of the DSP extension; no memory, no flags.
+    pub(super) fn widen(widened: &mut [[u32; 2 * LANES]], inputs: &[&[i8]; LANES]) {
+        let groups = inputs.iter().fold(widened.len(), |g, x| g.min(x.len() / 4));
+        if groups == 0 {
+            return;
+        }
+        let [x0, x1, x2, x3] = inputs.map(<[i8]>::as_ptr);
+        // SAFETY: reads `groups` words from each lane (4 bytes each: `ldr` allows any alignment
+        // on the Cortex-M4), which each holds at least that many, and writes `groups` × 32
+        // bytes to `widened`, which holds that many (`groups` is at most either), at least 1
+        // (the loop runs before it tests). `STM` stores `r2`–`r5` in that order, as the
+        // layout needs. The flags are clobbered (no `preserves_flags`).
         unsafe {
             core::arch::asm!(
-                "sxtb16 {even}, {x}",
-                "sxtb16 {odd}, {x}, ror #8",
-                x = in(reg) x,
-                even = out(reg) even,
-                odd = lateout(reg) odd,
-                options(pure, nomem, nostack, preserves_flags)
+                "2:",
+                "ldr r3, [{x0}], #4",
+                "ldr r5, [{x1}], #4",
+                "sxtb16 r2, r3",
+                "sxtb16 r3, r3, ror #8",
+                "sxtb16 r4, r5",
+                "sxtb16 r5, r5, ror #8",
+                "stmia {to}!, {{r2-r5}}",
+                "ldr r3, [{x2}], #4",
+                "ldr r5, [{x3}], #4",
+                "sxtb16 r2, r3",
+                "sxtb16 r3, r3, ror #8",
+                "sxtb16 r4, r5",
+                "sxtb16 r5, r5, ror #8",
+                "stmia {to}!, {{r2-r5}}",
+                "subs {n}, {n}, #1",
+                "bne 2b",
+                x0 = inout(reg) x0 => _,
+                x1 = inout(reg) x1 => _,
+                x2 = inout(reg) x2 => _,
+                x3 = inout(reg) x3 => _,
+                to = inout(reg) widened.as_mut_ptr() => _,
+                n = inout(reg) groups => _,
+                out("r2") _,
+                out("r3") _,
+                out("r4") _,
+                out("r5") _,
+                options(nostack)
             );
         }
-        [even, odd]
     }
 
     /// A row's sums: per four-byte group of its weights (`{pw}`), one load and two `SXTB16`
