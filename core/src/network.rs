@@ -779,15 +779,17 @@ impl Net<'_, '_> {
         for (s, row) in features.chunks_exact_mut(d).enumerate().take(SEGMENTS) {
             row.copy_from_slice(feature(s));
         }
+        // The root layer's three rows run as the vectors and the frame's features as the one
+        // row (one row of sums instead of three, for the same integers).
         let root = self.layer(Dense::Root);
         let mut acc = [0i32; 3];
         let all = &features[..SEGMENTS * d];
         int8::accumulate(
             &mut buffers.work,
-            1,
-            Vectors::Strided(all, 0),
-            Vectors::Strided(root.bias, 0),
-            root.weights,
+            acc.len(),
+            Vectors::Strided(root.weights, SEGMENTS * d),
+            Vectors::Strided(root.bias, 1),
+            all,
             &mut acc,
         )?;
         let h = self.target.height();
@@ -810,23 +812,28 @@ impl Net<'_, '_> {
             &layer,
             &mut hidden[..bones * d],
         )?;
+        // The output layer's four rows run as the vectors and the bones' features as the rows
+        // (one group of four instead of one per four bones): `raw[i · bones + k - 1]` is bone
+        // `k`'s product with row `i`, its bias added after (the same integer sum).
         let output = self.layer(Dense::DecoderOutput);
         let raw = &mut raw[..bones * QUATERNION];
         int8::accumulate(
             &mut buffers.work,
-            bones,
-            Vectors::Strided(hidden, d),
-            Vectors::Strided(output.bias, 0),
-            output.weights,
+            QUATERNION,
+            Vectors::Strided(output.weights, d),
+            Vectors::Strided(&[0; MAX_JOINTS][..bones], 0),
+            &hidden[..bones * d],
             raw,
         )?;
-        for (k, raw) in (1..n).zip(raw.chunks_exact(QUATERNION)) {
+        for k in 1..n {
             if let Some(chord) = self.prior.chord(k) {
                 let to = source[chord.to] - source[chord.from];
                 prior[k] = crate::kinematics::swing(chord.rest, to);
             }
             let parent = self.target.parent(k).unwrap_or(0);
-            let q = |i: usize| raw[i] as f32 * output.scale[i];
+            let q = |i: usize| {
+                raw[i * bones + k - 1].wrapping_add(output.bias[i]) as f32 * output.scale[i]
+            };
             let raw = Quaternion::new(1.0 + q(0), q(1), q(2), q(3));
             let norm = math::sqrt(raw.norm_squared() + NORM_EPSILON);
             let correction = Quat::new_unchecked(raw / norm);
