@@ -376,47 +376,71 @@ mod dsp {
         };
     }
 
-    /// [`identity!`] with the leaky slope: a negative value is scaled by `LEAKY_SMALL`
-    /// (`{xo}` holds its multiplier; its shift is 0) before it saturates.
+    /// [`identity!`] with the leaky slope, for a positive value; a negative one (known by
+    /// the sign of the value before its last halving) branches to `$negative`, which comes
+    /// back to `$back`.
     macro_rules! leaky {
-        ($s:literal, $at:literal) => {
+        ($s:literal, $at:literal, $negative:literal, $back:literal) => {
             concat!(
                 "smmul {pw}, ",
                 $s,
                 ", {n}\n",
                 "asr {pw}, {pw}, {w}\n",
                 "adds {pw}, {pw}, #1\n",
-                "asrs {pw}, {pw}, #1\n",
-                "bpl 5f\n",
-                "smmul {pw}, {pw}, {xo}\n",
-                "adds {pw}, {pw}, #1\n",
-                "asrs {pw}, {pw}, #1\n",
-                "5:\n",
-                "ssat {pw}, #8, {pw}\n",
+                "bmi ",
+                $negative,
+                "f\n",
+                "ssat {pw}, #8, {pw}, asr #1\n",
                 "strb {pw}, ",
                 $at,
                 "\n",
+                $back,
+                ":\n",
             )
         };
     }
 
-    /// The whole of [`requantize`] for one activation (`$lane`: [`identity!`] or
-    /// [`leaky!`]): the row loop's state kept below the stack pointer, each row's biases
+    /// [`leaky!`]'s negative value, out of the line: halved, scaled by `LEAKY_SMALL` (`{xo}`
+    /// holds its multiplier; its shift is 0), saturated and stored at `$at`.
+    macro_rules! negative {
+        ($at:literal, $negative:literal, $back:literal) => {
+            concat!(
+                $negative,
+                ":\n",
+                "asr {pw}, {pw}, #1\n",
+                "smmul {pw}, {pw}, {xo}\n",
+                "adds {pw}, {pw}, #1\n",
+                "ssat {pw}, #8, {pw}, asr #1\n",
+                "strb {pw}, ",
+                $at,
+                "\n",
+                "b ",
+                $back,
+                "b\n",
+            )
+        };
+    }
+
+    /// The whole of [`requantize`] for one activation (`$lanes`: each lane's output by
+    /// [`identity!`] or [`leaky!`], after `$setup`; `$aside`: code out of the line, such as
+    /// [`negative!`]): the row loop's state kept below the stack pointer, each row's biases
     /// loaded, its sums by [`row`]'s loop, its four outputs requantized and stored.
     macro_rules! requantize {
-        ($lane:ident, $setup:literal, $weights:expr, $widened:expr, $groups:expr,
-         $bias:expr, $stride:expr, $requant:expr, $out:expr, $m:expr) => {
+        ($setup:literal, [$l0:expr, $l1:expr, $l2:expr, $l3:expr], $aside:expr,
+         $weights:expr, $widened:expr, $groups:expr, $bias:expr, $stride:expr,
+         $requant:expr, $out:expr, $m:expr) => {
             core::arch::asm!(
                 // State: 0 the row's weights, 4 widened, 8 groups, 12 the row's lane-0 bias,
                 // 16 the lanes' bias stride, 20 the row's requantization, 24 its lane-0
-                // output, 28 the lanes' output stride (m), 32 rows left.
+                // output, 28 the lanes' output stride (m), 32 the end of lane 0's outputs.
                 "sub sp, sp, #40",
                 "str {pw}, [sp]",
                 "strd {px}, {n}, [sp, #4]",
                 "strd {s0}, {s1}, [sp, #12]",
                 "strd {s2}, {s3}, [sp, #20]",
                 "str {w}, [sp, #28]",
-                "str {w}, [sp, #32]",
+                "add {t}, {s3}, {w}",
+                "str {t}, [sp, #32]",
                 "1:",
                 "ldr {pw}, [sp]",
                 "ldrd {px}, {n}, [sp, #4]",
@@ -439,17 +463,19 @@ mod dsp {
                 "subs {w}, {w}, #1",
                 "ldrd {t}, {xe}, [sp, #24]",
                 $setup,
-                $lane!("{s0}", "[{t}]"),
-                $lane!("{s1}", "[{t}, {xe}]"),
+                $l0,
+                $l1,
                 "add {px}, {t}, {xe}, lsl #1",
-                $lane!("{s2}", "[{px}]"),
-                $lane!("{s3}", "[{px}, {xe}]"),
+                $l2,
+                $l3,
                 "adds {t}, {t}, #1",
                 "str {t}, [sp, #24]",
-                "ldr {t}, [sp, #32]",
-                "subs {t}, {t}, #1",
-                "str {t}, [sp, #32]",
+                "ldr {xe}, [sp, #32]",
+                "cmp {t}, {xe}",
                 "bne 1b",
+                "b 9f",
+                $aside,
+                "9:",
                 "add sp, sp, #40",
                 pw = inout(reg) $weights => _,
                 px = inout(reg) $widened => _,
@@ -471,8 +497,8 @@ mod dsp {
     /// `c` (`weights[c·n..]`, `n = 4 · widened.len()`), its sum started from `biases[l][c]`.
     /// One `asm!` loop over the rows, its state below the stack pointer, so that a row's sums
     /// stay in registers from their biases to their outputs: 10 instructions to start a row,
-    /// [`row`]'s 17 per four-byte group, then 34 to requantize and store its four outputs
-    /// (43 with the leaky slope, and 3 more for each negative output).
+    /// [`row`]'s 17 per four-byte group, then 33 to requantize and store its four outputs
+    /// (38 with the leaky slope, and 4 more for each negative output).
     ///
     /// Every factor of `requant` must be below ¼ (each a [`super::Small`], as the caller
     /// checks once per layer); otherwise the outputs are wrong. Returns `false` (and does
@@ -514,8 +540,19 @@ mod dsp {
             let (requant, out) = (requant.as_ptr(), out.as_mut_ptr());
             if LEAKY {
                 requantize!(
-                    leaky,
                     "mov {xo}, #0x66666666",
+                    [
+                        leaky!("{s0}", "[{t}]", "31", "41"),
+                        leaky!("{s1}", "[{t}, {xe}]", "32", "42"),
+                        leaky!("{s2}", "[{px}]", "33", "43"),
+                        leaky!("{s3}", "[{px}, {xe}]", "34", "44")
+                    ],
+                    concat!(
+                        negative!("[{t}]", "31", "41"),
+                        negative!("[{t}, {xe}]", "32", "42"),
+                        negative!("[{px}]", "33", "43"),
+                        negative!("[{px}, {xe}]", "34", "44")
+                    ),
                     weights,
                     widened,
                     groups,
@@ -526,7 +563,24 @@ mod dsp {
                     m
                 );
             } else {
-                requantize!(identity, "", weights, widened, groups, bias, stride, requant, out, m);
+                requantize!(
+                    "",
+                    [
+                        identity!("{s0}", "[{t}]"),
+                        identity!("{s1}", "[{t}, {xe}]"),
+                        identity!("{s2}", "[{px}]"),
+                        identity!("{s3}", "[{px}, {xe}]")
+                    ],
+                    "",
+                    weights,
+                    widened,
+                    groups,
+                    bias,
+                    stride,
+                    requant,
+                    out,
+                    m
+                );
             }
         }
         true
@@ -807,7 +861,12 @@ fn rows<F: Finish>(
     let mut first = 0;
     while first < count {
         let start = first.min(count.saturating_sub(LANES));
-        let vectors: [usize; LANES] = core::array::from_fn(|l| (start + l).min(count - 1));
+        // With fewer vectors than lanes (`start` is 0) the last repeats.
+        let vectors: [usize; LANES] = if count >= LANES {
+            core::array::from_fn(|l| start + l)
+        } else {
+            core::array::from_fn(|l| l.min(count - 1))
+        };
         let (Some(inputs), Some(biases)) = (input.lanes(&vectors, n), bias.lanes(&vectors, m))
         else {
             return Err(ShapeError::Mismatch);
