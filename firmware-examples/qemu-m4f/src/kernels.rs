@@ -2,7 +2,7 @@
 //! layers (its widest convolution and a joint layer).
 
 use crate::count;
-use posecoach_core::int8::{self, Activation, Conv, Layer, Vectors};
+use posecoach_core::int8::{self, Activation, Conv, Layer, Requant, Vectors};
 use posecoach_core::weights::{Dense, Weights};
 
 /// Deterministic bytes: a 32-bit LCG's high byte.
@@ -14,6 +14,82 @@ fn bytes<const N: usize>(seed: u32) -> [i8; N] {
         *o = (state >> 24) as i8;
     }
     out
+}
+
+/// Most vectors, inputs and outputs of [`check_shapes`]' layers.
+const MAX_COUNT: usize = 9;
+const MAX_N: usize = 24;
+const MAX_M: usize = 8;
+
+/// Runs `int8::linear` (with and without the leaky slope) and `int8::accumulate` on a grid of
+/// shapes, every output against a scalar loop's: fewer vectors than the four lanes, as many and
+/// more (a last group overlapping the one before); rows of whole four-byte groups and not;
+/// biases shared, one row per vector, and gathered in reverse (lanes a negative stride apart);
+/// requantizations below ¼ (the DSP path's one `asm!` loop) and above. Returns the layer calls
+/// checked.
+#[inline(never)]
+pub fn check_shapes() -> Result<u32, &'static str> {
+    let pool = bytes::<{ (MAX_COUNT + MAX_M) * MAX_N }>(11);
+    let (vectors, weights) = pool.split_at(MAX_COUNT * MAX_N);
+    let mut biases = [0i32; MAX_COUNT * MAX_M];
+    for (b, &x) in biases.iter_mut().zip(&bytes::<{ MAX_COUNT * MAX_M }>(13)) {
+        *b = i32::from(x) * 97;
+    }
+    let mut work = int8::Workspace::new();
+    let mut checked = 0;
+    for count in [1, 3, 4, 5, 9] {
+        for n in [4, 7, 8, 12, 24] {
+            for m in [1, 3, 4, 8] {
+                for factor in [0.002f32, 0.3] {
+                    let mut requant = [Requant::new(factor).ok_or("factor")?; MAX_M];
+                    for (c, r) in requant.iter_mut().enumerate() {
+                        *r = Requant::new(factor * (1.0 + c as f32 / 8.0)).ok_or("factor")?;
+                    }
+                    let requant = &requant[..m];
+                    let w = &weights[..m * n];
+                    let reversed = |i: usize| &biases[(count - 1 - i) * m..][..m];
+                    let gathered = |i: usize| &vectors[(count - 1 - i) * n..][..n];
+                    for kind in 0..3 {
+                        let (input, bias): (Vectors<'_, i8>, Vectors<'_, i32>) = match kind {
+                            0 => (Vectors::Strided(vectors, n), Vectors::Strided(&biases[..m], 0)),
+                            1 => (Vectors::Strided(vectors, n), Vectors::Strided(&biases, m)),
+                            _ => (Vectors::Each(&gathered), Vectors::Each(&reversed)),
+                        };
+                        let at = |i: usize| match kind {
+                            0 => (&vectors[i * n..][..n], &biases[..m]),
+                            1 => (&vectors[i * n..][..n], &biases[i * m..][..m]),
+                            _ => (gathered(i), reversed(i)),
+                        };
+                        let sum = |i: usize, c: usize| {
+                            let (x, b) = at(i);
+                            let row = &w[c * n..(c + 1) * n];
+                            let dot: i32 =
+                                row.iter().zip(x).map(|(&a, &b)| i32::from(a) * i32::from(b)).sum();
+                            dot.wrapping_add(b[c])
+                        };
+                        let mut raw = [0i32; MAX_COUNT * MAX_M];
+                        int8::accumulate(&mut work, count, input, bias, w, &mut raw[..count * m])
+                            .map_err(|_| "shape")?;
+                        for activation in [Activation::Identity, Activation::Leaky] {
+                            let layer = Layer { weights: w, requant, activation };
+                            let mut out = [0i8; MAX_COUNT * MAX_M];
+                            int8::linear(&mut work, count, input, bias, &layer, &mut out[..count * m])
+                                .map_err(|_| "shape")?;
+                            for (k, (&o, &r)) in out.iter().zip(&raw).take(count * m).enumerate() {
+                                let (i, c) = (k / m, k % m);
+                                if r != sum(i, c) || o != activation.apply(requant[c], r) {
+                                    return Err("the int8 kernels disagree with a scalar loop");
+                                }
+                            }
+                            checked += 1;
+                        }
+                        checked += 1;
+                    }
+                }
+            }
+        }
+    }
+    Ok(checked)
 }
 
 /// The decoder's last convolution: six segments of 16 channels, kernel 3, 64 frames.

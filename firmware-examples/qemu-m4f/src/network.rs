@@ -27,6 +27,10 @@ pub fn checked(scratch: &mut [Mm], out: &mut [Vec3]) -> Result<Weights<'static>,
     if *weights.architecture() != NETWORK {
         return Err("the weights are not the network the buffers were sized for");
     }
+    defmt::println!(
+        "KERNEL int8 shapes: {=u32} layer calls equal to a scalar loop",
+        kernels::check_shapes()?
+    );
     for (name, per_mac) in [
         ("linear", kernels::linear_per_mac_centi(&weights)?),
         ("conv1d", kernels::conv_per_mac_centi(&weights)?),
