@@ -359,17 +359,18 @@ mod dsp {
 
     /// One lane's output from its sum `$s`: [`super::Small::scale`] by `{n}` and `{w}`
     /// (`SMMUL`, the shift and the rounding), saturated to int8 (`SSAT`, which takes the last
-    /// halving) and stored at `$at`.
+    /// halving) and stored at `$at`; `{xo}` is free to work in (the next row's weights stay in
+    /// `{pw}`).
     macro_rules! identity {
         ($s:literal, $at:literal) => {
             concat!(
-                "smmul {pw}, ",
+                "smmul {xo}, ",
                 $s,
                 ", {n}\n",
-                "asr {pw}, {pw}, {w}\n",
-                "adds {pw}, {pw}, #1\n",
-                "ssat {pw}, #8, {pw}, asr #1\n",
-                "strb {pw}, ",
+                "asr {xo}, {xo}, {w}\n",
+                "adds {xo}, {xo}, #1\n",
+                "ssat {xo}, #8, {xo}, asr #1\n",
+                "strb {xo}, ",
                 $at,
                 "\n",
             )
@@ -423,10 +424,13 @@ mod dsp {
 
     /// The whole of [`requantize`] for one activation (`$lanes`: each lane's output by
     /// [`identity!`] or [`leaky!`], after `$setup`; `$aside`: code out of the line, such as
-    /// [`negative!`]): the row loop's state kept below the stack pointer, each row's biases
-    /// loaded, its sums by [`row`]'s loop, its four outputs requantized and stored.
+    /// [`negative!`]; `$keep` and `$restore` save the next row's weights pointer while the lanes
+    /// need its register and take it back, or are empty): the row loop's state kept below the
+    /// stack pointer, each row's biases loaded, its sums by [`row`]'s loop, its four outputs
+    /// requantized and stored.
     macro_rules! requantize {
         ($setup:literal, [$l0:expr, $l1:expr, $l2:expr, $l3:expr], $aside:expr,
+         $keep:literal, $restore:literal,
          $weights:expr, $widened:expr, $groups:expr, $bias:expr, $stride:expr,
          $requant:expr, $out:expr, $m:expr) => {
             core::arch::asm!(
@@ -442,7 +446,7 @@ mod dsp {
                 "add {t}, {s3}, {w}",
                 "str {t}, [sp, #32]",
                 "1:",
-                "ldr {pw}, [sp]",
+                $restore,
                 "ldrd {px}, {n}, [sp, #4]",
                 "ldrd {w}, {t}, [sp, #12]",
                 "ldr {s0}, [{w}]",
@@ -454,7 +458,7 @@ mod dsp {
                 "ldr {s3}, [{w}, {t}, lsl #1]",
                 sums!(),
                 // The next row's weights follow this one's.
-                "str {pw}, [sp]",
+                $keep,
                 "ldr {px}, [sp, #20]",
                 "ldrd {n}, {w}, [{px}], #8",
                 "str {px}, [sp, #20]",
@@ -496,9 +500,9 @@ mod dsp {
     /// (the leaky slope applied when `LEAKY`) and stored: `out[l·m + c]` for lane `l` and row
     /// `c` (`weights[c·n..]`, `n = 4 · widened.len()`), its sum started from `biases[l][c]`.
     /// One `asm!` loop over the rows, its state below the stack pointer, so that a row's sums
-    /// stay in registers from their biases to their outputs: 10 instructions to start a row,
-    /// [`row`]'s 17 per four-byte group, then 33 to requantize and store its four outputs
-    /// (38 with the leaky slope, and 4 more for each negative output).
+    /// stay in registers from their biases to their outputs: 9 instructions to start a row,
+    /// [`row`]'s 17 per four-byte group, then 32 to requantize and store its four outputs;
+    /// with the leaky slope 10 and 38, and 4 more for each negative output.
     ///
     /// Every factor of `requant` must be below ¼ (each a [`super::Small`], as the caller
     /// checks once per layer); otherwise the outputs are wrong. Returns `false` (and does
@@ -553,6 +557,8 @@ mod dsp {
                         negative!("[{px}]", "33", "43"),
                         negative!("[{px}, {xe}]", "34", "44")
                     ),
+                    "str {pw}, [sp]",
+                    "ldr {pw}, [sp]",
                     weights,
                     widened,
                     groups,
@@ -571,6 +577,8 @@ mod dsp {
                         identity!("{s2}", "[{px}]"),
                         identity!("{s3}", "[{px}, {xe}]")
                     ],
+                    "",
+                    "",
                     "",
                     weights,
                     widened,
