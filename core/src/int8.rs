@@ -253,9 +253,10 @@ mod dsp {
         let [x0, x1, x2, x3] = inputs.map(<[i8]>::as_ptr);
         // SAFETY: reads `groups` words from each lane (4 bytes each: `ldr` allows any alignment
         // on the Cortex-M4), which each holds at least that many, and writes `groups` × 32
-        // bytes to `widened`, which holds that many (`groups` is at most either), at least 1
-        // (the loop runs before it tests). `STM` stores `r2`–`r5` in that order, as the
-        // layout needs. The flags are clobbered (no `preserves_flags`).
+        // bytes to `widened` (word-aligned `u32`s, as `STM` needs), which holds that many
+        // (`groups` is at most either), at least 1 (the loop runs before it tests). `STM`
+        // stores `r2`–`r5` in that order, as the layout needs. The flags are clobbered (no
+        // `preserves_flags`).
         unsafe {
             core::arch::asm!(
                 "2:",
@@ -529,16 +530,17 @@ mod dsp {
         {
             return false;
         }
-        // SAFETY: the loop runs `m` rows (at least 1; it counts down to zero, so it ends), each
-        // reading the row's `n = 4 · groups` weights from `weights` (`m · n` long, rows in
-        // order), `groups` × 32 bytes from `widened` (word-aligned `u32`s, as `LDRD` needs) and
-        // lane `l`'s bias `c` at `biases[0] + l · stride + 4c` bytes, which is `biases[l][c]`
-        // (checked above: every lane's slice starts there and is `m` long); its two words of
-        // `requant[c]` (`repr(C)` multiplier and shift, 4-byte aligned); and writing lane `l`'s
-        // output at `out[l · m + c]`, inside `out` (`4m` long). The loop's state is kept in
-        // 40 bytes below the stack pointer, which it moves down before and back after (no
-        // `nostack`). SMLAD may set the Q flag, which nothing reads; the flags are
-        // clobbered (no `preserves_flags`).
+        // SAFETY: the loop runs `m` rows (at least 1; it ends when lane 0's output pointer, one
+        // further each row, is `m` past its start), each reading the row's `n = 4 · groups`
+        // weights from `weights` (`m · n` long, rows in order), `groups` × 32 bytes from
+        // `widened` (word-aligned `u32`s, as `LDRD` needs) and lane `l`'s bias `c` at
+        // `biases[0] + l · stride + 4c` bytes, which is `biases[l][c]` (checked above: every
+        // lane's slice starts there and is `m` long); its two words of `requant[c]` (`repr(C)`
+        // multiplier and shift, 4-byte aligned); and writing lane `l`'s output at
+        // `out[l · m + c]`, inside `out` (`4m` long). The loop's state is kept in 40 bytes
+        // below the stack pointer, which it moves down before and back after (no `nostack`).
+        // SMLAD may set the Q flag, which nothing reads; the flags are clobbered (no
+        // `preserves_flags`).
         unsafe {
             let (weights, widened, bias) = (weights.as_ptr(), widened.as_ptr(), biases[0].as_ptr());
             let (requant, out) = (requant.as_ptr(), out.as_mut_ptr());
@@ -672,7 +674,21 @@ pub enum Vectors<'a, T> {
 }
 
 impl<'a, T> Vectors<'a, T> {
-    /// The vectors `vectors`, each `len` long, or `None` where one is not.
+    /// Whether `count` vectors of `len` can be looked for: strided ones end within `usize`
+    /// (so that [`Vectors::lanes`]' offsets cannot overflow).
+    fn addressable(&self, count: usize, len: usize) -> bool {
+        match *self {
+            Vectors::Strided(_, stride) => count
+                .saturating_sub(1)
+                .checked_mul(stride)
+                .and_then(|last| last.checked_add(len))
+                .is_some(),
+            Vectors::Each(_) => true,
+        }
+    }
+
+    /// The vectors `vectors` (below a count [`Vectors::addressable`] allows), each `len` long,
+    /// or `None` where one is not.
     #[inline(always)]
     fn lanes(&self, vectors: &[usize; LANES], len: usize) -> Option<[&'a [T]; LANES]> {
         let mut lanes: [&[T]; LANES] = [&[]; LANES];
@@ -863,7 +879,13 @@ fn rows<F: Finish>(
         };
     };
     let n = weights.len().checked_div(m).ok_or(ShapeError::Mismatch)?;
-    if n == 0 || n > MAX_FIELD || n * m != weights.len() || m * count != out.len() {
+    if n == 0
+        || n > MAX_FIELD
+        || n * m != weights.len()
+        || m * count != out.len()
+        || !input.addressable(count, n)
+        || !bias.addressable(count, m)
+    {
         return Err(ShapeError::Mismatch);
     }
     let mut first = 0;
