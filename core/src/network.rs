@@ -316,21 +316,12 @@ fn rest_features(skeleton: &Skeleton, rest: &[Vec3], k: usize) -> [f32; REST_CHA
 fn dense_f32(t: &Tensors<'_>, x: &[f32], out: &mut [f32]) {
     let rows = t.weights.chunks_exact(x.len().max(1));
     for (((y, row), &b), &s) in out.iter_mut().zip(rows).zip(t.bias).zip(t.scale) {
-        *y = (dot_from(0.0, row, x) + b as f32) * s;
+        let sum = row
+            .iter()
+            .zip(x)
+            .fold(0.0, |s, (&w, x)| s + f32::from(w) * x);
+        *y = (sum + b as f32) * s;
     }
-}
-
-/// `start + Σ a[i] · b[i]` over the length of the shorter, added in order from `start` (the
-/// bits of a plain fold), four products to a step so that the loop's own work is shared.
-#[inline(never)]
-fn dot_from<A: Copy + Into<f32>>(start: f32, a: &[A], b: &[f32]) -> f32 {
-    let n = a.len().min(b.len());
-    let ((a4, a1), (b4, b1)) = (a[..n].as_chunks::<4>(), b[..n].as_chunks::<4>());
-    let f = |a: A| -> f32 { a.into() };
-    let sum = a4.iter().zip(b4).fold(start, |s, (a, b)| {
-        s + f(a[0]) * b[0] + f(a[1]) * b[1] + f(a[2]) * b[2] + f(a[3]) * b[3]
-    });
-    a1.iter().zip(b1).fold(sum, |s, (&a, b)| s + f(a) * b)
 }
 
 /// `sums[i] = f(sums[i], x[i])` over the length of the shorter, four to a step.
@@ -603,7 +594,7 @@ impl Net<'_, '_> {
                     .zip(logits[s * heads * d..].chunks_exact(d))
                     .zip(&offsets[row.clone()])
                 {
-                    *l = dot_from(offset, u, joint);
+                    *l = math::dot_from(offset, u, joint);
                 }
                 if first {
                     attention.start(&token_logits[row.clone()], &logit[..heads], joint);
@@ -1022,8 +1013,6 @@ mod tests {
             b in proptest::collection::vec(-100.0f32..100.0, 0..23),
             start in -100.0f32..100.0,
         ) {
-            let plain = a.iter().zip(&b).fold(start, |s, (a, b)| s + a * b);
-            proptest::prop_assert_eq!(dot_from(start, &a, &b).to_bits(), plain.to_bits());
             let mut sums = a.clone();
             update(&mut sums, &b, |s, x| s * start + x);
             let n = a.len().min(b.len());
