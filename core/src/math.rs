@@ -1,5 +1,5 @@
-//! Float functions that `core` lacks: square roots, a dot product, and the median and
-//! selection the scoring's robust spreads read.
+//! Float functions that `core` lacks: square roots, a dot product and scaled sums, and the
+//! median and selection the scoring's robust spreads read.
 //!
 //! With std (the host build and tests) the square roots are std's, which the compiler can
 //! vectorize; on an ARM FPU (the `eabihf` targets: the Cortex-M4F) the square root is the FPU's `VSQRT.F32`;
@@ -91,6 +91,21 @@ pub fn dot_from(start: f32, a: &[f32], b: &[f32]) -> f32 {
     imp::dot_from(start, a, b)
 }
 
+/// `sums[i] += k · x[i]` over the length of the shorter (each product rounded, then added). On
+/// an ARM FPU one `asm!` loop, four of each loaded and stored at once, one `VMLA` a value: the
+/// same bits.
+#[inline]
+pub fn add_scaled(sums: &mut [f32], k: f32, x: &[f32]) {
+    imp::add_scaled(sums, k, x);
+}
+
+/// `sums[i] = sums[i] · k + x[i]` over the length of the shorter (the product rounded, then
+/// added), as [`add_scaled`] is run.
+#[inline]
+pub fn scale_then_add(sums: &mut [f32], k: f32, x: &[f32]) {
+    imp::scale_then_add(sums, k, x);
+}
+
 /// std's or libm's square root.
 #[cfg(not(all(
     not(any(test, feature = "std")),
@@ -138,6 +153,20 @@ mod imp {
             s + a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]
         });
         a1.iter().zip(b1).fold(sum, |s, (a, b)| s + a * b)
+    }
+
+    #[inline]
+    pub(super) fn add_scaled(sums: &mut [f32], k: f32, x: &[f32]) {
+        for (s, x) in sums.iter_mut().zip(x) {
+            *s += k * x;
+        }
+    }
+
+    #[inline]
+    pub(super) fn scale_then_add(sums: &mut [f32], k: f32, x: &[f32]) {
+        for (s, x) in sums.iter_mut().zip(x) {
+            *s = *s * k + x;
+        }
     }
 }
 
@@ -313,6 +342,95 @@ mod imp {
         }
         f32::from_bits(sum)
     }
+
+    /// One loop for [`add_scaled`] and [`scale_then_add`] over `$sums` and `$x`: `k` in `s8`,
+    /// four sums loaded into `s0`–`s3` and four values into `s4`–`s7` (then one of each at a
+    /// time), combined by the `VMLA`s `$four` (then `$one`) and stored from `$stored` (then
+    /// `$one_stored`); `s0`–`s8` pushed before and popped after.
+    macro_rules! scaled {
+        ($sums:expr, $k:expr, $x:expr, [$($four:literal),*], $stored:literal,
+         $one:literal, $one_stored:literal) => {{
+            let n = $sums.len().min($x.len());
+            // SAFETY: the loops read and write `n` floats of `$sums` and read `n` of `$x` (`n` is
+            // at most either length; four at a time for `n / 4` steps, then one at a time for
+            // `n % 4`), 4-byte aligned (`f32`s), as `VLDM` and `VSTM` need; both count down to
+            // zero, so they end. `s0`–`s8` are pushed before use and popped after, so every FPU
+            // register the compiler allocated keeps its value; the stack is used only between
+            // the push and the pop, below `sp` as the ABI allows. `LSRS`, `ANDS` and `SUBS` set
+            // the flags (not preserved).
+            unsafe {
+                core::arch::asm!(
+                    "vpush {{s0-s8}}",
+                    "vmov s8, {k}",
+                    "lsrs {q}, {n}, #2",
+                    "beq 3f",
+                    "2:",
+                    "vldmia {s}, {{s0-s3}}",
+                    "vldmia {x}!, {{s4-s7}}",
+                    $($four,)*
+                    concat!("vstmia {s}!, {{", $stored, "}}"),
+                    "subs {q}, {q}, #1",
+                    "bne 2b",
+                    "3:",
+                    "ands {n}, {n}, #3",
+                    "beq 5f",
+                    "4:",
+                    "vldmia {s}, {{s0}}",
+                    "vldmia {x}!, {{s4}}",
+                    $one,
+                    concat!("vstmia {s}!, {{", $one_stored, "}}"),
+                    "subs {n}, {n}, #1",
+                    "bne 4b",
+                    "5:",
+                    "vpop {{s0-s8}}",
+                    k = in(reg) $k.to_bits(),
+                    q = out(reg) _,
+                    n = inout(reg) n => _,
+                    s = inout(reg) $sums.as_mut_ptr() => _,
+                    x = inout(reg) $x.as_ptr() => _,
+                );
+            }
+        }};
+    }
+
+    /// [`super::add_scaled`]: each sum plus `k` times its value (`VMLA` into the sum).
+    #[inline(never)]
+    pub(super) fn add_scaled(sums: &mut [f32], k: f32, x: &[f32]) {
+        scaled!(
+            sums,
+            k,
+            x,
+            [
+                "vmla.f32 s0, s8, s4",
+                "vmla.f32 s1, s8, s5",
+                "vmla.f32 s2, s8, s6",
+                "vmla.f32 s3, s8, s7"
+            ],
+            "s0-s3",
+            "vmla.f32 s0, s8, s4",
+            "s0"
+        );
+    }
+
+    /// [`super::scale_then_add`]: each value plus its sum times `k` (`VMLA` into the value:
+    /// the same sum, as addition commutes bit for bit).
+    #[inline(never)]
+    pub(super) fn scale_then_add(sums: &mut [f32], k: f32, x: &[f32]) {
+        scaled!(
+            sums,
+            k,
+            x,
+            [
+                "vmla.f32 s4, s0, s8",
+                "vmla.f32 s5, s1, s8",
+                "vmla.f32 s6, s2, s8",
+                "vmla.f32 s7, s3, s8"
+            ],
+            "s4-s7",
+            "vmla.f32 s4, s0, s8",
+            "s4"
+        );
+    }
 }
 
 #[cfg(test)]
@@ -328,6 +446,24 @@ mod tests {
         ) {
             let plain = a.iter().zip(&b).fold(start, |s, (a, b)| s + a * b);
             proptest::prop_assert_eq!(dot_from(start, &a, &b).to_bits(), plain.to_bits());
+        }
+
+        #[test]
+        fn scaled_sums_are_each_values_product_and_sum_to_the_bit(
+            a in proptest::collection::vec(-100.0f32..100.0, 0..23),
+            b in proptest::collection::vec(-100.0f32..100.0, 0..23),
+            k in -10.0f32..10.0,
+        ) {
+            let n = a.len().min(b.len());
+            let (mut added, mut scaled) = (a.clone(), a.clone());
+            add_scaled(&mut added, k, &b);
+            scale_then_add(&mut scaled, k, &b);
+            for (i, (&s, &x)) in a.iter().zip(&b).enumerate() {
+                proptest::prop_assert_eq!(added[i].to_bits(), (s + k * x).to_bits());
+                proptest::prop_assert_eq!(scaled[i].to_bits(), (s * k + x).to_bits());
+            }
+            proptest::prop_assert_eq!(&added[n..], &a[n..]);
+            proptest::prop_assert_eq!(&scaled[n..], &a[n..]);
         }
     }
 

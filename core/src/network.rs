@@ -891,11 +891,11 @@ impl Attention {
                 self.max[h] = logit;
                 self.token[h] *= old;
                 self.joints[h] = self.joints[h] * old + 1.0;
-                update(sums, x, |sum, v| sum * old + v);
+                math::scale_then_add(sums, old, x);
             } else {
                 let new = libm::expf(logit - self.max[h]);
                 self.joints[h] += new;
-                update(sums, x, |sum, v| sum + new * v);
+                math::add_scaled(sums, new, x);
             }
         }
     }
