@@ -378,9 +378,9 @@ mod dsp {
         };
     }
 
-    /// [`identity!`] with the leaky slope, for a positive value; a negative one (known by
-    /// the sign of the value before its last halving) branches to `$negative`, which comes
-    /// back to `$back`.
+    /// [`identity!`]'s steps with the leaky slope, in `{pw}` (`{xo}` holds the slope's
+    /// multiplier), for a positive value; a negative one (known by the sign of the value before
+    /// its last halving) branches to `$negative`, which comes back to `$back`.
     macro_rules! leaky {
         ($s:literal, $at:literal, $negative:literal, $back:literal) => {
             concat!(
@@ -428,12 +428,11 @@ mod dsp {
     /// [`negative!`]; `$keep` and `$restore` save the next row's weights pointer while the lanes
     /// need its register and take it back, or are empty): the row loop's state kept below the
     /// stack pointer, each row's biases loaded, its sums by [`row`]'s loop, its four outputs
-    /// requantized and stored.
+    /// requantized and stored; `$operands` is the tuple of the loop's pointers and counts.
     macro_rules! requantize {
         ($setup:literal, [$l0:expr, $l1:expr, $l2:expr, $l3:expr], $aside:expr,
-         $keep:literal, $restore:literal,
-         $weights:expr, $widened:expr, $groups:expr, $bias:expr, $stride:expr,
-         $requant:expr, $out:expr, $m:expr) => {
+         $keep:literal, $restore:literal, $operands:expr) => {{
+            let (weights, widened, groups, bias, stride, requant, out, m) = $operands;
             core::arch::asm!(
                 // State: 0 the row's weights, 4 widened, 8 groups, 12 the row's lane-0 bias,
                 // 16 the lanes' bias stride, 20 the row's requantization, 24 its lane-0
@@ -482,19 +481,19 @@ mod dsp {
                 $aside,
                 "9:",
                 "add sp, sp, #40",
-                pw = inout(reg) $weights => _,
-                px = inout(reg) $widened => _,
-                n = inout(reg) $groups => _,
-                s0 = inout(reg) $bias => _,
-                s1 = inout(reg) $stride => _,
-                s2 = inout(reg) $requant => _,
-                s3 = inout(reg) $out => _,
-                w = inout(reg) $m => _,
+                pw = inout(reg) weights => _,
+                px = inout(reg) widened => _,
+                n = inout(reg) groups => _,
+                s0 = inout(reg) bias => _,
+                s1 = inout(reg) stride => _,
+                s2 = inout(reg) requant => _,
+                s3 = inout(reg) out => _,
+                w = inout(reg) m => _,
                 t = out(reg) _,
                 xe = out(reg) _,
                 xo = out(reg) _,
             )
-        };
+        }};
     }
 
     /// A group's rows on four widened vectors, each output requantized by a [`super::Small`]
@@ -530,6 +529,16 @@ mod dsp {
         {
             return false;
         }
+        let operands = (
+            weights.as_ptr(),
+            widened.as_ptr(),
+            groups,
+            biases[0].as_ptr(),
+            stride,
+            requant.as_ptr(),
+            out.as_mut_ptr(),
+            m,
+        );
         // SAFETY: the loop runs `m` rows (at least 1; it ends when lane 0's output pointer, one
         // further each row, is `m` past its start), each reading the row's `n = 4 · groups`
         // weights from `weights` (`m · n` long, rows in order), `groups` × 32 bytes from
@@ -542,8 +551,6 @@ mod dsp {
         // SMLAD may set the Q flag, which nothing reads; the flags are clobbered (no
         // `preserves_flags`).
         unsafe {
-            let (weights, widened, bias) = (weights.as_ptr(), widened.as_ptr(), biases[0].as_ptr());
-            let (requant, out) = (requant.as_ptr(), out.as_mut_ptr());
             if LEAKY {
                 requantize!(
                     "mov {xo}, #0x66666666",
@@ -561,14 +568,7 @@ mod dsp {
                     ),
                     "str {pw}, [sp]",
                     "ldr {pw}, [sp]",
-                    weights,
-                    widened,
-                    groups,
-                    bias,
-                    stride,
-                    requant,
-                    out,
-                    m
+                    operands
                 );
             } else {
                 requantize!(
@@ -582,14 +582,7 @@ mod dsp {
                     "",
                     "",
                     "",
-                    weights,
-                    widened,
-                    groups,
-                    bias,
-                    stride,
-                    requant,
-                    out,
-                    m
+                    operands
                 );
             }
         }
