@@ -59,7 +59,6 @@ pub fn check_shapes() -> Result<u32, &'static str> {
                             1 => (&vectors[i * n..][..n], &biases[i * m..][..m]),
                             _ => (gathered(i), reversed(i)),
                         };
-
                         let mut raw = [0i32; MAX_COUNT * MAX_M];
                         int8::accumulate(&mut work, count, input, bias, w, &mut raw[..count * m])
                             .map_err(|_| "shape")?;
@@ -91,11 +90,8 @@ pub fn check_shapes() -> Result<u32, &'static str> {
 /// `[2^30, 2^31)`: factors from `2^(shift−1)` to nearly `2^shift`. Made from their stored form
 /// (two `i32`s), as a weights blob holds them.
 fn requants(shift: i32) -> Option<[Requant; MAX_M]> {
-    let mut requant = [bytemuck::cast::<[i32; 2], Requant>([1 << 30, shift]); MAX_M];
-    for (c, r) in requant.iter_mut().enumerate() {
-        let multiplier = (1 << 30) + (c as i32) * (1 << 27);
-        *r = bytemuck::cast([multiplier, shift]);
-    }
+    let requant: [Requant; MAX_M] =
+        core::array::from_fn(|c| bytemuck::cast([(1 << 30) + (c as i32) * (1 << 27), shift]));
     requant.iter().all(|r| r.is_valid()).then_some(requant)
 }
 
