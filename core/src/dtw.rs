@@ -3,8 +3,8 @@
 //! A sequence is `3 · joints` channels of `frames` floats each, channel-major: the x of joint
 //! 0 in every frame, then the x of joint 1, ..., then all y, then all z. A band row's costs are
 //! then computed one joint at a time across the row's contiguous frames, a loop the compiler
-//! vectorizes. The recurrence then takes the better of each cell's diagonal and upper
-//! neighbours for the whole row at once, leaving a short serial pass for the left neighbour.
+//! vectorizes. Where there are vectors the recurrence too runs over whole rows, in passes that
+//! end in the serial recurrence's values bit for bit; on the Cortex-M4F it goes cell after cell.
 //! The cost of cell `(i, j)` is the weighted mean over joints of the Euclidean distance
 //! between joint positions in frame `i` of `a` and frame `j` of `b` (callers put the root at
 //! the origin). The accumulated distance is classic DTW: `D(i, j) = cost(i, j) +
@@ -367,8 +367,8 @@ fn ceil(x: f32) -> usize {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ScratchLen {
     /// Floats of cost scratch: two padded rows of accumulated cost, as wide as the band's
-    /// widest step from one row to the next, and one row of cell costs, rounded up to whole
-    /// SIMD vectors of columns.
+    /// widest step from one row to the next (two more where SIMD vectors compute whole rows),
+    /// and one row of cell costs, rounded up to whole SIMD vectors of columns.
     pub cost: usize,
     /// Bytes of path scratch (2 bits per banded cell).
     pub path_bytes: usize,
@@ -383,6 +383,12 @@ pub struct ScratchLen {
 /// outside the matrix.
 pub fn scratch_len(n: usize, m: usize, window: &Window) -> Result<ScratchLen, DtwError> {
     Ok(layout(n, m, window)?.0)
+}
+
+/// Floats of cost scratch that any window over `m` columns fits in: a bound on
+/// [`ScratchLen::cost`] for callers that size their scratch once.
+pub const fn cost_len_bound(m: usize) -> usize {
+    (3 + PASS_ROWS) * (m + 2)
 }
 
 /// [`scratch_len`] and the width of an accumulated-cost row in the cost scratch.
@@ -401,7 +407,7 @@ fn layout(n: usize, m: usize, window: &Window) -> Result<(ScratchLen, usize), Dt
     }
     let width = span + 2;
     let len = ScratchLen {
-        cost: 2 * width + span.next_multiple_of(VECTOR).min(m),
+        cost: (2 + PASS_ROWS) * width + span.next_multiple_of(VECTOR).min(m),
         path_bytes: cells.div_ceil(4),
         cells,
     };
@@ -487,7 +493,8 @@ pub fn align(
 
     // Accumulated-cost rows are stored from one column left of the row's first column, with
     // infinity there and after the row's end, so neighbours need no range checks.
-    let (rows, here) = cost[..len.cost].split_at_mut(2 * width);
+    let (rows, rest) = cost[..len.cost].split_at_mut(2 * width);
+    let (passes, here) = rest.split_at_mut(PASS_ROWS * width);
     let (mut prev, mut curr) = rows.split_at_mut(width);
     prev.fill(f32::INFINITY);
     // A virtual diagonal predecessor of cell (0, 0) with distance 0 starts the path.
@@ -510,22 +517,21 @@ pub fn align(
         // lo - 1 ..= hi start at prev[lo - prev_lo].
         let above = &prev[lo - prev_lo..][..w + 1];
         curr[0] = f32::INFINITY;
-        let (row, after) = curr[1..].split_at_mut(w);
-        after.fill(f32::INFINITY);
-        // The better of the diagonal and upper neighbours, for all cells at once.
-        for ((t, &diagonal), &up) in row.iter_mut().zip(above).zip(&above[1..]) {
-            *t = if up < diagonal { up } else { diagonal };
+        curr[w + 1..].fill(f32::INFINITY);
+        let row = &mut curr[..=w];
+        if VECTOR > 1 {
+            let (spare, best) = passes.split_at_mut(width);
+            settle(
+                row,
+                &mut spare[..=w],
+                &mut best[..w],
+                cells,
+                above,
+                &mut bits,
+            );
+        } else {
+            recur(row, cells, above, &mut bits);
         }
-        // Then the left neighbour, cell after cell, a group of cells to a word of path bits.
-        let mut left = f32::INFINITY;
-        let (rows, row_rest) = row.as_chunks_mut::<GROUP>();
-        let (cell_groups, cell_rest) = cells.as_chunks::<GROUP>();
-        let (above_groups, above_rest) = above[..w].as_chunks::<GROUP>();
-        for ((row, cells), above) in rows.iter_mut().zip(cell_groups).zip(above_groups) {
-            bits.push(from_left(row, cells, above, &mut left), 2 * GROUP as u32);
-        }
-        let rest = from_left(row_rest, cell_rest, above_rest, &mut left);
-        bits.push(rest, 2 * row_rest.len() as u32);
         core::mem::swap(&mut prev, &mut curr);
         prev_lo = lo;
     }
@@ -574,6 +580,28 @@ pub fn align(
     })
 }
 
+/// The accumulated costs of a row, `row(k + 1) = cells(k) + min(best(k), row(k))` with
+/// `best(k)` the better of the diagonal `above(k)` and the upper `above(k + 1)`, and `row(0)`
+/// the infinity left of the row, cell after cell; the path bits go to `bits`. Where there are
+/// no vectors to compute whole rows with ([`settle`]).
+fn recur(row: &mut [f32], cells: &[f32], above: &[f32], bits: &mut StepWriter<'_>) {
+    let row = &mut row[1..];
+    // The better of the diagonal and upper neighbours, for all cells at once.
+    for ((t, &diagonal), &up) in row.iter_mut().zip(above).zip(&above[1..]) {
+        *t = if up < diagonal { up } else { diagonal };
+    }
+    // Then the left neighbour, cell after cell, a group of cells to a word of path bits.
+    let mut left = f32::INFINITY;
+    let (rows, row_rest) = row.as_chunks_mut::<GROUP>();
+    let (cell_groups, cell_rest) = cells.as_chunks::<GROUP>();
+    let (above_groups, above_rest) = above[..cells.len()].as_chunks::<GROUP>();
+    for ((row, cells), above) in rows.iter_mut().zip(cell_groups).zip(above_groups) {
+        bits.push(from_left(row, cells, above, &mut left), 2 * GROUP as u32);
+    }
+    let rest = from_left(row_rest, cell_rest, above_rest, &mut left);
+    bits.push(rest, 2 * row_rest.len() as u32);
+}
+
 /// The serial part of the recurrence over a group of cells: `row` holds the better of each
 /// cell's diagonal and upper neighbours and gets the accumulated costs, `left` is the
 /// accumulated cost left of the group and then of its last cell. Returns the group's path bits.
@@ -589,6 +617,87 @@ fn from_left(row: &mut [f32], cells: &[f32], above: &[f32], left: &mut f32) -> u
         *d = *left;
     }
     ups << row.len() | lefts
+}
+
+/// Rows of cost scratch that [`settle`] takes besides the two accumulated-cost rows: none where
+/// the serial recurrence runs.
+const PASS_ROWS: usize = if VECTOR > 1 { 2 } else { 0 };
+
+/// The accumulated costs of a row with vectors: `row(k + 1) = cells(k) + min(best(k), row(k))`
+/// with `best(k)` the better of the diagonal `above(k)` and the upper `above(k + 1)`, and
+/// `row(0)` the infinity left of the row.
+///
+/// The serial recurrence is a chain of a comparison and an addition a cell, which a CPU waits
+/// on cell after cell. Here passes over the whole row replace it, each computing every cell
+/// from its left neighbour's value after the pass before ([`step`]). The first takes no cell
+/// from the left, which settles the row's first cell; a cell depends only on the one before it,
+/// so each further pass settles one more at the least, and by the `w`-th one pass changes
+/// nothing. The values are then the serial recurrence's, bit for bit: the same comparisons and
+/// additions of the same values. A row takes as many passes as its longest run of steps from
+/// the left, plus two (2.1 a row on average for random walks at `D = 51`). `spare` alternates
+/// with `row` (both `w + 1` values); `best` receives the better neighbours above.
+#[multiversion::multiversion(targets("x86_64+avx512f", "x86_64+avx2+fma"))]
+fn settle(
+    row: &mut [f32],
+    spare: &mut [f32],
+    best: &mut [f32],
+    cells: &[f32],
+    above: &[f32],
+    bits: &mut StepWriter<'_>,
+) {
+    let firsts = row[1..].iter_mut().zip(best.iter_mut());
+    for (((d, t), &c), (&diagonal, &up)) in firsts.zip(cells).zip(above.iter().zip(&above[1..])) {
+        *t = if up < diagonal { up } else { diagonal };
+        *d = c + *t;
+    }
+    spare[0] = f32::INFINITY;
+    let (mut from, mut to) = (row, spare);
+    for _ in 0..best.len() {
+        if !step(from, to, best, cells) {
+            break;
+        }
+        core::mem::swap(&mut from, &mut to);
+    }
+    let w = best.len();
+    let (lefts, left_rest) = from[..w].as_chunks::<GROUP>();
+    let (bests, best_rest) = best.as_chunks::<GROUP>();
+    let (diagonals, diagonal_rest) = above[..w].as_chunks::<GROUP>();
+    for ((lefts, best), diagonals) in lefts.iter().zip(bests).zip(diagonals) {
+        bits.push(path_bits(lefts, best, diagonals), 2 * GROUP as u32);
+    }
+    let rest = path_bits(left_rest, best_rest, diagonal_rest);
+    bits.push(rest, 2 * best_rest.len() as u32);
+}
+
+/// One pass of [`settle`] from `from` into `to`. Returns whether any value differs from
+/// `from`'s, bit for bit.
+#[inline(always)]
+fn step(from: &[f32], to: &mut [f32], best: &[f32], cells: &[f32]) -> bool {
+    let mut changed = 0u32;
+    let lefts = from.iter().zip(&from[1..]);
+    for ((d, (&left, &old)), (&t, &c)) in to[1..].iter_mut().zip(lefts).zip(best.iter().zip(cells))
+    {
+        let new = c + if left < t { left } else { t };
+        changed |= new.to_bits() ^ old.to_bits();
+        *d = new;
+    }
+    changed != 0
+}
+
+/// The path bits of `best.len() <= GROUP` settled cells, as [`from_left`] returns them:
+/// `lefts` holds the accumulated cost left of each cell, `best` its better neighbour above,
+/// `diagonals` its diagonal neighbour. Each cell's comparison sets bit `k` (which a vector's
+/// comparison mask gives at once), then the order is reversed to put the last cell lowest.
+#[inline(always)]
+fn path_bits(lefts: &[f32], best: &[f32], diagonals: &[f32]) -> u32 {
+    let (mut ups, mut from_left) = (0u32, 0u32);
+    for (k, ((&left, &t), &diagonal)) in lefts.iter().zip(best).zip(diagonals).enumerate() {
+        ups |= u32::from(t < diagonal) << k;
+        from_left |= u32::from(left < t) << k;
+    }
+    let len = best.len() as u32;
+    let first_highest = |bits: u32| bits.reverse_bits().checked_shr(32 - len).unwrap_or(0);
+    first_highest(ups) << len | first_highest(from_left)
 }
 
 /// Weights used when the caller gives none.
@@ -959,6 +1068,32 @@ mod tests {
             let read = run(&Sequence::rooted(Frames::metres(&fa, joints)).unwrap(), &Sequence::rooted(Frames::metres(&fb, joints)).unwrap(), weights, &window);
             prop_assert_eq!(stored.0.distance.to_bits(), read.0.distance.to_bits());
             prop_assert_eq!(stored.1, read.1);
+        }
+
+        #[test]
+        fn whole_row_passes_equal_the_serial_recurrence_to_the_bit(
+            (above, cells) in (1usize..80).prop_flat_map(|w| (
+                // Few distinct values, so that ties are common; infinity as outside the band.
+                prop::collection::vec(prop::sample::select(vec![0.0f32, 0.5, 1.0, 1.5, 2.5, f32::INFINITY]), w + 1),
+                prop::collection::vec(prop::sample::select(vec![0.0f32, 0.25, 0.5, 1.0]), w),
+            )),
+        ) {
+            let w = cells.len();
+            let written = |settled: bool| {
+                let mut row = vec![f32::NAN; w + 1];
+                row[0] = f32::INFINITY;
+                let mut steps = vec![0u8; w.div_ceil(4)];
+                let mut bits = StepWriter { steps: &mut steps, offset: 0, acc: 0, count: 0 };
+                if settled {
+                    let (mut spare, mut best) = (vec![f32::NAN; w + 1], vec![f32::NAN; w]);
+                    settle(&mut row, &mut spare, &mut best, &cells, &above, &mut bits);
+                } else {
+                    recur(&mut row, &cells, &above, &mut bits);
+                }
+                bits.flush();
+                (row.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), steps)
+            };
+            prop_assert_eq!(written(true), written(false));
         }
 
         #[test]

@@ -527,7 +527,7 @@ pub struct ScratchLen {
 /// give (the swings themselves are read where they lie).
 pub const fn scratch_len(student: usize, coach: usize) -> ScratchLen {
     ScratchLen {
-        floats: 3 * (coach + 2),
+        floats: dtw::cost_len_bound(coach),
         bytes: (student * coach).div_ceil(4),
     }
 }
