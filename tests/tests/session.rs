@@ -140,8 +140,8 @@ fn pose_frames(motion: &io::Motion, format: Format) -> Vec<Message> {
         .collect()
 }
 
-/// Replays `messages`; returns each swing's score and its events' frames.
-fn scores(coach: &io::Motion, messages: &[Message]) -> Vec<(f32, Vec<usize>)> {
+/// Replays `messages`; returns each swing's score and its events' frames, and the refusals.
+fn scores(coach: &io::Motion, messages: &[Message]) -> (Vec<(f32, Vec<usize>)>, Vec<Refusal>) {
     let coaches = [Coach {
         skeleton: &coach.skeleton,
         positions: &coach.positions,
@@ -149,23 +149,24 @@ fn scores(coach: &io::Motion, messages: &[Message]) -> Vec<(f32, Vec<usize>)> {
     }];
     let mut buffers = OwnedBuffers::new(BufferLens::new(31, coach.frames(), 60));
     let mut session = Session::new(&coaches, buffers.buffers());
-    let mut found = Vec::new();
+    let (mut found, mut refused) = (Vec::new(), Vec::new());
     for m in messages {
         session.handle(m, |o| match o {
             Outcome::Scored { report, .. } => found.push((
                 report.score,
                 report.student_events.iter().map(|(_, f)| f).collect(),
             )),
+            Outcome::Refused(r) => refused.push(r),
             other => panic!("{other:?}"),
         });
     }
-    found
+    (found, refused)
 }
 
-#[test]
-fn a_stream_in_another_format_is_mapped_onto_the_profile() {
-    // The student (1.75 m, H3.6M profile) swings the driver, keeping the grip and planted feet;
-    // one phone sends H3.6M keypoints, another CMU-31 keypoints of the same motion.
+/// The driver coach, an H3.6M profile of a 1.75 m student, and the student's swing of the
+/// driver (keeping the grip and planted feet) as two phones send it: one in H3.6M keypoints,
+/// the other in CMU-31 keypoints of the same motion, each with still set-up before and after.
+fn driver_streams() -> (io::Motion, Message, Vec<Message>, Vec<Message>) {
     let coach = io::load(&fixture("golf_driver_60hz.csv")).unwrap();
     let student = io::load(&fixture("h36m17_tpose.csv")).unwrap();
     let mut on_h36m = coach.retarget_analytic(&student).unwrap();
@@ -219,11 +220,21 @@ fn a_stream_in_another_format_is_mapped_onto_the_profile() {
             ..m.clone()
         }
     };
-    let mut same = vec![profile.clone()];
-    same.extend(pose_frames(&padded(&on_h36m), Format::H36m17));
-    let mut mapped = vec![profile];
-    mapped.extend(pose_frames(&padded(&on_cmu), Format::Cmu31));
-    let (same, mapped) = (scores(&coach, &same), scores(&coach, &mapped));
+    let h36m = pose_frames(&padded(&on_h36m), Format::H36m17);
+    let cmu = pose_frames(&padded(&on_cmu), Format::Cmu31);
+    (coach, profile, h36m, cmu)
+}
+
+#[test]
+fn a_stream_in_another_format_is_mapped_onto_the_profile() {
+    let (coach, profile, h36m, cmu) = driver_streams();
+    let (same, refused) = scores(
+        &coach,
+        &[std::slice::from_ref(&profile), &h36m[..]].concat(),
+    );
+    assert_eq!(refused, []);
+    let (mapped, refused) = scores(&coach, &[&[profile], &cmu[..]].concat());
+    assert_eq!(refused, []);
     assert_eq!((same.len(), mapped.len()), (1, 1));
     eprintln!("H3.6M stream {:?}\nCMU-31 stream {:?}", same[0], mapped[0]);
     // The events are the same and the score nearly so: CMU-31's head end, mapped onto the
@@ -232,6 +243,44 @@ fn a_stream_in_another_format_is_mapped_onto_the_profile() {
     assert!(mapped[0].0 > 85.0 && (mapped[0].0 - same[0].0).abs() < 10.0);
     for (a, b) in same[0].1.iter().zip(&mapped[0].1) {
         assert!(a.abs_diff(*b) <= 1);
+    }
+}
+
+#[test]
+fn a_refused_first_frame_does_not_fix_the_streams_format() {
+    // Before the stream has taken a frame, a frame it refuses (a format without keypoints, a
+    // wrong keypoint count) must leave the next frames in any format to be read as if it had
+    // not come: once, such a frame fixed the session's fit, and every later frame was dropped
+    // without a word.
+    let (coach, profile, h36m, cmu) = driver_streams();
+    for frames in [h36m, cmu] {
+        let (clean, refused) = scores(
+            &coach,
+            &[std::slice::from_ref(&profile), &frames[..]].concat(),
+        );
+        assert_eq!((clean.len(), refused.len()), (1, 0));
+        let Message::PoseFrame(first) = &frames[0] else {
+            unreachable!()
+        };
+        let canonical = PoseFrame {
+            format: Format::Canonical,
+            ..first.clone()
+        };
+        let mut short = PoseFrame {
+            format: Format::Coco17,
+            ..first.clone()
+        };
+        short.joints_mm.truncate(16);
+        for bad in [canonical, short] {
+            let format = bad.format;
+            let messages = [&[profile.clone(), Message::PoseFrame(bad)], &frames[..]].concat();
+            let (found, refused) = scores(&coach, &messages);
+            assert!(
+                matches!(refused[..], [Refusal::Stream(_)]),
+                "{format:?}: {refused:?}"
+            );
+            assert_eq!(found, clean, "after a refused {format:?} frame");
+        }
     }
 }
 

@@ -429,7 +429,9 @@ impl<'b> Session<'b> {
         if student.imu.is_some() {
             return Err(Refusal::Input);
         }
-        if student.fit.is_none() {
+        // The fit follows the first frame the stream takes: a refused frame before it (a
+        // format the stream cannot read, a wrong keypoint count) must not fix its format.
+        if student.fit.is_none() || student.stream.format().is_none() {
             let source = stream_skeleton(&student.skeleton, frame.format)?;
             let fit = Fit::new(&source, &student.skeleton).map_err(|_| Refusal::Retarget)?;
             student.fit = Some(fit);
