@@ -1,6 +1,7 @@
 //! Any bytes, read as a phone's messages with hostile times (each a step of any size from the
-//! last: jumps, a clock that wraps or restarts, repeats), must never make the device's session
-//! panic or give swing detection more than `MAX_FRAMES_PER_MESSAGE` frames for one message.
+//! last: jumps, a clock that wraps or restarts, repeats) and now and then another keypoint
+//! format or a wrong keypoint count, must never make the device's session panic or give swing
+//! detection more than `MAX_FRAMES_PER_MESSAGE` frames for one message.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -110,12 +111,30 @@ fuzz_target!(|data: &[u8]| {
                 clock = clock.wrapping_add(bytes.step());
                 let seq = u32::from(bytes.u16());
                 let wobble = bytes.i16x3();
+                // Mostly H3.6M; otherwise any format, its keypoints the T-pose's over again,
+                // one short when the selector is odd.
+                let (format, keypoints) = match bytes.u8() {
+                    f if f < 192 => (Format::H36m17, tpose.len()),
+                    f => {
+                        // Every wire format: the built-in ones, and two without keypoints.
+                        let built_in = Format::BUILT_IN;
+                        let format = match usize::from(f) % (built_in.len() + 2) {
+                            i if i < built_in.len() => built_in[i],
+                            i if i == built_in.len() => Format::Canonical,
+                            _ => Format::Custom,
+                        };
+                        let n = format.keypoints().len();
+                        (format, n.saturating_sub(usize::from(f & 1)))
+                    }
+                };
                 Message::PoseFrame(PoseFrame {
                     seq,
                     t_us: clock,
-                    format: Format::H36m17,
+                    format,
                     joints_mm: tpose
                         .iter()
+                        .cycle()
+                        .take(keypoints)
                         .map(|p| [0, 1, 2].map(|i| p[i].saturating_add(wobble[i] % 400)))
                         .collect(),
                     confidence: heapless::Vec::new(),
