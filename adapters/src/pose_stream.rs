@@ -97,7 +97,7 @@ pub enum StreamEvent<'a> {
     Gap,
 }
 
-/// What the stream has taken and dropped.
+/// What the stream has taken and dropped; each count stops at `u32::MAX`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct StreamCounters {
@@ -119,12 +119,12 @@ pub struct StreamCounters {
 impl StreamCounters {
     /// Adds `other`'s counts to these.
     pub fn add(&mut self, other: &StreamCounters) {
-        self.accepted += other.accepted;
-        self.duplicates += other.duplicates;
-        self.out_of_order += other.out_of_order;
-        self.gaps += other.gaps;
-        self.masked += other.masked;
-        self.emitted += other.emitted;
+        self.accepted = self.accepted.saturating_add(other.accepted);
+        self.duplicates = self.duplicates.saturating_add(other.duplicates);
+        self.out_of_order = self.out_of_order.saturating_add(other.out_of_order);
+        self.gaps = self.gaps.saturating_add(other.gaps);
+        self.masked = self.masked.saturating_add(other.masked);
+        self.emitted = self.emitted.saturating_add(other.emitted);
     }
 }
 
@@ -249,7 +249,7 @@ impl PoseStream {
         let joints = self.check(frame)?;
         if let Some(last) = self.last {
             if frame.seq == last.seq || frame.t_us == last.t_us {
-                self.counters.duplicates += 1;
+                self.counters.duplicates = self.counters.duplicates.saturating_add(1);
                 return Ok(());
             }
             let gap_us = (self.config.max_gap_s * 1e6) as u64;
@@ -257,18 +257,18 @@ impl PoseStream {
             // A clock far behind the last frame's is a sender that restarted: a break.
             let restarted = frame.t_us.saturating_add(gap_us) < last.t_us;
             if !restarted && (!newer || frame.t_us < last.t_us) {
-                self.counters.out_of_order += 1;
+                self.counters.out_of_order = self.counters.out_of_order.saturating_add(1);
                 return Ok(());
             }
             if restarted || frame.t_us - last.t_us > gap_us {
-                self.counters.gaps += 1;
+                self.counters.gaps = self.counters.gaps.saturating_add(1);
                 self.grid = None;
                 emit(StreamEvent::Gap);
             }
         }
         self.format = Some(frame.format);
         self.joints = joints.len();
-        self.counters.accepted += 1;
+        self.counters.accepted = self.counters.accepted.saturating_add(1);
         let mut current = self.previous;
         let mut unsure = 0u64;
         let table = frame.format.joints();
@@ -292,7 +292,7 @@ impl PoseStream {
                 current[k] = *position;
                 self.seen |= 1 << k;
             } else {
-                self.counters.masked += 1;
+                self.counters.masked = self.counters.masked.saturating_add(1);
                 unsure |= 1 << k;
             }
         }
@@ -334,7 +334,7 @@ impl PoseStream {
                 while let Some(t) = self.grid_time(t0, k).filter(|&t| t <= t_us) {
                     let w = (t.saturating_sub(last.t_us)) as f32 / span;
                     resample::lerp(&self.previous, &current, w, &mut out);
-                    self.counters.emitted += 1;
+                    self.counters.emitted = self.counters.emitted.saturating_add(1);
                     emit(StreamEvent::Frame {
                         t_us: t,
                         joints: &out[..self.joints],
@@ -346,7 +346,7 @@ impl PoseStream {
             }
             _ if ready => {
                 self.grid = Some((t_us, 1));
-                self.counters.emitted += 1;
+                self.counters.emitted = self.counters.emitted.saturating_add(1);
                 emit(StreamEvent::Frame {
                     t_us,
                     joints: &current[..self.joints],

@@ -123,7 +123,7 @@ pub struct Config {
     pub band: Band,
 }
 
-/// What a device has counted since it started.
+/// What a device has counted since it started; each count stops at `u32::MAX`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Counters {
@@ -352,7 +352,7 @@ impl Decoder {
                 return None;
             }
             if self.len == MAX_FRAME - 1 {
-                self.counters.overflows += 1;
+                self.counters.overflows = self.counters.overflows.saturating_add(1);
                 self.skipping = true;
                 self.len = 0;
                 return None;
@@ -368,19 +368,19 @@ impl Decoder {
         let message = self.frame(len);
         match message {
             Ok(m) => {
-                self.counters.frames_ok += 1;
+                self.counters.frames_ok = self.counters.frames_ok.saturating_add(1);
                 Some(m)
             }
             Err(FrameFault::Crc) => {
-                self.counters.crc_errors += 1;
+                self.counters.crc_errors = self.counters.crc_errors.saturating_add(1);
                 None
             }
             Err(FrameFault::Malformed) => {
-                self.counters.malformed += 1;
+                self.counters.malformed = self.counters.malformed.saturating_add(1);
                 None
             }
             Err(FrameFault::Version) => {
-                self.counters.versions += 1;
+                self.counters.versions = self.counters.versions.saturating_add(1);
                 self.owed = true;
                 None
             }

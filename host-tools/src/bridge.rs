@@ -301,7 +301,7 @@ fn read_lines(
 ) {
     let mut reader = BufReader::new(stream);
     let mut line = Vec::new();
-    for n in 1.. {
+    for n in 1u64.. {
         let frame = match next_line(&mut reader, &mut line) {
             Ok(None) | Err(_) => return,
             // (Before the blank case: the too-long line's bytes are already gone.)

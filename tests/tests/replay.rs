@@ -324,3 +324,65 @@ fn without_a_coach_selected_each_swing_gets_the_coach_of_its_club() {
         assert_eq!(chosen, made, "{name}");
     }
 }
+
+#[test]
+fn an_imu_clock_that_wraps_mid_session_keeps_the_swings_and_their_times() {
+    use posecoach_adapters::log::LogReader;
+    use posecoach_adapters::session::Outcome;
+    // The IMU recording moved to the end of the sensors' clock: it wraps 1.5 s in, after the
+    // still period, while tracking. The adapter moves its grid to the new clock and the
+    // session goes on; each swing's start is reported on the sender's clock, wrapped as it
+    // is (once, its time past the end of the clock panicked).
+    let log = Path::new(env!("CARGO_MANIFEST_DIR")).join("logs/imu_200hz.pclog");
+    let bytes = std::fs::read(&log).unwrap();
+    let messages: Vec<Message> = LogReader::new(&bytes).unwrap().collect();
+    let first = messages
+        .iter()
+        .find_map(|m| match m {
+            Message::ImuSample(s) => Some(s.t_us),
+            _ => None,
+        })
+        .unwrap();
+    let shift = (u64::MAX - 1_500_000).wrapping_sub(first);
+    let wrapped: Vec<Message> = messages
+        .iter()
+        .cloned()
+        .map(|m| match m {
+            Message::ImuSample(mut s) => {
+                s.t_us = s.t_us.wrapping_add(shift);
+                Message::ImuSample(s)
+            }
+            m => m,
+        })
+        .collect();
+    let swings = |messages: &[Message]| {
+        let mut found = Vec::new();
+        posecoach_cli::coaches::session(None, |session| {
+            for m in messages {
+                session.handle(m, |outcome| match outcome {
+                    Outcome::Scored { swing, report, .. } => {
+                        found.push((swing.start_us, swing.frames, report.score))
+                    }
+                    Outcome::Unscored { swing, error } => panic!("{swing:?}: {error:?}"),
+                    _ => {}
+                });
+            }
+        })
+        .unwrap();
+        found
+    };
+    let (clean, wrapped) = (swings(&messages), swings(&wrapped));
+    assert_eq!(
+        clean.len(),
+        sidecar(&log)["swings"].as_array().unwrap().len()
+    );
+    assert_eq!(clean.len(), wrapped.len());
+    eprintln!("{clean:?}\n{wrapped:?}");
+    for ((start, frames, score), (start_w, frames_w, score_w)) in clean.iter().zip(&wrapped) {
+        // The grid's move to the new clock may take or give one frame at the 30 Hz model
+        // rate, and the session times a swing by its frames since the first.
+        let off_us = start_w.wrapping_sub(start.wrapping_add(shift)) as i64;
+        assert!(off_us.abs() <= 33_334, "{off_us} µs off");
+        assert!(frames.abs_diff(*frames_w) <= 1 && (score - score_w).abs() < 1.0);
+    }
+}

@@ -530,7 +530,7 @@ impl<'b> Session<'b> {
                     error: FusionError::TimeNotIncreasing { .. },
                     ..
                 } => {
-                    self.stale += 1;
+                    self.stale = self.stale.saturating_add(1);
                     Ok(())
                 }
                 e => Err(Refusal::Imu(e)),
@@ -580,8 +580,9 @@ impl<'b> Session<'b> {
         // The swing is scored where it lies in the detector's ring (a window that has left the
         // ring is skipped, as a copy of it would fail).
         let _ = detector.with_window(&window, |frames| {
-            *swings += 1;
-            let at = |frame: u64| t0_us + (frame as f64 * 1e6 / f64::from(rate)) as u64;
+            *swings = swings.saturating_add(1);
+            // On the sender's clock, which may wrap (the IMU adapter follows it round).
+            let at = |frame: u64| t0_us.wrapping_add((frame as f64 * 1e6 / f64::from(rate)) as u64);
             let found = swing_span(skeleton, frames, rate);
             // Without a selection, the coach whose set-up this swing's is nearest, made when it
             // is not the one in the virtual coach (by the analytic retargeter: the network's
