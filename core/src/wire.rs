@@ -795,7 +795,7 @@ mod tests {
 
     #[test]
     fn frames_have_the_documented_layout() {
-        // Ack { seq: 7 }: version 3, variant 7 (varint), seq 7 (varint), CRC-32 LE; COBS; 0x00.
+        // Ack { seq: 7 }: version 4, variant 7 (varint), seq 7 (varint), CRC-32 LE; COBS; 0x00.
         let f = frame(&Message::Ack { seq: 7 });
         let mut payload = f[..f.len() - 1].to_vec();
         let n = cobs::decode_in_place(&mut payload).unwrap();
