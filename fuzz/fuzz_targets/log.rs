@@ -1,10 +1,12 @@
 //! Any bytes, read as a recorded session (behind a valid header when they lack one), must
-//! never make the log reader or the device's session panic.
+//! never make the log reader or the device's session panic. Each input is also tried with every
+//! frame's CRC made right, so that mutations of a recorded message (positions, times, settings)
+//! reach the session and its scoring rather than stopping at the frame's check.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use posecoach_io::{csv, Motion};
-use posecoach_adapters::log::{header, LogReader};
+use posecoach_adapters::log::{header, LogReader, HEADER_LEN};
 use posecoach_adapters::session::{BufferLens, Coach, OwnedBuffers, Session};
 use posecoach_core::config::MAX_JOINTS;
 use std::sync::OnceLock;
@@ -26,6 +28,34 @@ fuzz_target!(|data: &[u8]| {
         framed.extend_from_slice(data);
         &framed[..]
     };
+    replay(log);
+    replay(&with_crcs_made_right(log));
+});
+
+/// `log` with the CRC of each frame that decodes from COBS made right (other frames as they
+/// are).
+fn with_crcs_made_right(log: &[u8]) -> Vec<u8> {
+    let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+    let (head, frames) = log.split_at(HEADER_LEN.min(log.len()));
+    let mut out = head.to_vec();
+    for frame in frames.split_inclusive(|&b| b == 0) {
+        let mut payload = frame.strip_suffix(&[0]).unwrap_or(frame).to_vec();
+        match cobs::decode_in_place(&mut payload) {
+            Ok(n) if n > 4 => {
+                let body = &payload[..n - 4];
+                let mut fixed = body.to_vec();
+                fixed.extend_from_slice(&crc.checksum(body).to_le_bytes());
+                out.extend_from_slice(&cobs::encode_vec(&fixed));
+                out.push(0);
+            }
+            _ => out.extend_from_slice(frame),
+        }
+    }
+    out
+}
+
+/// Reads `log` and gives each message to a fresh session.
+fn replay(log: &[u8]) {
     let Ok(reader) = LogReader::new(log) else {
         return;
     };
@@ -40,4 +70,4 @@ fuzz_target!(|data: &[u8]| {
     for message in reader {
         session.handle(&message, |_| {});
     }
-});
+}
