@@ -377,7 +377,6 @@ fn an_imu_clock_that_wraps_mid_session_keeps_the_swings_and_their_times() {
         sidecar(&log)["swings"].as_array().unwrap().len()
     );
     assert_eq!(clean.len(), wrapped.len());
-    eprintln!("{clean:?}\n{wrapped:?}");
     for ((start, frames, score), (start_w, frames_w, score_w)) in clean.iter().zip(&wrapped) {
         // The grid's move to the new clock may take or give one frame at the 30 Hz model
         // rate, and the session times a swing by its frames since the first.
