@@ -1,10 +1,18 @@
 //! Human limits a body and its motion must keep. A skeleton or a swing outside them is a
-//! corrupt file, a wrong unit or a broken sensor, not a golfer: it is refused, not scored.
+//! corrupt file, a wrong unit, a broken sensor or a hostile phone, not a golfer: it is refused,
+//! not scored.
 //!
-//! The limits are wide on purpose: they catch what no person can be (a 44 km stature, a joint
-//! crossing a room between two frames), never an unusual golfer. They apply to the body's
-//! joints: a tracked club is longer than half a child's stature, and its head, at up to 70 m/s
-//! and often occluded at impact, jumps between captured samples.
+//! The limits are wide on purpose: they catch what no person can be (a 44 km stature, an arm as
+//! long as the body, a shank half the other's, a joint crossing a room between two frames),
+//! never an unusual golfer. They apply to the body's joints: a tracked club is longer than half
+//! a child's stature, and its head, at up to 70 m/s and often occluded at impact, jumps between
+//! captured samples.
+//!
+//! The limb bones (upper arms, forearms, thighs, shanks) are judged against their typical share
+//! of the stature, from Winter's segment lengths (Biomechanics and Motor Control of Human
+//! Movement, 4th ed., 2009, after Drillis and Contini 1966), which every keypoint format names
+//! the same way; other bones (spines, clavicles, faces) differ between formats and are only
+//! held under [`MAX_BONE_SHARE`].
 
 use crate::joint::Joint;
 use crate::math::norm;
@@ -18,6 +26,33 @@ pub const MAX_STATURE_M: f32 = 2.75;
 /// Longest bone accepted, as a share of the stature: the longest human bone, the femur, is
 /// about 27 % of it, and no segment of a body is half of it.
 pub const MAX_BONE_SHARE: f32 = 0.5;
+/// The limb bones, each as its joint and the parent it hangs from, with its typical length as
+/// a share of the stature (Winter 2009: shoulder to elbow 0.186, elbow to wrist 0.146, hip to
+/// knee 0.245, knee to ankle 0.246); left and right side by side.
+pub const LIMBS: [(Joint, Joint, f32); 8] = [
+    (Joint::LeftElbow, Joint::LeftShoulder, 0.186),
+    (Joint::RightElbow, Joint::RightShoulder, 0.186),
+    (Joint::LeftWrist, Joint::LeftElbow, 0.146),
+    (Joint::RightWrist, Joint::RightElbow, 0.146),
+    (Joint::LeftKnee, Joint::LeftHip, 0.245),
+    (Joint::RightKnee, Joint::RightHip, 0.245),
+    (Joint::LeftAnkle, Joint::LeftKnee, 0.246),
+    (Joint::RightAnkle, Joint::RightKnee, 0.246),
+];
+/// A limb bone may be from this many times its typical share of the stature to this many: a
+/// segment's share varies between adults by about 5 % (one standard deviation), a keypoint
+/// detector places joints a few centimetres apart from the anatomical centres, and a T-pose
+/// from a phone carries its noise; half and 1.6 times are far outside all three.
+pub const LIMB_RANGE: (f32, f32) = (0.5, 1.6);
+/// Most a limb bone may differ from the other side's, as a share of the longer: the limbs'
+/// lengths differ by under 2 cm in most adults (under 5 % of a shank), the rest is room for
+/// the keypoints' noise in the T-pose.
+pub const SYMMETRY: f32 = 0.25;
+/// The path from one wrist to the other along the bones (both arms and the shoulders between
+/// them: arm span less the hands, 0.77 to 0.91 of the stature on the formats' standard
+/// skeletons) must be from this share of the
+/// stature to this one: the arms count toward the body's size as the legs and trunk do.
+pub const SPAN_SHARE: (f32, f32) = (0.6, 1.3);
 /// Fastest a body joint may move between two frames, m/s: ten times what the hands reach in
 /// a tour swing (under 10 m/s at impact), leaving room for keypoint noise at high rates.
 pub const MAX_SPEED_M_S: f32 = 100.0;
@@ -28,13 +63,40 @@ pub const MAX_SPEED_M_S: f32 = 100.0;
 pub enum Implausible {
     /// A stature (metres, [`Skeleton::height`]) outside [`MIN_STATURE_M`] to [`MAX_STATURE_M`].
     Stature(f32),
-    /// Joint `joint`'s bone (from its parent) is `metres` long, more than [`MAX_BONE_SHARE`] of
-    /// the stature.
+    /// Joint `joint`'s bone (from its parent) is `metres` long, outside the `min` to `max`
+    /// metres a human's is at this stature: past [`MAX_BONE_SHARE`] of it, or for a limb bone
+    /// outside [`LIMB_RANGE`] of its typical share.
     Bone {
         /// The bone's child joint (skeleton index).
         joint: usize,
+        /// Its canonical name, where it has one.
+        name: Option<Joint>,
         /// Its length.
         metres: f32,
+        /// The shortest a human's is at this stature.
+        min: f32,
+        /// The longest.
+        max: f32,
+    },
+    /// Joint `joint`'s limb bone is `metres` long and the other side's `mirror`: they differ
+    /// by more than [`SYMMETRY`] of the longer.
+    Asymmetric {
+        /// The bone's child joint (skeleton index).
+        joint: usize,
+        /// Its canonical name.
+        name: Joint,
+        /// Its length.
+        metres: f32,
+        /// The other side's.
+        mirror: f32,
+    },
+    /// The path from wrist to wrist along the bones is `metres` long, outside [`SPAN_SHARE`]
+    /// of the `stature`.
+    Span {
+        /// Its length.
+        metres: f32,
+        /// The stature.
+        stature: f32,
     },
     /// Joint `joint` moved at `speed` m/s (past [`MAX_SPEED_M_S`]) into frame `frame`.
     Speed {
@@ -47,6 +109,18 @@ pub enum Implausible {
     },
 }
 
+impl Implausible {
+    /// The skeleton joint the refusal names, if any.
+    pub fn joint(&self) -> Option<usize> {
+        match *self {
+            Implausible::Stature(_) | Implausible::Span { .. } => None,
+            Implausible::Bone { joint, .. }
+            | Implausible::Asymmetric { joint, .. }
+            | Implausible::Speed { joint, .. } => Some(joint),
+        }
+    }
+}
+
 impl core::fmt::Display for Implausible {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
@@ -55,10 +129,39 @@ impl core::fmt::Display for Implausible {
                 "a stature of {m} m is outside the human range of {MIN_STATURE_M} to \
                  {MAX_STATURE_M} m (wrong units or corrupt joints?)"
             ),
-            Implausible::Bone { joint, metres } => write!(
+            Implausible::Bone {
+                joint,
+                name,
+                metres,
+                min,
+                max,
+            } => {
+                write!(f, "the bone into joint {joint}")?;
+                if let Some(name) = name {
+                    write!(f, " ({name})")?;
+                }
+                write!(
+                    f,
+                    " is {metres:.3} m long; at this stature a human's is {min:.3} to {max:.3} m: \
+                     a corrupt joint or a body no person has"
+                )
+            }
+            Implausible::Asymmetric {
+                joint,
+                name,
+                metres,
+                mirror,
+            } => write!(
                 f,
-                "joint {joint}'s bone is {metres} m long, more than {MAX_BONE_SHARE} of the \
-                 stature: a corrupt joint"
+                "the bone into joint {joint} ({name}) is {metres:.3} m long and the other \
+                 side's {mirror:.3} m: more than {SYMMETRY} of the longer apart, which no \
+                 person's limbs are"
+            ),
+            Implausible::Span { metres, stature } => write!(
+                f,
+                "the arms, wrist to wrist along the bones, are {metres:.3} m for a stature of \
+                 {stature:.3} m; a human's are {} to {} of it",
+                SPAN_SHARE.0, SPAN_SHARE.1
             ),
             Implausible::Speed {
                 joint,
@@ -78,24 +181,90 @@ fn of_body(skeleton: &Skeleton, k: usize) -> bool {
     !matches!(skeleton.joint(k), Some(Joint::ClubGrip | Joint::ClubHead))
 }
 
-/// Checks `skeleton`'s stature and every body bone against the human limits.
+/// Checks `skeleton` against the human limits: its stature, every body bone's length, the limb
+/// bones' lengths and their symmetry, and the arms' span.
 ///
 /// # Errors
-/// The first [`Implausible`] found: the stature, then the bones in joint order.
+/// The first [`Implausible`] found: the stature, then the bones in joint order, then the limbs
+/// in [`LIMBS`]' order, then the span.
 pub fn body(skeleton: &Skeleton) -> Result<(), Implausible> {
     let stature = skeleton.height();
     if !(MIN_STATURE_M..=MAX_STATURE_M).contains(&stature) {
         return Err(Implausible::Stature(stature));
     }
+    let length = |k: usize| norm(&skeleton.offset(k));
     (1..skeleton.len())
         .filter(|&k| of_body(skeleton, k))
         .try_for_each(|joint| {
-            let metres = norm(&skeleton.offset(joint));
-            match metres <= MAX_BONE_SHARE * stature {
+            let name = skeleton.joint(joint);
+            let share = LIMBS
+                .iter()
+                .find(|&&(j, parent, _)| {
+                    name == Some(j)
+                        && skeleton.parent(joint).and_then(|p| skeleton.joint(p)) == Some(parent)
+                })
+                .map(|&(_, _, share)| share);
+            let (min, max) = match share {
+                Some(s) => (LIMB_RANGE.0 * s * stature, LIMB_RANGE.1 * s * stature),
+                None => (0.0, MAX_BONE_SHARE * stature),
+            };
+            let metres = length(joint);
+            match (min..=max).contains(&metres) {
                 true => Ok(()),
-                false => Err(Implausible::Bone { joint, metres }),
+                false => Err(Implausible::Bone {
+                    joint,
+                    name,
+                    metres,
+                    min,
+                    max,
+                }),
             }
-        })
+        })?;
+    let limb = |j: Joint, parent: Joint| {
+        let k = skeleton.index_of(j)?;
+        (skeleton.parent(k) == skeleton.index_of(parent)).then(|| (k, length(k)))
+    };
+    for pair in LIMBS.chunks_exact(2) {
+        let (Some((left, l)), Some((right, r))) =
+            (limb(pair[0].0, pair[0].1), limb(pair[1].0, pair[1].1))
+        else {
+            continue;
+        };
+        if (l - r).abs() > SYMMETRY * l.max(r) {
+            let (joint, name, metres, mirror) = match l < r {
+                true => (left, pair[0].0, l, r),
+                false => (right, pair[1].0, r, l),
+            };
+            return Err(Implausible::Asymmetric {
+                joint,
+                name,
+                metres,
+                mirror,
+            });
+        }
+    }
+    let wrists = (
+        skeleton.find(&[Joint::LeftWrist, Joint::LeftHand]),
+        skeleton.find(&[Joint::RightWrist, Joint::RightHand]),
+    );
+    if let (Some(a), Some(b)) = wrists {
+        let metres = path_length(skeleton, a, b);
+        if !(SPAN_SHARE.0 * stature..=SPAN_SHARE.1 * stature).contains(&metres) {
+            return Err(Implausible::Span { metres, stature });
+        }
+    }
+    Ok(())
+}
+
+/// The length of the path from joint `a` to joint `b` along `skeleton`'s bones.
+fn path_length(skeleton: &Skeleton, a: usize, b: usize) -> f32 {
+    let above_a = skeleton.ancestry(a).fold(0u64, |m, k| m | 1 << k);
+    // The lowest joint above both (the root when their chains meet only there).
+    let common = skeleton
+        .ancestry(b)
+        .find(|&k| above_a & (1 << k) != 0)
+        .unwrap_or(0);
+    skeleton.chain_length(a) + skeleton.chain_length(b) - 2.0 * skeleton.chain_length(common)
 }
 
 /// Checks the speed of every body joint of `skeleton` in `positions` (frames of
@@ -183,9 +352,109 @@ mod tests {
         let broken = skeleton.with_bone_lengths(&lengths[..n]).unwrap();
         let e = body(&broken).unwrap_err();
         assert!(
-            matches!(e, Implausible::Bone { joint, metres } if joint == wrist && (metres - 32.0).abs() < 1e-3),
+            matches!(e, Implausible::Bone { joint, metres, .. } if joint == wrist && (metres - 32.0).abs() < 1e-3),
             "{e:?}"
         );
+    }
+
+    /// The standard H3.6M skeleton with each bone's length from `length` (index, standard
+    /// length).
+    fn reshaped(length: impl Fn(usize, f32) -> f32) -> Skeleton {
+        let skeleton = Skeleton::standard(Format::H36m17).unwrap();
+        let lengths: [f32; 17] = core::array::from_fn(|k| length(k, norm(&skeleton.offset(k))));
+        skeleton.with_bone_lengths(&lengths).unwrap()
+    }
+
+    fn index(j: Joint) -> usize {
+        Skeleton::standard(Format::H36m17)
+            .unwrap()
+            .index_of(j)
+            .unwrap()
+    }
+
+    #[test]
+    fn every_standard_body_passes() {
+        let all = [
+            Format::Canonical,
+            Format::Cmu31,
+            Format::Bandai22,
+            Format::H36m17,
+            Format::Coco17,
+            Format::BlazePose33,
+            Format::Smpl24,
+            Format::GolfMarkers,
+        ];
+        for format in all {
+            if let Ok(skeleton) = Skeleton::standard(format) {
+                assert_eq!(body(&skeleton), Ok(()), "{format:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn limbs_no_person_has_are_named() {
+        let (elbow, wrist) = (index(Joint::LeftElbow), index(Joint::LeftWrist));
+        // A left arm of 1.6 m on a body of about 1.62 m.
+        let long = reshaped(|k, l| match k {
+            k if k == elbow || k == wrist => 0.8,
+            _ => l,
+        });
+        assert!(
+            matches!(body(&long), Err(Implausible::Bone { joint, name: Some(Joint::LeftElbow), .. }) if joint == elbow),
+            "{:?}",
+            body(&long)
+        );
+        // Arms of zero length: both upper arms named, the left first.
+        let arms = [
+            Joint::LeftElbow,
+            Joint::LeftWrist,
+            Joint::RightElbow,
+            Joint::RightWrist,
+        ]
+        .map(index);
+        let none = reshaped(|k, l| if arms.contains(&k) { 0.0 } else { l });
+        assert!(
+            matches!(body(&none), Err(Implausible::Bone { joint, metres: 0.0, .. }) if joint == elbow),
+            "{:?}",
+            body(&none)
+        );
+        // One shank half the other's: each within its human range, the pair not.
+        let ankle = index(Joint::RightAnkle);
+        let short = reshaped(|k, l| if k == ankle { 0.55 * l } else { l });
+        assert!(
+            matches!(body(&short), Err(Implausible::Asymmetric { joint, name: Joint::RightAnkle, .. }) if joint == ankle),
+            "{:?}",
+            body(&short)
+        );
+        // Within the tolerance: 15 % shorter passes.
+        let near = reshaped(|k, l| if k == ankle { 0.85 * l } else { l });
+        assert_eq!(body(&near), Ok(()));
+    }
+
+    #[test]
+    fn arms_count_toward_the_bodys_size() {
+        // Every arm bone 1.45 times its length and the shoulders three times theirs (each bone
+        // within its range): the span is not.
+        let arms = [
+            Joint::LeftElbow,
+            Joint::LeftWrist,
+            Joint::RightElbow,
+            Joint::RightWrist,
+        ]
+        .map(index);
+        let shoulders = [Joint::LeftShoulder, Joint::RightShoulder].map(index);
+        let wide = reshaped(|k, l| match k {
+            k if arms.contains(&k) => 1.45 * l,
+            k if shoulders.contains(&k) => 3.0 * l,
+            _ => l,
+        });
+        assert!(
+            matches!(body(&wide), Err(Implausible::Span { .. })),
+            "{:?}",
+            body(&wide)
+        );
+        let e = body(&wide).unwrap_err();
+        assert_eq!(e.joint(), None);
     }
 
     #[test]

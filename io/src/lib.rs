@@ -141,11 +141,8 @@ fn human(motion: &Motion) -> Result<(), FileErrorKind> {
         return Err(FileErrorKind::NeverCaptured(motion.names[k].clone()));
     }
     let name = |e: Implausible| {
-        let joint = match e {
-            Implausible::Stature(_) => None,
-            Implausible::Bone { joint, .. } | Implausible::Speed { joint, .. } => Some(joint),
-        };
-        FileErrorKind::Implausible(e, joint.and_then(|k| motion.names.get(k).cloned()))
+        let joint = e.joint().and_then(|k| motion.names.get(k).cloned());
+        FileErrorKind::Implausible(e, joint)
     };
     plausible::body(&motion.skeleton).map_err(name)?;
     plausible::motion(
