@@ -17,10 +17,10 @@
 //!
 //! let mut log = header().to_vec();
 //! let mut frame = [0u8; MAX_FRAME];
-//! let n = encode(&Message::CoachSelect { coach: 1 }, &mut frame).unwrap();
+//! let n = encode(&Message::CoachSelect { seq: 1, coach: 1 }, &mut frame).unwrap();
 //! log.extend_from_slice(&frame[..n]);
 //! let messages: Vec<Message> = LogReader::new(&log).unwrap().collect();
-//! assert_eq!(messages, [Message::CoachSelect { coach: 1 }]);
+//! assert_eq!(messages, [Message::CoachSelect { seq: 1, coach: 1 }]);
 //! ```
 
 use posecoach_core::wire::{self, Counters, Decoder, Message};
@@ -200,7 +200,7 @@ mod tests {
     #[test]
     fn damaged_frames_are_counted_and_skipped() {
         let messages = [
-            Message::CoachSelect { coach: 1 },
+            Message::CoachSelect { seq: 1, coach: 1 },
             Message::Ack { seq: 2 },
             Message::Ack { seq: 3 },
         ];

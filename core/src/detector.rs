@@ -238,6 +238,12 @@ impl<'s> SwingDetector<'s> {
         self.candidate = None;
     }
 
+    /// Whether a candidate swing is being watched: the hands passed the opening speed and
+    /// have not yet settled (or the candidate outgrew the storage).
+    pub fn watching(&self) -> bool {
+        self.candidate.is_some()
+    }
+
     /// Frames pushed so far.
     pub fn frames_seen(&self) -> u64 {
         self.seen
@@ -490,5 +496,41 @@ mod tests {
         assert_eq!(d.storage, &before[..]);
         let gone = SwingWindow { start: 0, len: 5 };
         assert_eq!(d.with_window(&gone, |_| ()), Err(DetectorError::Window));
+    }
+
+    #[test]
+    fn it_watches_from_fast_hands_until_they_settle() {
+        let s = Skeleton::standard(Format::H36m17).unwrap();
+        let mut storage = vec![[0i16; 3]; 17 * 6 * RATE_HZ as usize];
+        let mut d =
+            SwingDetector::new(&s, DetectorConfig::full_swing(RATE_HZ), &mut storage).unwrap();
+        let at = |x: f32| [Vec3::new(x, 1.0, 0.0); 17];
+        for _ in 0..30 {
+            d.push(&at(0.0)).unwrap();
+        }
+        assert!(!d.watching());
+        // Every joint, the hands among them, moving at 3 m/s for 0.2 s: watched.
+        let mut x = 0.0;
+        for _ in 0..12 {
+            x += 3.0 / RATE_HZ;
+            d.push(&at(x)).unwrap();
+        }
+        assert!(d.watching());
+        // Still again: watched until the hands have settled (0.4 s and the means' span),
+        // then not (a slow movement is no swing, so no window comes out).
+        let mut closed = None;
+        for n in 0..90 {
+            if d.push(&at(x)).unwrap().is_some() {
+                closed = Some(n);
+            }
+            if !d.watching() {
+                break;
+            }
+        }
+        assert_eq!(closed, None);
+        assert!(!d.watching());
+        d.push(&at(x + 1.0)).unwrap();
+        d.clear();
+        assert!(!d.watching());
     }
 }

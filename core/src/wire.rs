@@ -40,7 +40,7 @@ use heapless::Vec as HVec;
 use serde::{Deserialize, Serialize};
 
 /// Protocol version carried in every frame.
-pub const VERSION: u8 = 4;
+pub const VERSION: u8 = 5;
 /// Largest frame on the wire, delimiter included.
 pub const MAX_FRAME: usize = 640;
 /// Most joints a pose frame or profile carries (BlazePose's 33 landmarks fit).
@@ -241,14 +241,26 @@ pub enum Message {
     /// Device internal or device → phone on request: an IMU sample.
     ImuSample(ImuSample),
     /// Phone → device: the student's T-pose.
-    StudentProfile(StudentProfile),
+    StudentProfile {
+        /// Sender's sequence number, which the device's `Ack` or `Nack` carries back.
+        seq: u32,
+        /// The T-pose.
+        profile: StudentProfile,
+    },
     /// Phone → device: which stored coach reference to use.
     CoachSelect {
+        /// Sender's sequence number, as in `StudentProfile`.
+        seq: u32,
         /// Reference number.
         coach: u16,
     },
     /// Phone → device: scoring settings.
-    Config(Config),
+    Config {
+        /// Sender's sequence number, as in `StudentProfile`.
+        seq: u32,
+        /// The settings.
+        config: Config,
+    },
     /// Device → phone: a scored swing.
     SwingReport(SwingReport),
     /// Device → phone: counters.
@@ -266,7 +278,39 @@ pub enum Message {
         reason: NackReason,
     },
     /// Phone → device: where the IMUs are.
-    SensorLayout(SensorLayout),
+    SensorLayout {
+        /// Sender's sequence number, as in `StudentProfile`.
+        seq: u32,
+        /// The sensors.
+        layout: SensorLayout,
+    },
+}
+
+impl Message {
+    /// The sender's sequence number of a message that carries one (a pose frame or a set-up
+    /// message), which the device's `Ack` or `Nack` for it carries back.
+    pub fn seq(&self) -> Option<u32> {
+        match self {
+            Message::PoseFrame(PoseFrame { seq, .. })
+            | Message::StudentProfile { seq, .. }
+            | Message::CoachSelect { seq, .. }
+            | Message::Config { seq, .. }
+            | Message::SensorLayout { seq, .. } => Some(*seq),
+            _ => None,
+        }
+    }
+
+    /// Whether this is a set-up message (`StudentProfile`, `CoachSelect`, `Config`,
+    /// `SensorLayout`): one a device acknowledges.
+    pub fn is_setup(&self) -> bool {
+        matches!(
+            self,
+            Message::StudentProfile { .. }
+                | Message::CoachSelect { .. }
+                | Message::Config { .. }
+                | Message::SensorLayout { .. }
+        )
+    }
 }
 
 /// Why a message could not be framed.
@@ -493,15 +537,22 @@ mod tests {
                         mag_dut,
                     })
                 }),
-            (format(), joints()).prop_map(|(format, joints_mm)| Message::StudentProfile(
-                StudentProfile { format, joints_mm }
-            )),
-            any::<u16>().prop_map(|coach| Message::CoachSelect { coach }),
-            (any::<u16>(), any::<u16>(), any::<bool>()).prop_map(
-                |(model_rate_hz, radius, anchored)| Message::Config(Config {
-                    model_rate_hz,
-                    band: Band { radius, anchored }
-                })
+            (any::<u32>(), format(), joints()).prop_map(|(seq, format, joints_mm)| {
+                Message::StudentProfile {
+                    seq,
+                    profile: StudentProfile { format, joints_mm },
+                }
+            }),
+            (any::<u32>(), any::<u16>())
+                .prop_map(|(seq, coach)| Message::CoachSelect { seq, coach }),
+            (any::<u32>(), any::<u16>(), any::<u16>(), any::<bool>()).prop_map(
+                |(seq, model_rate_hz, radius, anchored)| Message::Config {
+                    seq,
+                    config: Config {
+                        model_rate_hz,
+                        band: Band { radius, anchored }
+                    }
+                }
             ),
             (
                 (any::<u32>(), any::<u16>(), any::<u16>()),
@@ -609,20 +660,26 @@ mod tests {
                 ])
             )
                 .prop_map(|(seq, reason)| Message::Nack { seq, reason }),
-            prop::collection::vec(
-                (any::<u8>(), 0..Joint::ALL.len(), any::<[i16; 4]>()),
-                0..=MAX_SENSORS
+            (
+                any::<u32>(),
+                prop::collection::vec(
+                    (any::<u8>(), 0..Joint::ALL.len(), any::<[i16; 4]>()),
+                    0..=MAX_SENSORS
+                )
             )
-            .prop_map(|sensors| Message::SensorLayout(SensorLayout {
-                sensors: sensors
-                    .into_iter()
-                    .map(|(sensor, j, mounting_q14)| SensorPlacement {
-                        sensor,
-                        joint: Joint::ALL[j],
-                        mounting_q14,
-                    })
-                    .collect()
-            })),
+                .prop_map(|(seq, sensors)| Message::SensorLayout {
+                    seq,
+                    layout: SensorLayout {
+                        sensors: sensors
+                            .into_iter()
+                            .map(|(sensor, j, mounting_q14)| SensorPlacement {
+                                sensor,
+                                joint: Joint::ALL[j],
+                                mounting_q14,
+                            })
+                            .collect()
+                    }
+                }),
         ]
     }
 
@@ -668,7 +725,7 @@ mod tests {
 
     #[test]
     fn a_frame_of_another_version_is_counted_and_owed_one_nack() {
-        let mut old = frame(&Message::CoachSelect { coach: 3 });
+        let mut old = frame(&Message::CoachSelect { seq: 1, coach: 3 });
         // The same frame in version 2: its version byte and CRC rewritten, COBS again.
         let mut payload = [0u8; MAX_FRAME];
         let n = cobs::decode(&old[..old.len() - 1], &mut payload)
@@ -683,11 +740,11 @@ mod tests {
         old.push(0);
         let mut stream = old.clone();
         stream.extend(&old);
-        stream.extend(frame(&Message::CoachSelect { coach: 4 }));
+        stream.extend(frame(&Message::CoachSelect { seq: 1, coach: 4 }));
         let mut decoder = Decoder::new();
         let mut got = Vec::new();
         decoder.push_all(&stream, |m| got.push(m));
-        assert_eq!(got, [Message::CoachSelect { coach: 4 }]);
+        assert_eq!(got, [Message::CoachSelect { seq: 1, coach: 4 }]);
         let counters = decoder.counters();
         assert_eq!(
             (counters.versions, counters.malformed, counters.crc_errors),
@@ -708,9 +765,9 @@ mod tests {
     fn an_overlong_frame_is_dropped_and_the_next_one_read() {
         let mut stream = std::vec![0x55u8; 3 * MAX_FRAME];
         stream.push(0);
-        stream.extend(frame(&Message::CoachSelect { coach: 3 }));
+        stream.extend(frame(&Message::CoachSelect { seq: 1, coach: 3 }));
         let (got, counters) = decode_all(&stream);
-        assert_eq!(got, [Message::CoachSelect { coach: 3 }]);
+        assert_eq!(got, [Message::CoachSelect { seq: 1, coach: 3 }]);
         assert_eq!((counters.overflows, counters.frames_ok), (1, 1));
     }
 
@@ -783,19 +840,23 @@ mod tests {
 
     #[test]
     fn a_config_carries_its_band_as_radius_then_flag() {
-        // Version 3, variant 4, model rate 60, radius 10 (varints), anchored (one byte).
-        let f = frame(&Message::Config(Config {
-            model_rate_hz: 60,
-            band: Band::DEFAULT,
-        }));
+        // Variant 4, sequence number 9, model rate 60, radius 10 (varints), anchored (one
+        // byte).
+        let f = frame(&Message::Config {
+            seq: 9,
+            config: Config {
+                model_rate_hz: 60,
+                band: Band::DEFAULT,
+            },
+        });
         let mut payload = f[..f.len() - 1].to_vec();
         let n = cobs::decode_in_place(&mut payload).unwrap();
-        assert_eq!(&payload[..n - 4], &[VERSION, 4, 60, 10, 1]);
+        assert_eq!(&payload[..n - 4], &[VERSION, 4, 9, 60, 10, 1]);
     }
 
     #[test]
     fn frames_have_the_documented_layout() {
-        // Ack { seq: 7 }: version 4, variant 7 (varint), seq 7 (varint), CRC-32 LE; COBS; 0x00.
+        // Ack { seq: 7 }: the version, variant 7 (varint), seq 7 (varint), CRC-32 LE; COBS; 0x00.
         let f = frame(&Message::Ack { seq: 7 });
         let mut payload = f[..f.len() - 1].to_vec();
         let n = cobs::decode_in_place(&mut payload).unwrap();

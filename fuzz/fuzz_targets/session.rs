@@ -1,12 +1,14 @@
 //! Any bytes, read as a phone's messages with hostile times (each a step of any size from the
-//! last: jumps, a clock that wraps or restarts, repeats) and now and then another keypoint
-//! format or a wrong keypoint count, must never make the device's session panic or give swing
-//! detection more than `MAX_FRAMES_PER_MESSAGE` frames for one message.
+//! last: jumps, a clock that wraps or restarts, repeats), now and then another keypoint format
+//! or a wrong keypoint count, layouts broken or sent before any profile, set-ups sent again and
+//! coaches selected again, must never make the device's session panic or give swing detection
+//! more than `MAX_FRAMES_PER_MESSAGE` frames for one message, nor leave it unable to take a
+//! valid set-up once no swing is under way.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use posecoach_adapters::session::{
-    BufferLens, Coach, OwnedBuffers, Session, MAX_FRAMES_PER_MESSAGE,
+    BufferLens, Coach, Outcome, OwnedBuffers, Session, MAX_FRAMES_PER_MESSAGE,
 };
 use posecoach_core::dtw::Band;
 use posecoach_core::format::Format;
@@ -80,11 +82,19 @@ fuzz_target!(|data: &[u8]| {
     let mut buffers = OwnedBuffers::new(BufferLens::new(17, coach.frames(), 120));
     let mut session = Session::new(&coaches, buffers.buffers());
     let tpose = tpose();
-    let profile = Message::StudentProfile(StudentProfile {
-        format: Format::H36m17,
-        joints_mm: tpose.iter().copied().collect(),
-    });
-    session.handle(&profile, |_| {});
+    let profile = Message::StudentProfile {
+        seq: 0,
+        profile: StudentProfile {
+            format: Format::H36m17,
+            joints_mm: tpose.iter().copied().collect(),
+        },
+    };
+    let mut bytes = Bytes(data);
+    // Mostly a session set up first; otherwise whatever comes first (a layout before any
+    // profile among it).
+    if bytes.u8() & 3 != 0 {
+        session.handle(&profile, |_| {});
+    }
     let joints = [
         Joint::Pelvis,
         Joint::Thorax,
@@ -93,17 +103,26 @@ fuzz_target!(|data: &[u8]| {
         Joint::LeftWrist,
         Joint::RightWrist,
     ];
-    let layout = Message::SensorLayout(SensorLayout {
-        sensors: (0u8..)
-            .zip(joints)
-            .map(|(sensor, joint)| SensorPlacement {
-                sensor,
-                joint,
-                mounting_q14: [16384, 0, 0, 0],
-            })
-            .collect(),
-    });
-    let mut bytes = Bytes(data);
+    let layout = Message::SensorLayout {
+        seq: 1,
+        layout: SensorLayout {
+            sensors: (0u8..)
+                .zip(joints)
+                .map(|(sensor, joint)| SensorPlacement {
+                    sensor,
+                    joint,
+                    mounting_q14: [16384, 0, 0, 0],
+                })
+                .collect(),
+        },
+    };
+    let settings = |model_rate_hz, radius, anchored| Message::Config {
+        seq: 2,
+        config: Config {
+            model_rate_hz,
+            band: Band { radius, anchored },
+        },
+    };
     let mut clock = 0u64;
     while !bytes.0.is_empty() {
         let message = match bytes.u8() % 8 {
@@ -153,16 +172,34 @@ fuzz_target!(|data: &[u8]| {
                     mag_dut,
                 })
             }
-            6 => layout.clone(),
-            _ => match bytes.u8() % 3 {
-                0 => Message::Config(Config {
-                    model_rate_hz: bytes.u16(),
-                    band: Band {
-                        radius: bytes.u16(),
-                        anchored: bytes.u8() & 1 == 1,
-                    },
-                }),
-                1 => Message::CoachSelect { coach: bytes.u16() },
+            // The layout that fits, or one cut short, or with a strap's turn zeroed.
+            6 => match bytes.u8() % 4 {
+                0 => {
+                    let mut broken = layout.clone();
+                    if let Message::SensorLayout { layout, .. } = &mut broken {
+                        let keep = usize::from(bytes.u8()) % (layout.sensors.len() + 1);
+                        layout.sensors.truncate(keep);
+                        if let Some(s) = layout.sensors.last_mut() {
+                            s.mounting_q14 = [0; 4];
+                        }
+                    }
+                    broken
+                }
+                _ => layout.clone(),
+            },
+            // Settings (any, or the ones in force again), a coach (any, or the first two
+            // again and again), the profile again.
+            _ => match bytes.u8() % 5 {
+                0 => settings(bytes.u16(), bytes.u16(), bytes.u8() & 1 == 1),
+                1 => settings(60, 10, true),
+                2 => Message::CoachSelect {
+                    seq: 3,
+                    coach: bytes.u16(),
+                },
+                3 => Message::CoachSelect {
+                    seq: 3,
+                    coach: u16::from(bytes.u8() & 1),
+                },
                 _ => profile.clone(),
             },
         };
@@ -170,5 +207,15 @@ fuzz_target!(|data: &[u8]| {
         session.handle(&message, |_| {});
         let given = session.frames() - before;
         assert!(given <= MAX_FRAMES_PER_MESSAGE, "{given} frames from {message:?}");
+    }
+    // Whatever came before, no message left the session unable to take a valid set-up: once
+    // no swing is under way, the device's settings and the profile are acknowledged, and the
+    // session takes pose frames again.
+    if !session.swing_under_way() {
+        for message in [settings(60, 10, true), profile] {
+            let mut acknowledged = false;
+            session.handle(&message, |o| acknowledged |= matches!(o, Outcome::Accepted));
+            assert!(acknowledged, "{message:?} not taken");
+        }
     }
 });

@@ -185,6 +185,7 @@ fn serve<L: Read + Write>(
                             eprintln!("device-sim: swing {} not scored: {error}", swing.number);
                         }
                         Outcome::Refused(_) => totals.refused += 1,
+                        Outcome::Accepted => {}
                     }
                     if let Some(reply) = outcome.reply(message) {
                         let scored = matches!(reply, Message::SwingReport(_));

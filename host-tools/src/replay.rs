@@ -137,6 +137,7 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
                 } => (swing, Ok((report, compared))),
                 Outcome::Unscored { swing, error } => (swing, Err(error)),
                 Outcome::Refused(r) => return refused.push(r.to_string()),
+                Outcome::Accepted => return,
             };
             let start_s = swing.start_us as f64 * 1e-6;
             let coach = names

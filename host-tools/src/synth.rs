@@ -257,13 +257,20 @@ pub fn run(args: &Args) -> Result<String> {
         format,
         joints_mm: keypoint_joints.iter().map(|&k| to_mm(rest[k])).collect(),
     };
-    let select = args.coach.map(|coach| Message::CoachSelect { coach });
+    // The set-up messages are numbered 0, 1, 2 (and 3 for the sensor layout), in their own
+    // sequence: the device only sends each number back in its `Ack`.
+    let select = args
+        .coach
+        .map(|coach| Message::CoachSelect { seq: 2, coach });
     for m in [
-        Message::StudentProfile(profile),
-        Message::Config(Config {
-            model_rate_hz: args.model_rate,
-            band: Band::DEFAULT,
-        }),
+        Message::StudentProfile { seq: 0, profile },
+        Message::Config {
+            seq: 1,
+            config: Config {
+                model_rate_hz: args.model_rate,
+                band: Band::DEFAULT,
+            },
+        },
     ]
     .into_iter()
     .chain(select)
@@ -547,7 +554,14 @@ fn record_imu(
         positions: timeline.positions.clone(),
     };
     let layout = synth_imu::default_layout(&body.skeleton);
-    push_frame(bytes, &Message::SensorLayout(layout.clone()))?;
+    let seq = 2 + u32::from(args.coach.is_some());
+    push_frame(
+        bytes,
+        &Message::SensorLayout {
+            seq,
+            layout: layout.clone(),
+        },
+    )?;
     let field = (!args.no_mag).then_some(synth_imu::EARTH_FIELD_UT);
     let samples = synth_imu::imu_samples(&motion, &layout, rate_hz, &ImuNoise::MEMS, field, rng);
     let mut sent = 0;

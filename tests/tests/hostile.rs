@@ -10,9 +10,11 @@
 use posecoach_adapters::log::{header, HEADER_LEN};
 use posecoach_core::dtw::Band;
 use posecoach_core::format::Format;
+use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{
-    encode, Config, Decoder, ImuSample, Message, PoseFrame, StudentProfile, MAX_FRAME,
+    encode, Config, Decoder, ImuSample, Message, PoseFrame, SensorLayout, SensorPlacement,
+    StudentProfile, MAX_FRAME,
 };
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -51,8 +53,44 @@ fn refused(message: Message) -> Sent {
     }
 }
 
-/// What a broken or hostile phone sends after `last`, the clean session's latest pose frame.
-fn burst(last: &PoseFrame) -> Vec<Sent> {
+/// Sensor layouts no device can take: none at all, and one whose strap turns by a zero
+/// quaternion.
+fn broken_layouts() -> [Message; 2] {
+    let zero = SensorPlacement {
+        sensor: 0,
+        joint: Joint::Pelvis,
+        mounting_q14: [0; 4],
+    };
+    [
+        SensorLayout {
+            sensors: heapless::Vec::new(),
+        },
+        SensorLayout {
+            sensors: [zero].into_iter().collect(),
+        },
+    ]
+    .map(|layout| Message::SensorLayout { seq: 90, layout })
+}
+
+/// `profile` with each bone's keypoints moved as `reshape` (keypoint, position in mm) says.
+fn reshaped(profile: &StudentProfile, reshape: impl Fn(usize, [i16; 3]) -> [i16; 3]) -> Message {
+    let joints_mm = profile
+        .joints_mm
+        .iter()
+        .enumerate()
+        .map(|(k, &p)| reshape(k, p));
+    Message::StudentProfile {
+        seq: 91,
+        profile: StudentProfile {
+            format: profile.format,
+            joints_mm: joints_mm.collect(),
+        },
+    }
+}
+
+/// What a broken or hostile phone sends after `last`, the clean session's latest pose frame;
+/// `setup` is the session's own set-up messages (profile, settings, coach).
+fn burst(last: &PoseFrame, setup: &[Message]) -> Vec<Sent> {
     let at = |seq: u32, t_us: u64| PoseFrame {
         seq,
         t_us,
@@ -66,14 +104,15 @@ fn burst(last: &PoseFrame) -> Vec<Sent> {
     let mut other_format = at(3, 5_000 + 100_000);
     other_format.format = Format::Cmu31;
     other_format.joints_mm = (0..cmu.len()).map(|k| [k as i16, 900, 0]).collect();
-    let config = |model_rate_hz, radius| {
-        Message::Config(Config {
+    let config = |model_rate_hz, radius| Message::Config {
+        seq: 97,
+        config: Config {
             model_rate_hz,
             band: Band {
                 radius,
                 anchored: true,
             },
-        })
+        },
     };
     let huge = StudentProfile {
         format: last.format,
@@ -88,7 +127,49 @@ fn burst(last: &PoseFrame) -> Vec<Sent> {
         format: last.format,
         joints_mm: (0..last.joints_mm.len()).map(|_| [0; 3]).collect(),
     };
-    vec![
+    let Some(Message::StudentProfile { profile, .. }) = setup.first() else {
+        panic!("the clean session starts with its profile");
+    };
+    // H3.6M keypoints: the left shoulder, elbow and wrist, the right knee and ankle.
+    let (shoulder, elbow, wrist, knee, ankle) = (11, 12, 13, 2, 3);
+    let at_mm = |k: usize| profile.joints_mm[k];
+    // The left arm straight out to 1.6 m from the shoulder; both arms folded into the
+    // shoulders; the right shank half as long as the left.
+    let long_arm = reshaped(profile, |k, p| match k {
+        k if k == elbow || k == wrist => {
+            let s = at_mm(shoulder);
+            let reach = if k == elbow { 800 } else { 1600 };
+            [s[0].saturating_add(reach), s[1], s[2]]
+        }
+        _ => p,
+    });
+    let no_arms = reshaped(profile, |k, p| match k {
+        12 | 13 => at_mm(11),
+        15 | 16 => at_mm(14),
+        _ => p,
+    });
+    let half_shank = reshaped(profile, |k, p| match k {
+        k if k == ankle => {
+            let (kn, an) = (at_mm(knee), p);
+            [0, 1, 2].map(|i| kn[i] + (an[i] - kn[i]) / 2)
+        }
+        _ => p,
+    });
+    let one_sensor = Message::SensorLayout {
+        seq: 92,
+        layout: SensorLayout {
+            sensors: [SensorPlacement {
+                sensor: 0,
+                joint: Joint::Pelvis,
+                mounting_q14: [16384, 0, 0, 0],
+            }]
+            .into_iter()
+            .collect(),
+        },
+    };
+    let resent: Vec<Sent> = setup.iter().cloned().map(taken).collect();
+    let [empty, zero] = broken_layouts();
+    let mut out = vec![
         // A gap just under the stream's break: the grid filled up to it in one message.
         taken(Message::PoseFrame(at(last.seq + 1, last.t_us + 240_000))),
         // The clock leaps ahead, leaps to 0.1 s before the end of u64, reaches it, and wraps
@@ -111,10 +192,26 @@ fn burst(last: &PoseFrame) -> Vec<Sent> {
         refused(config(0, 10)),
         refused(config(u16::MAX, 10)),
         refused(config(30, 0)),
-        refused(Message::CoachSelect { coach: u16::MAX }),
-        // Bodies no golfer has: every joint 32 m out, every joint at one point.
-        refused(Message::StudentProfile(huge)),
-        refused(Message::StudentProfile(flat)),
+        refused(Message::CoachSelect {
+            seq: 93,
+            coach: u16::MAX,
+        }),
+        // Bodies no golfer has: every joint 32 m out, every joint at one point, a left arm of
+        // 1.6 m, no arms, one shank half the other.
+        refused(Message::StudentProfile {
+            seq: 94,
+            profile: huge,
+        }),
+        refused(Message::StudentProfile {
+            seq: 95,
+            profile: flat,
+        }),
+        refused(long_arm),
+        refused(no_arms),
+        refused(half_shank),
+        // Layouts no sensor set has.
+        refused(empty),
+        refused(zero),
         // An IMU sample in a pose session.
         refused(Message::ImuSample(ImuSample {
             sensor: 0,
@@ -123,7 +220,18 @@ fn burst(last: &PoseFrame) -> Vec<Sent> {
             gyro_ddps: [0; 3],
             mag_dut: None,
         })),
-    ]
+    ];
+    // The set-up in force sent again (a phone that missed its acknowledgements): taken, and
+    // nothing restarts.
+    out.extend(resent);
+    // A layout that fits: the session takes IMU samples and refuses pose frames, until the
+    // profile sent again returns it to pose frames (sent twice, as a phone that missed the
+    // first acknowledgement does: the second changes nothing).
+    out.push(taken(one_sensor));
+    out.push(refused(Message::PoseFrame(at(7, 5_000 + 166_667))));
+    out.push(taken(setup[0].clone()));
+    out.push(taken(setup[0].clone()));
+    out
 }
 
 /// After the session: the golfer's six IMUs declared, a still moment, then every sensor's
@@ -134,7 +242,7 @@ fn imu_tail(last_t_us: u64) -> Vec<Sent> {
     let skeleton = Skeleton::standard(Format::H36m17).unwrap();
     let layout = posecoach_cli::synth_imu::default_layout(&skeleton);
     let sensors = layout.sensors.len() as u8;
-    let mut out = vec![taken(Message::SensorLayout(layout))];
+    let mut out = vec![taken(Message::SensorLayout { seq: 98, layout })];
     let sample = |sensor, t_us| {
         Message::ImuSample(ImuSample {
             sensor,
@@ -166,6 +274,15 @@ fn imu_tail(last_t_us: u64) -> Vec<Sent> {
     out
 }
 
+/// The time of each swing's top in the clean session, µs (its sidecar's).
+fn tops_us() -> Vec<u64> {
+    let text = std::fs::read_to_string(logs().join(format!("{CLEAN}.swings.json"))).unwrap();
+    let sidecar: Value = serde_json::from_str(&text).unwrap();
+    let swings = sidecar["swings"].as_array().unwrap();
+    let top = |s: &Value| (s["events_s"]["top"].as_f64().unwrap() * 1e6) as u64;
+    swings.iter().map(top).collect()
+}
+
 /// The hostile log's bytes, and how many of its messages the device must refuse.
 fn make() -> (Vec<u8>, usize) {
     let clean = std::fs::read(logs().join(format!("{CLEAN}.pclog"))).unwrap();
@@ -174,22 +291,43 @@ fn make() -> (Vec<u8>, usize) {
     for &b in &clean[HEADER_LEN..] {
         messages.extend(decoder.push(b));
     }
-    let mut sent = Vec::new();
+    let setup: Vec<Message> = messages
+        .iter()
+        .take_while(|m| m.is_setup())
+        .cloned()
+        .collect();
+    let Some(Message::CoachSelect { coach, .. }) = setup.last() else {
+        panic!("the clean session's set-up ends with its coach");
+    };
+    let other_coach = Message::CoachSelect {
+        seq: 96,
+        coach: 1 - coach,
+    };
+    // Layouts before any profile: refused, and the session still takes its set-up.
+    let mut sent: Vec<Sent> = broken_layouts().into_iter().map(refused).collect();
     let mut bursts = BURSTS_S.iter().map(|s| (s * 1e6) as u64).peekable();
+    let mut tops = tops_us().into_iter().peekable();
     let mut last: Option<PoseFrame> = None;
     for message in messages {
         if let Message::PoseFrame(frame) = &message {
             if let (Some(&at), Some(previous)) = (bursts.peek(), &last) {
                 if frame.t_us >= at {
-                    sent.extend(burst(previous));
+                    sent.extend(burst(previous, &setup));
                     bursts.next();
                 }
+            }
+            // At the top of each swing: the coach in force selected again (taken, the swing
+            // goes on) and the other coach (refused as busy: the swing is not lost).
+            if tops.next_if(|&top| frame.t_us >= top).is_some() {
+                sent.push(taken(setup[setup.len() - 1].clone()));
+                sent.push(refused(other_coach.clone()));
             }
             last = Some(frame.clone());
         }
         sent.push(taken(message));
     }
     assert!(bursts.next().is_none(), "every burst placed");
+    assert!(tops.next().is_none(), "every swing's top reached");
     sent.extend(imu_tail(last.unwrap().t_us));
     let mut bytes = header().to_vec();
     let mut frame = [0u8; MAX_FRAME];
@@ -206,8 +344,9 @@ fn sidecar(refused: usize) -> String {
     let mut sidecar: Value = serde_json::from_str(&text).unwrap();
     sidecar["log"] = Value::from(format!("{HOSTILE}.pclog"));
     sidecar["hostile"] = Value::from(format!(
-        "{CLEAN}.pclog with bursts of hostile messages at {BURSTS_S:?} s and a tail of IMU \
-         samples whose clocks jump, wrap and restart (tests/tests/hostile.rs)"
+        "{CLEAN}.pclog behind two broken sensor layouts, with bursts of hostile messages at \
+         {BURSTS_S:?} s, the coach selected again and another one at each swing's top, and a \
+         tail of IMU samples whose clocks jump, wrap and restart (tests/tests/hostile.rs)"
     ));
     sidecar["refused"] = Value::from(refused);
     format!("{sidecar:#}\n")

@@ -8,7 +8,7 @@ use posecoach_core::dtw::Band;
 use posecoach_core::format::Format;
 use posecoach_core::plausible::Implausible;
 use posecoach_core::skeleton::Skeleton;
-use posecoach_core::wire::{Config, ImuSample, Message, PoseFrame, StudentProfile};
+use posecoach_core::wire::{Config, ImuSample, Message, NackReason, PoseFrame, StudentProfile};
 use posecoach_core::Vec3;
 use posecoach_io as io;
 use posecoach_tests::fixture;
@@ -29,13 +29,16 @@ fn profile(height: f32) -> Message {
     let mut rest = vec![Vec3::zeros(); skeleton.len()];
     skeleton.rest_positions(&mut rest);
     let scale = height / skeleton.height();
-    Message::StudentProfile(StudentProfile {
-        format: Format::H36m17,
-        joints_mm: rest
-            .iter()
-            .map(|p| [p.x, p.y, p.z].map(|v| (v * scale * 1000.0).round() as i16))
-            .collect(),
-    })
+    Message::StudentProfile {
+        seq: 0,
+        profile: StudentProfile {
+            format: Format::H36m17,
+            joints_mm: rest
+                .iter()
+                .map(|p| [p.x, p.y, p.z].map(|v| (v * scale * 1000.0).round() as i16))
+                .collect(),
+        },
+    }
 }
 
 #[test]
@@ -62,13 +65,16 @@ fn bad_messages_are_refused_and_change_nothing() {
 
     // A rate the buffers (sized for 60 Hz) cannot hold, a zero band, a rate out of range.
     for (rate, band) in [(120, 10), (60, 0), (5, 10)] {
-        let config = Message::Config(Config {
-            model_rate_hz: rate,
-            band: Band {
-                radius: band,
-                anchored: true,
+        let config = Message::Config {
+            seq: 0,
+            config: Config {
+                model_rate_hz: rate,
+                band: Band {
+                    radius: band,
+                    anchored: true,
+                },
             },
-        });
+        };
         let expected = if rate == 120 {
             Refusal::Buffers
         } else {
@@ -78,15 +84,24 @@ fn bad_messages_are_refused_and_change_nothing() {
         assert_eq!(session.config().model_rate_hz, 60);
     }
     assert_eq!(
-        outcomes(&mut session, &Message::CoachSelect { coach: 1 }),
+        outcomes(&mut session, &Message::CoachSelect { seq: 0, coach: 1 }),
         [Refusal::UnknownCoach(1)]
     );
-    let Message::StudentProfile(mut short) = profile(1.75) else {
+    let Message::StudentProfile {
+        profile: mut short, ..
+    } = profile(1.75)
+    else {
         unreachable!()
     };
     short.joints_mm.truncate(10);
     assert_eq!(
-        outcomes(&mut session, &Message::StudentProfile(short)),
+        outcomes(
+            &mut session,
+            &Message::StudentProfile {
+                seq: 0,
+                profile: short
+            }
+        ),
         [Refusal::ProfileFormat(Format::H36m17)]
     );
     assert!((session.student().unwrap().height() - height).abs() < 1e-6);
@@ -97,12 +112,22 @@ fn bad_messages_are_refused_and_change_nothing() {
             [Refusal::Implausible(Implausible::Stature(_))]
         ));
     }
-    let Message::StudentProfile(mut stretched) = profile(1.75) else {
+    let Message::StudentProfile {
+        profile: mut stretched,
+        ..
+    } = profile(1.75)
+    else {
         unreachable!()
     };
     stretched.joints_mm[13] = [32_000, -32_000, 32_000];
     assert!(matches!(
-        outcomes(&mut session, &Message::StudentProfile(stretched))[..],
+        outcomes(
+            &mut session,
+            &Message::StudentProfile {
+                seq: 0,
+                profile: stretched
+            }
+        )[..],
         [Refusal::Implausible(Implausible::Bone { joint: 13, .. })]
     ));
     assert!((session.student().unwrap().height() - height).abs() < 1e-6);
@@ -157,6 +182,7 @@ fn scores(coach: &io::Motion, messages: &[Message]) -> (Vec<(f32, Vec<usize>)>, 
                 report.student_events.iter().map(|(_, f)| f).collect(),
             )),
             Outcome::Refused(r) => refused.push(r),
+            Outcome::Accepted => {}
             other => panic!("{other:?}"),
         });
     }
@@ -200,14 +226,17 @@ fn driver_streams() -> (io::Motion, Message, Vec<Message>, Vec<Message>) {
     };
     let mut on_cmu = coach.retarget_analytic(&cmu).unwrap();
     on_cmu.keep_contacts(&coach).unwrap();
-    let profile = Message::StudentProfile(StudentProfile {
-        format: Format::H36m17,
-        joints_mm: h36m
-            .positions
-            .iter()
-            .map(|p| [p.x, p.y, p.z].map(|v| (v * 1000.0).round() as i16))
-            .collect(),
-    });
+    let profile = Message::StudentProfile {
+        seq: 0,
+        profile: StudentProfile {
+            format: Format::H36m17,
+            joints_mm: h36m
+                .positions
+                .iter()
+                .map(|p| [p.x, p.y, p.z].map(|v| (v * 1000.0).round() as i16))
+                .collect(),
+        },
+    };
     // Still set-up before and after, so the detector sees a whole swing.
     let padded = |m: &io::Motion| {
         let (first, last) = (m.frame(0).to_vec(), m.frame(m.frames() - 1).to_vec());
@@ -418,6 +447,167 @@ fn hostile() -> impl Strategy<Value = Hostile> {
     ]
 }
 
+/// The recorded session the QEMU firmware replays (an H3.6M phone at 30 Hz, coach 0
+/// selected, two swings), its messages.
+fn device_log() -> Vec<Message> {
+    let logs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("logs");
+    let bytes = std::fs::read(logs.join("device_h36m_30hz.pclog")).unwrap();
+    posecoach_adapters::log::LogReader::new(&bytes)
+        .unwrap()
+        .collect()
+}
+
+/// What the bundled device answers to each of `messages` (its `Ack`s, `Nack`s and reports, as
+/// messages), and each scored swing's number and score.
+fn device_replies(messages: &[Message]) -> (Vec<Message>, Vec<(u32, f32)>) {
+    let (mut replies, mut swings) = (Vec::new(), Vec::new());
+    posecoach_cli::coaches::session(None, |session| {
+        for m in messages {
+            session.handle(m, |o| {
+                if let Outcome::Scored { swing, report, .. } = &o {
+                    swings.push((swing.number, report.score));
+                }
+                replies.extend(o.reply(m));
+            });
+        }
+    })
+    .unwrap();
+    (replies, swings)
+}
+
+#[test]
+fn every_set_up_message_is_acknowledged_with_its_sequence_number() {
+    let messages = device_log();
+    let setups: Vec<u32> = messages
+        .iter()
+        .filter(|m| m.is_setup())
+        .filter_map(Message::seq)
+        .collect();
+    assert_eq!(setups.len(), 3, "profile, settings, coach");
+    let (replies, swings) = device_replies(&messages);
+    let acks: Vec<u32> = replies
+        .iter()
+        .filter_map(|r| match r {
+            Message::Ack { seq } => Some(*seq),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(acks, setups);
+    assert_eq!(swings.len(), 2);
+}
+
+#[test]
+fn a_set_up_sent_again_mid_swing_loses_nothing_and_a_change_waits_for_the_swing_to_end() {
+    let clean = device_log();
+    let (_, expected) = device_replies(&clean);
+    let setup: Vec<Message> = clean.iter().take_while(|m| m.is_setup()).cloned().collect();
+    let other_coach = Message::CoachSelect { seq: 77, coach: 1 };
+    // The whole set-up again every 10 frames (a third of a second), as a phone that missed its
+    // acknowledgements sends it, and another coach at each swing's top (its sidecar's time).
+    let logs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("logs");
+    let sidecar = std::fs::read_to_string(logs.join("device_h36m_30hz.swings.json")).unwrap();
+    let sidecar: serde_json::Value = serde_json::from_str(&sidecar).unwrap();
+    let mut tops = sidecar["swings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| (s["events_s"]["top"].as_f64().unwrap() * 1e6) as u64)
+        .peekable();
+    let mut sent = Vec::new();
+    for (n, m) in clean.iter().enumerate() {
+        if n > setup.len() && n % 10 == 0 {
+            sent.extend(setup.iter().cloned());
+        }
+        if let Message::PoseFrame(f) = m {
+            if tops.next_if(|&top| f.t_us >= top).is_some() {
+                sent.push(other_coach.clone());
+            }
+        }
+        sent.push(m.clone());
+    }
+    assert!(tops.next().is_none());
+    let (replies, swings) = device_replies(&sent);
+    // The same set-up is taken and changes nothing: the same swings, scored the same; the
+    // other coach is refused as busy, each time.
+    let resent = sent
+        .iter()
+        .filter(|m| m.is_setup() && **m != other_coach)
+        .count();
+    let acks = replies
+        .iter()
+        .filter(|r| matches!(r, Message::Ack { .. }))
+        .count();
+    assert_eq!(acks, resent);
+    let nacks: Vec<&Message> = replies
+        .iter()
+        .filter(|r| matches!(r, Message::Nack { .. }))
+        .collect();
+    let busy = Message::Nack {
+        seq: 77,
+        reason: NackReason::Busy,
+    };
+    assert_eq!(nacks, [&busy, &busy]);
+    assert_eq!(swings, expected);
+}
+
+#[test]
+fn no_sensor_layout_wedges_the_session() {
+    let clean = device_log();
+    let (_, expected) = device_replies(&clean);
+    let layout = |mounting_q14: [i16; 4], sensors: usize| Message::SensorLayout {
+        seq: 50,
+        layout: posecoach_core::wire::SensorLayout {
+            sensors: (0..sensors as u8)
+                .map(|sensor| posecoach_core::wire::SensorPlacement {
+                    sensor,
+                    joint: posecoach_core::joint::Joint::Pelvis,
+                    mounting_q14,
+                })
+                .collect(),
+        },
+    };
+    // Before any profile: an empty layout and a zero turn are refused as unexpected, and the
+    // session then scores exactly what it scores without them.
+    let mut before = vec![
+        layout([0; 4], 0),
+        layout([0; 4], 1),
+        layout([16384, 0, 0, 0], 1),
+    ];
+    before.extend(clean.iter().cloned());
+    let (replies, swings) = device_replies(&before);
+    assert!(replies[..3].iter().all(|r| matches!(
+        r,
+        Message::Nack {
+            seq: 50,
+            reason: NackReason::Unexpected
+        }
+    )));
+    assert_eq!(swings, expected);
+    // A layout that fits, taken before the swings: pose frames are refused as unexpected until
+    // the profile comes again, and the swings after it are scored.
+    let setup = clean.iter().take_while(|m| m.is_setup()).count();
+    let mut switched = clean[..setup].to_vec();
+    switched.push(layout([16384, 0, 0, 0], 1));
+    switched.extend(clean[setup..setup + 20].iter().cloned());
+    switched.push(clean[0].clone());
+    switched.extend(clean[setup + 20..].iter().cloned());
+    let (replies, swings) = device_replies(&switched);
+    let unexpected = replies
+        .iter()
+        .filter(|r| {
+            matches!(
+                r,
+                Message::Nack {
+                    reason: NackReason::Unexpected,
+                    ..
+                }
+            )
+        })
+        .count();
+    assert_eq!(unexpected, 20);
+    assert_eq!(swings.len(), expected.len());
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
 
@@ -434,8 +624,8 @@ proptest! {
         }];
         let mut buffers = OwnedBuffers::new(BufferLens::new(17, coach.frames(), 60));
         let mut session = Session::new(&coaches, buffers.buffers());
-        let Message::StudentProfile(tpose) = profile(1.75) else { unreachable!() };
-        session.handle(&Message::StudentProfile(tpose.clone()), |_| {});
+        let Message::StudentProfile { profile: tpose, .. } = profile(1.75) else { unreachable!() };
+        session.handle(&profile(1.75), |_| {});
         let layout = posecoach_cli::synth_imu::default_layout(
             &Skeleton::standard(Format::H36m17).unwrap(),
         );
@@ -467,12 +657,12 @@ proptest! {
                         mag_dut: mag,
                     })
                 }
-                Hostile::Layout => Message::SensorLayout(layout.clone()),
-                Hostile::Config { rate, radius, anchored } => Message::Config(Config {
-                    model_rate_hz: rate,
-                    band: Band { radius, anchored },
-                }),
-                Hostile::Coach(coach) => Message::CoachSelect { coach },
+                Hostile::Layout => Message::SensorLayout { seq: 0, layout: layout.clone() },
+                Hostile::Config { rate, radius, anchored } => Message::Config {
+                    seq: 0,
+                    config: Config { model_rate_hz: rate, band: Band { radius, anchored } },
+                },
+                Hostile::Coach(coach) => Message::CoachSelect { seq: 0, coach },
                 Hostile::Profile(height) => profile(height),
             };
             let before = session.frames();

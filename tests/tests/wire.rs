@@ -29,15 +29,21 @@ fn every_message() -> Vec<Message> {
             gyro_ddps: [150, -20000, 3],
             mag_dut: Some([200, 0, -400]),
         }),
-        Message::StudentProfile(StudentProfile {
-            format: Format::Coco17,
-            joints_mm: joints,
-        }),
-        Message::CoachSelect { coach: 4 },
-        Message::Config(Config {
-            model_rate_hz: 60,
-            band: Band::DEFAULT,
-        }),
+        Message::StudentProfile {
+            seq: 11,
+            profile: StudentProfile {
+                format: Format::Coco17,
+                joints_mm: joints,
+            },
+        },
+        Message::CoachSelect { seq: 12, coach: 4 },
+        Message::Config {
+            seq: 13,
+            config: Config {
+                model_rate_hz: 60,
+                band: Band::DEFAULT,
+            },
+        },
         Message::SwingReport(SwingReport {
             swing: 3,
             coach: 1,
@@ -89,19 +95,22 @@ fn every_message() -> Vec<Message> {
             seq: 0,
             reason: NackReason::Version,
         },
-        Message::SensorLayout(SensorLayout {
-            sensors: [
-                (0, Joint::Pelvis, [16384, 0, 0, 0]),
-                (1, Joint::LeftWrist, [11585, 0, 11585, 0]),
-            ]
-            .into_iter()
-            .map(|(sensor, joint, mounting_q14)| SensorPlacement {
-                sensor,
-                joint,
-                mounting_q14,
-            })
-            .collect(),
-        }),
+        Message::SensorLayout {
+            seq: 14,
+            layout: SensorLayout {
+                sensors: [
+                    (0, Joint::Pelvis, [16384, 0, 0, 0]),
+                    (1, Joint::LeftWrist, [11585, 0, 11585, 0]),
+                ]
+                .into_iter()
+                .map(|(sensor, joint, mounting_q14)| SensorPlacement {
+                    sensor,
+                    joint,
+                    mounting_q14,
+                })
+                .collect(),
+            },
+        },
     ]
 }
 

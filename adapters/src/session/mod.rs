@@ -119,6 +119,15 @@ struct Student<'b> {
     imu: Option<ImuAdapter>,
 }
 
+/// The student as the phone set them up: the profile's skeleton and, in a session with IMUs,
+/// where the sensors are (a layout is checked against the body it was sent for, so a new
+/// profile clears it).
+#[derive(Clone, Debug, PartialEq)]
+struct Body {
+    skeleton: Skeleton,
+    layout: Option<SensorLayout>,
+}
+
 /// One session; see the [module documentation](self).
 #[derive(Debug)]
 pub struct Session<'b> {
@@ -129,8 +138,7 @@ pub struct Session<'b> {
     /// The phone's `CoachSelect`; until one, each swing is scored against the coach whose
     /// set-up its own is nearest ([`setup::nearest`]).
     selected: Option<u16>,
-    profile: Option<Skeleton>,
-    layout: Option<SensorLayout>,
+    body: Option<Body>,
     student: Option<Student<'b>>,
     /// The ring while no detector holds it.
     spare: &'b mut [Mm],
@@ -190,8 +198,7 @@ impl<'b> Session<'b> {
             network: None,
             config,
             selected: None,
-            profile: None,
-            layout: None,
+            body: None,
             student: None,
             spare: buffers.ring,
             virtual_coach: buffers.coach,
@@ -234,37 +241,38 @@ impl<'b> Session<'b> {
 
     /// The student's skeleton, once a profile has been taken.
     pub fn student(&self) -> Option<&Skeleton> {
-        self.profile.as_ref()
+        self.body.as_ref().map(|b| &b.skeleton)
     }
 
-    /// Takes one message and calls `on` with what it led to. Messages a device sends rather
-    /// than receives are ignored.
+    /// Whether the detector is watching a swing that may be under way: a set-up message that
+    /// would change the session is then refused as busy ([`Refusal::SwingUnderWay`]).
+    pub fn swing_under_way(&self) -> bool {
+        self.student.as_ref().is_some_and(|s| s.detector.watching())
+    }
+
+    /// Takes one message and calls `on` with what it led to: a set-up message taken (applied,
+    /// or the same as the one in force) is [`Outcome::Accepted`], a message refused
+    /// [`Outcome::Refused`]. Messages a device sends rather than receives are ignored.
     pub fn handle(&mut self, message: &Message, mut on: impl FnMut(Outcome<'_>)) {
         let refusal = match message {
-            Message::StudentProfile(p) => self.profile(p).err(),
-            Message::Config(c) => {
-                if valid(c) {
-                    self.reconfigure(|s| &mut s.config, *c).err()
-                } else {
-                    Some(Refusal::Config)
-                }
-            }
-            Message::CoachSelect { coach } => {
-                if usize::from(*coach) >= self.coaches.len() {
-                    Some(Refusal::UnknownCoach(*coach))
-                } else {
-                    self.reconfigure(|s| &mut s.selected, Some(*coach)).err()
-                }
-            }
-            Message::SensorLayout(layout) => self
-                .reconfigure(|s| &mut s.layout, Some(layout.clone()))
-                .err(),
+            Message::StudentProfile { profile, .. } => self.profile(profile).err(),
+            Message::Config { config, .. } => match valid(config) {
+                true => self.set(|s| &mut s.config, *config).err(),
+                false => Some(Refusal::Config),
+            },
+            Message::CoachSelect { coach, .. } => match usize::from(*coach) < self.coaches.len() {
+                true => self.set(|s| &mut s.selected, Some(*coach)).err(),
+                false => Some(Refusal::UnknownCoach(*coach)),
+            },
+            Message::SensorLayout { layout, .. } => self.layout(layout).err(),
             Message::PoseFrame(frame) => self.pose(frame, &mut on).err(),
             Message::ImuSample(sample) => self.imu(sample, &mut on).err(),
             _ => None,
         };
-        if let Some(r) = refusal {
-            on(Outcome::Refused(r));
+        match refusal {
+            Some(r) => on(Outcome::Refused(r)),
+            None if message.is_setup() => on(Outcome::Accepted),
+            None => {}
         }
     }
 
@@ -294,12 +302,41 @@ impl<'b> Session<'b> {
             .with_bone_lengths(&lengths[..template.len()])
             .map_err(Refusal::Profile)?;
         plausible::body(&skeleton).map_err(Refusal::Implausible)?;
-        self.reconfigure(|s| &mut s.profile, Some(skeleton))
+        // A profile sets the body alone: a sensor layout, checked against the body it came
+        // after, follows it again if the session is to take IMU samples. So the profile in
+        // force sent again changes nothing in a pose session, and in one with IMUs returns it
+        // to pose frames (a phone sends its profile, then its layout).
+        self.set(
+            |s| &mut s.body,
+            Some(Body {
+                skeleton,
+                layout: None,
+            }),
+        )
     }
 
-    /// Sets a field and rebuilds what follows it; if that fails the field gets its old value
-    /// back and the session is rebuilt as it was (a swing in progress is dropped either way).
-    fn reconfigure<T>(&mut self, field: fn(&mut Self) -> &mut T, value: T) -> Result<(), Refusal> {
+    #[inline(never)]
+    fn layout(&mut self, layout: &SensorLayout) -> Result<(), Refusal> {
+        let skeleton = self.student().ok_or(Refusal::NoProfile)?.clone();
+        let layout = Some(layout.clone());
+        self.set(|s| &mut s.body, Some(Body { skeleton, layout }))
+    }
+
+    /// Sets a field to `value` and rebuilds what follows it. The value in force already
+    /// changes nothing; another is refused while a swing may be under way, so that none is
+    /// lost. If the rebuild fails the field gets its old value back and the session is rebuilt
+    /// as it was (no swing was under way).
+    fn set<T: PartialEq>(
+        &mut self,
+        field: fn(&mut Self) -> &mut T,
+        value: T,
+    ) -> Result<(), Refusal> {
+        if *field(self) == value {
+            return Ok(());
+        }
+        if self.swing_under_way() {
+            return Err(Refusal::SwingUnderWay);
+        }
         let previous = core::mem::replace(field(self), value);
         self.restart().inspect_err(|_| {
             *field(self) = previous;
@@ -310,7 +347,7 @@ impl<'b> Session<'b> {
 
     /// Rebuilds everything that follows the profile, coach and settings.
     fn restart(&mut self) -> Result<(), Refusal> {
-        let Some(skeleton) = self.profile.clone() else {
+        let Some(Body { skeleton, layout }) = self.body.clone() else {
             return Ok(());
         };
         let first = self.selected.unwrap_or(0);
@@ -320,7 +357,7 @@ impl<'b> Session<'b> {
             .ok_or(Refusal::UnknownCoach(first))?;
         let rate = self.config.model_rate_hz;
         let joints = skeleton.len();
-        let detector = match self.layout {
+        let detector = match layout {
             Some(_) => DetectorConfig::gyro_swing(f32::from(rate)),
             None => DetectorConfig::full_swing(f32::from(rate)),
         };
@@ -361,8 +398,7 @@ impl<'b> Session<'b> {
                     && self.floats.len() >= needed.floats
                     && self.bytes.len() >= needed.bytes;
                 fits.then_some(()).ok_or(Refusal::Buffers)?;
-                let imu = self
-                    .layout
+                let imu = layout
                     .as_ref()
                     .map(|layout| ImuAdapter::new(layout, &skeleton, f32::from(rate)))
                     .transpose()

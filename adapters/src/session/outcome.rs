@@ -55,25 +55,29 @@ pub enum Outcome<'r> {
         /// Why.
         error: ScoreError,
     },
-    /// The message was refused (a phone would get a `Nack`).
+    /// A set-up message was taken: applied, or the same as the one in force (a phone gets an
+    /// `Ack`).
+    Accepted,
+    /// The message was refused (a phone gets a `Nack`).
     Refused(Refusal),
 }
 
 impl Outcome<'_> {
     /// What a device answers to `message` when handling it led to this: a `SwingReport` for
-    /// a scored swing, a `Nack` for a refusal (of the pose frame's `seq`, else 0), nothing for
-    /// a swing that could not be scored.
+    /// a scored swing, an `Ack` for a set-up message taken, a `Nack` for a refusal (both of
+    /// the message's `seq`; 0 for a message without one), nothing for a swing that could not
+    /// be scored.
     pub fn reply(&self, message: &Message) -> Option<Message> {
         match self {
             Outcome::Scored { swing, report, .. } => Some(Message::SwingReport(
                 report.to_wire(swing.number, swing.coach),
             )),
             Outcome::Unscored { .. } => None,
+            Outcome::Accepted => Some(Message::Ack {
+                seq: message.seq().unwrap_or(0),
+            }),
             Outcome::Refused(why) => Some(Message::Nack {
-                seq: match message {
-                    Message::PoseFrame(f) => f.seq,
-                    _ => 0,
-                },
+                seq: message.seq().unwrap_or(0),
                 reason: why.nack_reason(),
             }),
         }

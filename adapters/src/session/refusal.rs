@@ -14,7 +14,7 @@ use posecoach_core::wire::NackReason;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Refusal {
-    /// Pose frames before any `StudentProfile`.
+    /// Pose frames or a sensor layout before any `StudentProfile`.
     NoProfile,
     /// The profile's keypoints do not make a skeleton.
     Profile(SkeletonError),
@@ -26,6 +26,9 @@ pub enum Refusal {
     UnknownCoach(u16),
     /// The buffers are too small for this student, coach or rate.
     Buffers,
+    /// A set-up that would change the session while a swing may be under way: refused so that
+    /// the swing is not lost; the phone sends it again (it is taken once the golfer is still).
+    SwingUnderWay,
     /// A model rate outside [`RATES_HZ`] or a zero band.
     Config,
     /// The student's skeleton lacks what swing detection needs.
@@ -48,7 +51,7 @@ impl Refusal {
     pub fn nack_reason(self) -> NackReason {
         match self {
             Refusal::NoProfile | Refusal::Input => NackReason::Unexpected,
-            Refusal::Buffers => NackReason::Busy,
+            Refusal::Buffers | Refusal::SwingUnderWay => NackReason::Busy,
             _ => NackReason::Invalid,
         }
     }
@@ -57,7 +60,9 @@ impl Refusal {
 impl core::fmt::Display for Refusal {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            Refusal::NoProfile => f.write_str("pose frames before a student profile"),
+            Refusal::NoProfile => {
+                f.write_str("pose frames or a sensor layout before a student profile")
+            }
             Refusal::Profile(e) => write!(f, "student profile: {e}"),
             Refusal::Implausible(e) => write!(f, "student profile: {e}"),
             Refusal::ProfileFormat(format) => write!(
@@ -67,6 +72,10 @@ impl core::fmt::Display for Refusal {
             ),
             Refusal::UnknownCoach(n) => write!(f, "no coach reference number {n}"),
             Refusal::Buffers => f.write_str("buffers too small for this student, coach or rate"),
+            Refusal::SwingUnderWay => f.write_str(
+                "a set-up change while a swing may be under way: send it again once the golfer \
+                 is still",
+            ),
             Refusal::Config => write!(
                 f,
                 "model rate outside {} to {} Hz, or a zero band",

@@ -429,15 +429,24 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     };
     messages.insert(
         1,
-        Message::Config(Config {
-            model_rate_hz: MODEL_HZ,
-            band: Band::DEFAULT,
-        }),
+        Message::Config {
+            seq: 1,
+            config: Config {
+                model_rate_hz: MODEL_HZ,
+                band: Band::DEFAULT,
+            },
+        },
     );
     // The coach of the swing's club, as a phone that knows the club selects it; the coach the
     // device chooses from the swing's set-up without one is measured on its own.
     let mut selected = messages.clone();
-    selected.insert(2, Message::CoachSelect { coach: clean.coach });
+    selected.insert(
+        2,
+        Message::CoachSelect {
+            seq: 2,
+            coach: clean.coach,
+        },
+    );
 
     if let Some(dir) = logs_out {
         let mut bytes = posecoach_adapters::log::header().to_vec();
@@ -620,7 +629,7 @@ fn phone_messages(
             .map(|(p, n)| phone::to_mm(p / (*n as f32) * 1e-3))
             .collect(),
     };
-    let mut messages = vec![Message::StudentProfile(profile)];
+    let mut messages = vec![Message::StudentProfile { seq: 0, profile }];
     messages.extend(frames.into_iter().map(Message::PoseFrame));
     Ok(messages)
 }
@@ -656,8 +665,8 @@ fn imu_messages(
     let field = magnetometers.then_some(synth_imu::EARTH_FIELD_UT);
     let samples = synth_imu::imu_samples(&motion, &layout, IMU_HZ, &ImuNoise::MEMS, field, rng);
     let mut messages = vec![
-        Message::StudentProfile(profile),
-        Message::SensorLayout(layout),
+        Message::StudentProfile { seq: 0, profile },
+        Message::SensorLayout { seq: 3, layout },
     ];
     for sample in samples {
         if !rng.random_bool(0.03) {
@@ -701,6 +710,7 @@ fn run_session(messages: &[Message]) -> Result<(Vec<Scored>, Vec<String>)> {
                     scored.push((at, swing.frames, swing.coach, Err(error.to_string())));
                 }
                 Outcome::Refused(r) => refused.push(r.to_string()),
+                Outcome::Accepted => {}
             });
         }
     })?;
