@@ -257,14 +257,20 @@ impl<'b> Session<'b> {
         let refusal = match message {
             Message::StudentProfile { profile, .. } => self.profile(profile).err(),
             Message::Config { config, .. } => match valid(config) {
-                true => self.set(|s| &mut s.config, *config).err(),
+                true => self.set(|s| Some(&mut s.config), *config).err(),
                 false => Some(Refusal::Config),
             },
             Message::CoachSelect { coach, .. } => match usize::from(*coach) < self.coaches.len() {
-                true => self.set(|s| &mut s.selected, Some(*coach)).err(),
+                true => self.set(|s| Some(&mut s.selected), Some(*coach)).err(),
                 false => Some(Refusal::UnknownCoach(*coach)),
             },
-            Message::SensorLayout { layout, .. } => self.layout(layout).err(),
+            // A layout is checked against the body it follows: it needs a profile.
+            Message::SensorLayout { layout, .. } => self
+                .set(
+                    |s| s.body.as_mut().map(|b| &mut b.layout),
+                    Some(layout.clone()),
+                )
+                .err(),
             Message::PoseFrame(frame) => self.pose(frame, &mut on).err(),
             Message::ImuSample(sample) => self.imu(sample, &mut on).err(),
             _ => None,
@@ -306,40 +312,34 @@ impl<'b> Session<'b> {
         // after, follows it again if the session is to take IMU samples. So the profile in
         // force sent again changes nothing in a pose session, and in one with IMUs returns it
         // to pose frames (a phone sends its profile, then its layout).
-        self.set(
-            |s| &mut s.body,
-            Some(Body {
-                skeleton,
-                layout: None,
-            }),
-        )
+        let body = Some(Body {
+            skeleton,
+            layout: None,
+        });
+        self.set(|s| Some(&mut s.body), body)
     }
 
-    #[inline(never)]
-    fn layout(&mut self, layout: &SensorLayout) -> Result<(), Refusal> {
-        let skeleton = self.student().ok_or(Refusal::NoProfile)?.clone();
-        let layout = Some(layout.clone());
-        self.set(|s| &mut s.body, Some(Body { skeleton, layout }))
-    }
-
-    /// Sets a field to `value` and rebuilds what follows it. The value in force already
-    /// changes nothing; another is refused while a swing may be under way, so that none is
-    /// lost. If the rebuild fails the field gets its old value back and the session is rebuilt
-    /// as it was (no swing was under way).
+    /// Sets a field (absent without a profile: [`Refusal::NoProfile`]) to `value` and rebuilds
+    /// what follows it. The value in force already changes nothing; another is refused while a
+    /// swing may be under way, so that none is lost. If the rebuild fails the field gets its old
+    /// value back and the session is rebuilt as it was (no swing was under way).
     fn set<T: PartialEq>(
         &mut self,
-        field: fn(&mut Self) -> &mut T,
+        field: fn(&mut Self) -> Option<&mut T>,
         value: T,
     ) -> Result<(), Refusal> {
-        if *field(self) == value {
+        let current = field(self).ok_or(Refusal::NoProfile)?;
+        if *current == value {
             return Ok(());
         }
         if self.swing_under_way() {
             return Err(Refusal::SwingUnderWay);
         }
-        let previous = core::mem::replace(field(self), value);
+        let previous = field(self).map(|f| core::mem::replace(f, value));
         self.restart().inspect_err(|_| {
-            *field(self) = previous;
+            if let (Some(f), Some(previous)) = (field(self), previous) {
+                *f = previous;
+            }
             // What worked before works again.
             let _ = self.restart();
         })
