@@ -284,36 +284,12 @@ impl<'b> Session<'b> {
 
     #[inline(never)]
     fn profile(&mut self, profile: &StudentProfile) -> Result<(), Refusal> {
-        let format = profile.format;
-        let table = format.joints();
-        if table.is_empty() || profile.joints_mm.len() != format.keypoints().len() {
-            return Err(Refusal::ProfileFormat(format));
-        }
-        let mut keypoints = [Vec3::zeros(); MAX_JOINTS];
-        for (k, [x, y, z]) in keypoints.iter_mut().zip(&profile.joints_mm) {
-            *k = Vec3::new(f32::from(*x), f32::from(*y), f32::from(*z)) * 1e-3;
-        }
-        let mut joints = [Vec3::zeros(); MAX_JOINTS];
-        format
-            .map_keypoints(&keypoints[..profile.joints_mm.len()], &mut joints)
-            .map_err(|_| Refusal::ProfileFormat(format))?;
-        let template = Skeleton::standard(format).map_err(Refusal::Profile)?;
-        let lengths: [f32; MAX_JOINTS] = core::array::from_fn(|k| {
-            (k < template.len())
-                .then(|| template.parent(k))
-                .flatten()
-                .map_or(0.0, |p| norm(&(joints[k] - joints[p])))
-        });
-        let skeleton = template
-            .with_bone_lengths(&lengths[..template.len()])
-            .map_err(Refusal::Profile)?;
-        plausible::body(&skeleton).map_err(Refusal::Implausible)?;
         // A profile sets the body alone: a sensor layout, checked against the body it came
         // after, follows it again if the session is to take IMU samples. So the profile in
         // force sent again changes nothing in a pose session, and in one with IMUs returns it
         // to pose frames (a phone sends its profile, then its layout).
         let body = Some(Body {
-            skeleton,
+            skeleton: body_of(profile)?,
             layout: None,
         });
         self.set(|s| Some(&mut s.body), body)
@@ -347,9 +323,10 @@ impl<'b> Session<'b> {
 
     /// Rebuilds everything that follows the profile, coach and settings.
     fn restart(&mut self) -> Result<(), Refusal> {
-        let Some(Body { skeleton, layout }) = self.body.clone() else {
+        let Some(skeleton) = self.student().cloned() else {
             return Ok(());
         };
+        let layout = self.body.as_ref().and_then(|b| b.layout.as_ref());
         let first = self.selected.unwrap_or(0);
         let coach = self
             .coaches
@@ -399,7 +376,6 @@ impl<'b> Session<'b> {
                     && self.bytes.len() >= needed.bytes;
                 fits.then_some(()).ok_or(Refusal::Buffers)?;
                 let imu = layout
-                    .as_ref()
                     .map(|layout| ImuAdapter::new(layout, &skeleton, f32::from(rate)))
                     .transpose()
                     .map_err(Refusal::Imu)?;
@@ -712,6 +688,38 @@ impl<'b> Session<'b> {
             }
         });
     }
+}
+
+/// The student's skeleton from `profile`: its bone lengths on the format's standard T-pose,
+/// checked against the human limits. (Out of line, so that its arrays are off the stack while
+/// the session is rebuilt.)
+#[inline(never)]
+fn body_of(profile: &StudentProfile) -> Result<Skeleton, Refusal> {
+    let format = profile.format;
+    let table = format.joints();
+    if table.is_empty() || profile.joints_mm.len() != format.keypoints().len() {
+        return Err(Refusal::ProfileFormat(format));
+    }
+    let mut keypoints = [Vec3::zeros(); MAX_JOINTS];
+    for (k, [x, y, z]) in keypoints.iter_mut().zip(&profile.joints_mm) {
+        *k = Vec3::new(f32::from(*x), f32::from(*y), f32::from(*z)) * 1e-3;
+    }
+    let mut joints = [Vec3::zeros(); MAX_JOINTS];
+    format
+        .map_keypoints(&keypoints[..profile.joints_mm.len()], &mut joints)
+        .map_err(|_| Refusal::ProfileFormat(format))?;
+    let template = Skeleton::standard(format).map_err(Refusal::Profile)?;
+    let lengths: [f32; MAX_JOINTS] = core::array::from_fn(|k| {
+        (k < template.len())
+            .then(|| template.parent(k))
+            .flatten()
+            .map_or(0.0, |p| norm(&(joints[k] - joints[p])))
+    });
+    let skeleton = template
+        .with_bone_lengths(&lengths[..template.len()])
+        .map_err(Refusal::Profile)?;
+    plausible::body(&skeleton).map_err(Refusal::Implausible)?;
+    Ok(skeleton)
 }
 
 /// Whether a session can run with `config`.
