@@ -18,10 +18,12 @@
 //! from the standard T-pose and its bone lengths from the mean over the frames.
 
 use crate::keypoints::{self, Hints, KeypointError, Reading, Samples, MIN_CONFIDENCE};
-use crate::landmarks::{self, Landmarks};
+use crate::landmarks;
 use crate::motion::Motion;
 use posecoach_core::joint::Joint;
 use posecoach_core::Vec3;
+use std::cell::Cell;
+use std::collections::HashMap;
 use std::fmt;
 
 /// A CSV problem, with the 1-based line and column where it was found.
@@ -186,19 +188,8 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         .trim(::csv::Trim::All)
         .from_reader(bytes);
     let mut records = reader.byte_records();
-    // The line of a byte: the parser's own line count leaves out the blank lines it skips.
-    let line_at = |byte: u64| {
-        let start = usize::try_from(byte).unwrap_or(usize::MAX).min(bytes.len());
-        let blank = bytes[start..]
-            .iter()
-            .take_while(|b| b"\r\n".contains(b))
-            .count();
-        1 + bytes[..start + blank]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
-    };
-    let line_of = |p: Option<&::csv::Position>| p.map_or(0, |p| line_at(p.byte()));
+    let lines = Lines::new(bytes);
+    let line_of = |p: Option<&::csv::Position>| p.map_or(0, |p| lines.line_at(p.byte()));
     let syntax = |e: ::csv::Error| {
         let line = line_of(e.position());
         err(line, 0, CsvErrorKind::Syntax(e.to_string()))
@@ -226,6 +217,8 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         .or_else(|| clocks().next())
         .map(|(i, _)| i);
     let mut landmarks: Vec<Columns> = Vec::new();
+    // Each landmark's place in `landmarks`, by its key.
+    let mut by_key: HashMap<String, usize> = HashMap::new();
     let mut ignored = Vec::new();
     for (i, cell) in cells.iter().enumerate() {
         if Some(i) == clock {
@@ -238,23 +231,16 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
             });
             continue;
         };
-        let key = landmarks::key(name);
-        let at = match landmarks
-            .iter()
-            .position(|c| landmarks::key(&c.name) == key)
-        {
-            Some(at) => at,
-            None => {
-                let upper = cell.ends_with(|c: char| c.is_ascii_uppercase());
-                landmarks.push(Columns {
-                    name: name.to_string(),
-                    pattern: (sep.to_string(), upper),
-                    first: i,
-                    ..Columns::default()
-                });
-                landmarks.len() - 1
-            }
-        };
+        let at = *by_key.entry(landmarks::key(name)).or_insert_with(|| {
+            let upper = cell.ends_with(|c: char| c.is_ascii_uppercase());
+            landmarks.push(Columns {
+                name: name.to_string(),
+                pattern: (sep.to_string(), upper),
+                first: i,
+                ..Columns::default()
+            });
+            landmarks.len() - 1
+        });
         let slot = match axis {
             Axis::Coordinate(a) => &mut landmarks[at].xyz[a],
             Axis::Confidence => &mut landmarks[at].confidence,
@@ -269,16 +255,11 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         *slot = Some(i);
     }
     // A landmark some vocabulary knows must have all three coordinates; others are set aside.
-    let known = |name: &str| {
-        let k = landmarks::key(name);
-        Landmarks::ALL
-            .iter()
-            .any(|l| l.names().iter().any(|n| landmarks::key(n) == k))
-    };
+    let known = landmarks::known();
     let mut read = Vec::new();
     for c in landmarks {
         if let Some(a) = c.xyz.iter().position(Option::is_none) {
-            if known(&c.name) {
+            if known.contains(&landmarks::key(&c.name)) {
                 let axis = ["x", "y", "z"][a];
                 let axis = if c.pattern.1 {
                     axis.to_ascii_uppercase()
@@ -320,8 +301,8 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
             };
             return Err(err(line, 0, kind));
         }
-        let cell = |i: usize| String::from_utf8_lossy(&record[i]).into_owned();
-        let bad = |i: usize| err(line, i + 1, CsvErrorKind::BadNumber(cell(i)));
+        let cell = |i: usize| String::from_utf8_lossy(&record[i]);
+        let bad = |i: usize| err(line, i + 1, CsvErrorKind::BadNumber(cell(i).into_owned()));
         let coordinate = |i: usize| number::<f32>(&cell(i), sep).map_err(|()| bad(i));
         if let Some(i) = clock {
             let t = number::<f64>(&cell(i), sep)
@@ -355,6 +336,45 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         return Err(err(header_line + 1, 0, CsvErrorKind::Empty));
     }
     Ok(out)
+}
+
+/// The lines of a file's byte offsets, counted on from the offset asked for before: reading a
+/// file front to back counts each byte once.
+struct Lines<'a> {
+    bytes: &'a [u8],
+    /// The offset last asked for, and its line: one more than the newlines before it.
+    at: Cell<(usize, usize)>,
+}
+
+impl<'a> Lines<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        Lines {
+            bytes,
+            at: Cell::new((0, 1)),
+        }
+    }
+
+    /// The 1-based line of the record starting at `byte`. The parser's own line count leaves
+    /// out the blank lines it skips, and a record's position may precede them: they are passed
+    /// over.
+    fn line_at(&self, byte: u64) -> usize {
+        let bytes = self.bytes;
+        let start = usize::try_from(byte).unwrap_or(usize::MAX).min(bytes.len());
+        let blank = bytes[start..]
+            .iter()
+            .take_while(|b| b"\r\n".contains(b))
+            .count();
+        let end = start + blank;
+        let newlines = |range: &[u8]| range.iter().filter(|&&b| b == b'\n').count();
+        let (at, line) = self.at.get();
+        let line = if end >= at {
+            line + newlines(&bytes[at..end])
+        } else {
+            line - newlines(&bytes[end..at])
+        };
+        self.at.set((end, line));
+        line
+    }
 }
 
 /// A cell's number: `None` for an empty cell or `nan`; with `;` separators a decimal comma is
@@ -412,7 +432,9 @@ pub fn write(motion: &Motion) -> String {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+    use crate::landmarks::Landmarks;
     use posecoach_core::skeleton::SkeletonError;
+    use proptest::prelude::*;
 
     const T_POSE: &str = "time,pelvis_x,pelvis_y,pelvis_z,left_hip_x,left_hip_y,left_hip_z,\
 left_ankle_x,left_ankle_y,left_ankle_z,right_hip_x,right_hip_y,right_hip_z,\
@@ -682,5 +704,105 @@ right_wrist_x,right_wrist_y,right_wrist_z\n\
             "{e}"
         );
         assert_eq!(e.line, 1);
+    }
+
+    /// What may stand between two rows: a blank line (LF or CRLF).
+    const FILLERS: [&str; 2] = ["", "\r"];
+
+    proptest! {
+        #[test]
+        fn an_error_names_the_line_it_was_written_on(
+            fillers in proptest::collection::vec(proptest::option::of(0..FILLERS.len()), 1..300),
+            crlf in any::<bool>(),
+            bad in any::<prop::sample::Index>(),
+        ) {
+            let end = if crlf { "\r\n" } else { "\n" };
+            let bad = bad.index(fillers.len());
+            let mut text = format!("time,pelvis_x,pelvis_y,pelvis_z{end}");
+            let mut line = 1;
+            let mut written = 0;
+            for (row, filler) in fillers.iter().enumerate() {
+                if let Some(f) = filler {
+                    text.push_str(FILLERS[*f]);
+                    text.push_str(end);
+                    line += 1;
+                }
+                line += 1;
+                if row == bad {
+                    written = line;
+                    text.push_str(&format!("{row},0,abc,0{end}"));
+                } else {
+                    text.push_str(&format!("{row},0,1,0{end}"));
+                }
+            }
+            let e = read(&text).unwrap_err();
+            prop_assert_eq!((e.line, e.column), (written, 3), "{}", e);
+        }
+
+        #[test]
+        fn lines_are_counted_on_from_any_offset(
+            bytes in proptest::collection::vec(prop::sample::select(b"\n\ra".to_vec()), 0..200),
+            offsets in proptest::collection::vec(0u64..220, 1..20),
+        ) {
+            let lines = Lines::new(&bytes);
+            for byte in offsets {
+                let start = (byte as usize).min(bytes.len());
+                let blank = bytes[start..].iter().take_while(|b| b"\r\n".contains(b)).count();
+                let expected = 1 + bytes[..start + blank].iter().filter(|&&b| b == b'\n').count();
+                prop_assert_eq!(lines.line_at(byte), expected);
+            }
+        }
+    }
+
+    #[test]
+    fn a_late_row_names_its_line() {
+        let mut lines = DRIVER.lines();
+        let mut text = format!("{}\n", lines.next().unwrap());
+        let rows: Vec<&str> = lines.collect();
+        for k in 0..20_000 {
+            let (_, cells) = rows[k % rows.len()].split_once(',').unwrap();
+            text.push_str(&format!("{},{cells}", k as f64 / 60.0));
+            text.push_str(if k % 7 == 0 { "\n\n" } else { "\n" });
+        }
+        text.push_str("1e9,x\n");
+        let e = read(&text).unwrap_err();
+        assert_eq!(
+            (e.line, e.column),
+            (1 + 20_000 + 20_000 / 7 + 1 + 1, 0),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_wide_header_reads_as_a_narrow_one() {
+        let narrow = read_with(T_POSE.as_bytes(), &Hints::default()).unwrap();
+        // Each landmark's columns spelt anew, with 999 columns of 333 landmarks no vocabulary
+        // knows after each column.
+        let (header, row) = T_POSE.split_once('\n').unwrap();
+        let (mut names, mut cells, mut extra) = (vec![], vec![], vec![]);
+        let spell = ["{}_x", "{}.Y", "{} z"];
+        for (k, (name, cell)) in header.split(',').zip(row.trim().split(',')).enumerate() {
+            names.push(match name.rsplit_once('_') {
+                Some((landmark, axis)) => {
+                    let a = "xyz".find(axis).unwrap();
+                    spell[a].replace("{}", &landmark.to_uppercase())
+                }
+                None => name.to_string(),
+            });
+            cells.push(cell.to_string());
+            for j in 0..333 {
+                extra.push(format!("extra{k}n{j}"));
+                for axis in ["x", "y", "z"] {
+                    names.push(format!("extra{k}n{j}_{axis}"));
+                    cells.push("0".into());
+                }
+            }
+        }
+        let text = format!("{}\n{}\n", names.join(","), cells.join(","));
+        let (motion, reading) = read_with(text.as_bytes(), &Hints::default()).unwrap();
+        assert_eq!(motion.positions, narrow.0.positions);
+        assert_eq!(motion.names, narrow.0.names);
+        assert_eq!(reading.landmarks, narrow.1.landmarks);
+        assert_eq!(reading.ignored, extra);
     }
 }
