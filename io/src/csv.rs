@@ -22,6 +22,7 @@ use crate::landmarks;
 use crate::motion::Motion;
 use posecoach_core::joint::Joint;
 use posecoach_core::Vec3;
+use std::borrow::Cow;
 use std::cell::Cell;
 use std::collections::HashMap;
 use std::fmt;
@@ -136,10 +137,11 @@ enum Axis {
 
 /// A landmark's columns: x, y, z and a confidence, 0-based.
 #[derive(Clone, Debug, Default)]
-struct Columns {
-    name: String,
+struct Columns<'a> {
+    /// The name as the first column spells it.
+    name: &'a str,
     /// How the first column spelt the separator and axis case, for naming a missing one.
-    pattern: (String, bool),
+    pattern: (&'a str, bool),
     first: usize,
     xyz: [Option<usize>; 3],
     confidence: Option<usize>,
@@ -199,10 +201,7 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         .ok_or(err(1, 0, CsvErrorKind::Empty))?
         .map_err(syntax)?;
     let header_line = line_of(header.position()).max(1);
-    let cells: Vec<String> = header
-        .iter()
-        .map(|c| String::from_utf8_lossy(c).into_owned())
-        .collect();
+    let cells: Vec<Cow<str>> = header.iter().map(String::from_utf8_lossy).collect();
     // The time column: one whose name says time, before one that only counts frames (pandas
     // writes its row index first, unnamed, before a file's own time column).
     let clocks = || {
@@ -225,7 +224,7 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
             continue;
         }
         let Some((name, sep, axis)) = column(cell) else {
-            ignored.push(match cell.as_str() {
+            ignored.push(match cell.as_ref() {
                 "" => format!("column {} (no name)", i + 1),
                 named => named.to_string(),
             });
@@ -234,8 +233,8 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         let at = *by_key.entry(landmarks::key(name)).or_insert_with(|| {
             let upper = cell.ends_with(|c: char| c.is_ascii_uppercase());
             landmarks.push(Columns {
-                name: name.to_string(),
-                pattern: (sep.to_string(), upper),
+                name,
+                pattern: (sep, upper),
                 first: i,
                 ..Columns::default()
             });
@@ -249,17 +248,16 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
             return Err(err(
                 header_line,
                 i + 1,
-                CsvErrorKind::DuplicateColumn(cell.clone()),
+                CsvErrorKind::DuplicateColumn(cell.to_string()),
             ));
         }
         *slot = Some(i);
     }
     // A landmark some vocabulary knows must have all three coordinates; others are set aside.
     let known = landmarks::known();
-    let mut read = Vec::new();
-    for c in landmarks {
+    for c in &landmarks {
         if let Some(a) = c.xyz.iter().position(Option::is_none) {
-            if known.contains(&landmarks::key(&c.name)) {
+            if known.contains(&landmarks::key(c.name)) {
                 let axis = ["x", "y", "z"][a];
                 let axis = if c.pattern.1 {
                     axis.to_ascii_uppercase()
@@ -278,16 +276,18 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
                     .iter()
                     .chain([&c.confidence])
                     .flatten()
-                    .map(|&i| cells[i].clone()),
+                    .map(|&i| cells[i].to_string()),
             );
-            continue;
         }
-        read.push(c);
     }
+    // In place: a wide header's landmarks are many.
+    landmarks.retain(|c| c.xyz.iter().all(Option::is_some));
+    drop(by_key);
+    let read = landmarks;
 
     let mut out = Samples {
-        names: read.iter().map(|c| c.name.clone()).collect(),
-        clock: clock.map(|i| cells[i].clone()),
+        names: read.iter().map(|c| c.name.to_string()).collect(),
+        clock: clock.map(|i| cells[i].to_string()),
         ignored,
         ..Samples::default()
     };
@@ -328,7 +328,13 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
                     out.positions.push(Vec3::zeros());
                     out.missing.push(true);
                 }
-                _ => return Err(err(line, x + 1, CsvErrorKind::PartialJoint(c.name.clone()))),
+                _ => {
+                    return Err(err(
+                        line,
+                        x + 1,
+                        CsvErrorKind::PartialJoint(c.name.to_string()),
+                    ))
+                }
             }
         }
     }
