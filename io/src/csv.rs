@@ -361,16 +361,21 @@ impl<'a> Lines<'a> {
     }
 
     /// The 1-based line of the record starting at `byte`. The parser's own line count leaves
-    /// out the blank lines it skips, and a record's position may precede them: they are passed
-    /// over.
+    /// out the blank and comment lines it skips, and a record's position precedes them: they
+    /// are passed over.
     fn line_at(&self, byte: u64) -> usize {
         let bytes = self.bytes;
-        let start = usize::try_from(byte).unwrap_or(usize::MAX).min(bytes.len());
-        let blank = bytes[start..]
-            .iter()
-            .take_while(|b| b"\r\n".contains(b))
-            .count();
-        let end = start + blank;
+        let mut end = usize::try_from(byte).unwrap_or(usize::MAX).min(bytes.len());
+        loop {
+            let rest = &bytes[end..];
+            let skipped = match rest.first() {
+                Some(b'\r' | b'\n') => 1,
+                // A comment runs to the end of its line.
+                Some(b'#') => rest.iter().take_while(|b| !b"\r\n".contains(b)).count(),
+                _ => break,
+            };
+            end += skipped;
+        }
         let newlines = |range: &[u8]| range.iter().filter(|&&b| b == b'\n').count();
         let (at, line) = self.at.get();
         let line = if end >= at {
@@ -492,6 +497,16 @@ right_wrist_x,right_wrist_y,right_wrist_z\n\
             ),
             ("time,pelvis_x,pelvis_y,pelvis_z\n0,0,inf,0\n", 2, 3),
             ("time,pelvis_x,pelvis_y,pelvis_z\n", 2, 0),
+            (
+                "# from a tool\ntime,pelvis_x,pelvis_y,pelvis_q\n0,0,0,0\n",
+                2,
+                2,
+            ),
+            (
+                "time,pelvis_x,pelvis_y,pelvis_z\n# a\n\n# b\n0,0,x,0\n",
+                5,
+                3,
+            ),
         ];
         for (text, line, column) in cases {
             let e = read(text).unwrap_err();
@@ -712,8 +727,8 @@ right_wrist_x,right_wrist_y,right_wrist_z\n\
         assert_eq!(e.line, 1);
     }
 
-    /// What may stand between two rows: a blank line (LF or CRLF).
-    const FILLERS: [&str; 2] = ["", "\r"];
+    /// What may stand between two rows: a blank line (LF or CRLF) or a comment.
+    const FILLERS: [&str; 3] = ["", "\r", "# a comment, with a comma"];
 
     proptest! {
         #[test]
@@ -747,14 +762,20 @@ right_wrist_x,right_wrist_y,right_wrist_z\n\
 
         #[test]
         fn lines_are_counted_on_from_any_offset(
-            bytes in proptest::collection::vec(prop::sample::select(b"\n\ra".to_vec()), 0..200),
+            bytes in proptest::collection::vec(prop::sample::select(b"\n\ra#".to_vec()), 0..200),
             offsets in proptest::collection::vec(0u64..220, 1..20),
         ) {
             let lines = Lines::new(&bytes);
             for byte in offsets {
-                let start = (byte as usize).min(bytes.len());
-                let blank = bytes[start..].iter().take_while(|b| b"\r\n".contains(b)).count();
-                let expected = 1 + bytes[..start + blank].iter().filter(|&&b| b == b'\n').count();
+                // The first line from `byte` on that is neither blank nor a comment.
+                let mut start = (byte as usize).min(bytes.len());
+                while start < bytes.len() && b"\r\n#".contains(&bytes[start]) {
+                    start += match bytes[start] {
+                        b'#' => bytes[start..].iter().take_while(|&&b| b != b'\r' && b != b'\n').count(),
+                        _ => 1,
+                    };
+                }
+                let expected = 1 + bytes[..start].iter().filter(|&&b| b == b'\n').count();
                 prop_assert_eq!(lines.line_at(byte), expected);
             }
         }
