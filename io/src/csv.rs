@@ -20,12 +20,12 @@
 use crate::keypoints::{self, Hints, KeypointError, Reading, Samples, MIN_CONFIDENCE};
 use crate::landmarks;
 use crate::motion::Motion;
+use crate::places::Places;
 use posecoach_core::joint::Joint;
 use posecoach_core::Vec3;
-use std::borrow::Cow;
 use std::cell::Cell;
-use std::collections::HashMap;
 use std::fmt;
+use std::num::NonZeroUsize;
 
 /// A CSV problem, with the 1-based line and column where it was found.
 #[derive(Clone, Debug, PartialEq)]
@@ -135,20 +135,24 @@ enum Axis {
     Confidence,
 }
 
-/// A landmark's columns: x, y, z and a confidence, 0-based.
-#[derive(Clone, Debug, Default)]
+/// A 1-based column (a wide header's landmarks are many: a column and its absence fit in a
+/// word).
+type Column = NonZeroUsize;
+
+/// A landmark's columns: x, y, z and a confidence.
+#[derive(Clone, Debug)]
 struct Columns<'a> {
     /// The name as the first column spells it.
     name: &'a str,
     /// How the first column spelt the separator and axis case, for naming a missing one.
-    pattern: (&'a str, bool),
-    first: usize,
-    xyz: [Option<usize>; 3],
-    confidence: Option<usize>,
+    pattern: (char, bool),
+    first: Column,
+    xyz: [Option<Column>; 3],
+    confidence: Option<Column>,
 }
 
 /// The landmark name and axis of a header cell, if it is one.
-fn column(cell: &str) -> Option<(&str, &str, Axis)> {
+fn column(cell: &str) -> Option<(&str, char, Axis)> {
     const AXES: [(&str, Axis); 10] = [
         ("x", Axis::Coordinate(0)),
         ("y", Axis::Coordinate(1)),
@@ -166,7 +170,7 @@ fn column(cell: &str) -> Option<(&str, &str, Axis)> {
         let rest = lower.strip_suffix(word)?;
         let sep = rest.chars().last().filter(|c| "_.:- ".contains(*c))?;
         let name = &cell[..rest.len() - sep.len_utf8()];
-        (!name.is_empty()).then_some((name, &cell[rest.len() - sep.len_utf8()..rest.len()], axis))
+        (!name.is_empty()).then_some((name, sep, axis))
     })
 }
 
@@ -201,7 +205,8 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         .ok_or(err(1, 0, CsvErrorKind::Empty))?
         .map_err(syntax)?;
     let header_line = line_of(header.position()).max(1);
-    let cells: Vec<Cow<str>> = header.iter().map(String::from_utf8_lossy).collect();
+    // Text as the parser holds it, in place: a wide header's cells are many.
+    let cells = ::csv::StringRecord::from_byte_record_lossy(header);
     // The time column: one whose name says time, before one that only counts frames (pandas
     // writes its row index first, unnamed, before a file's own time column).
     let clocks = || {
@@ -217,29 +222,31 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         .map(|(i, _)| i);
     let mut landmarks: Vec<Columns> = Vec::new();
     // Each landmark's place in `landmarks`, by its key.
-    let mut by_key: HashMap<String, usize> = HashMap::new();
+    let mut by_key = Places::default();
     let mut ignored = Vec::new();
     for (i, cell) in cells.iter().enumerate() {
         if Some(i) == clock {
             continue;
         }
         let Some((name, sep, axis)) = column(cell) else {
-            ignored.push(match cell.as_ref() {
+            ignored.push(match cell {
                 "" => format!("column {} (no name)", i + 1),
                 named => named.to_string(),
             });
             continue;
         };
-        let at = *by_key.entry(landmarks::key(name)).or_insert_with(|| {
+        let key = landmarks::key(name);
+        let at = by_key.first_or(&key, landmarks.len(), |j| landmarks::key(landmarks[j].name));
+        if at == landmarks.len() {
             let upper = cell.ends_with(|c: char| c.is_ascii_uppercase());
             landmarks.push(Columns {
                 name,
                 pattern: (sep, upper),
-                first: i,
-                ..Columns::default()
+                first: Column::MIN.saturating_add(i),
+                xyz: [None; 3],
+                confidence: None,
             });
-            landmarks.len() - 1
-        });
+        }
         let slot = match axis {
             Axis::Coordinate(a) => &mut landmarks[at].xyz[a],
             Axis::Confidence => &mut landmarks[at].confidence,
@@ -251,7 +258,7 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
                 CsvErrorKind::DuplicateColumn(cell.to_string()),
             ));
         }
-        *slot = Some(i);
+        *slot = Some(Column::MIN.saturating_add(i));
     }
     // A landmark some vocabulary knows must have all three coordinates; others are set aside.
     let known = landmarks::known();
@@ -267,7 +274,7 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
                 let expected = format!("{}{}{axis}", c.name, c.pattern.0);
                 return Err(err(
                     header_line,
-                    c.first + 1,
+                    c.first.get(),
                     CsvErrorKind::MissingColumn(expected),
                 ));
             }
@@ -276,7 +283,7 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
                     .iter()
                     .chain([&c.confidence])
                     .flatten()
-                    .map(|&i| cells[i].to_string()),
+                    .map(|c| cells[c.get() - 1].to_string()),
             );
         }
     }
@@ -314,9 +321,9 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
             out.times.push(t);
         }
         for c in &read {
-            let [x, y, z] = c.xyz.map(|i| i.unwrap_or_default());
+            let [x, y, z] = c.xyz.map(|c| c.map_or(0, |c| c.get() - 1));
             let unsure = match c.confidence {
-                Some(i) => coordinate(i)?.is_some_and(|v| v < MIN_CONFIDENCE),
+                Some(c) => coordinate(c.get() - 1)?.is_some_and(|v| v < MIN_CONFIDENCE),
                 None => false,
             };
             match (coordinate(x)?, coordinate(y)?, coordinate(z)?) {

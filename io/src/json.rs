@@ -28,12 +28,11 @@ mod value;
 use crate::keypoints::{self, Hints, KeypointError, Reading, Samples, MIN_CONFIDENCE};
 use crate::landmarks::Landmarks;
 use crate::motion::Motion;
-use hashbrown::HashTable;
+use crate::places::Places;
 use posecoach_core::Vec3;
 use serde_json::value::RawValue;
 use std::collections::HashSet;
 use std::fmt;
-use std::hash::{BuildHasher, RandomState};
 use value::{Item, Kind, Object, Point};
 
 /// A JSON problem, with the 1-based frame where it was found.
@@ -212,32 +211,21 @@ fn landmarks_of<'a>(frame: Object<'a>, clock: Option<&str>) -> Found<'a> {
 /// The first frame's landmark names (a name may repeat), each found at its first place.
 struct Names {
     names: Vec<String>,
-    /// Places in `names`, by the name's hash.
-    index: HashTable<usize>,
-    hasher: RandomState,
+    places: Places,
 }
 
 impl Names {
     fn new(names: Vec<String>) -> Names {
-        let hasher = RandomState::new();
-        let mut index = HashTable::with_capacity(names.len());
+        let mut places = Places::default();
         for (k, name) in names.iter().enumerate() {
-            let hash = hasher.hash_one(name.as_str());
-            if index.find(hash, |&j| names[j] == *name).is_none() {
-                index.insert_unique(hash, k, |&j| hasher.hash_one(names[j].as_str()));
-            }
+            places.first_or(name, k, |j| names[j].as_str());
         }
-        Names {
-            names,
-            index,
-            hasher,
-        }
+        Names { names, places }
     }
 
     /// The first place of `name`.
     fn place(&self, name: &str) -> Option<usize> {
-        let hash = self.hasher.hash_one(name);
-        self.index.find(hash, |&k| self.names[k] == name).copied()
+        self.places.find(name, |k| self.names[k].as_str())
     }
 }
 
