@@ -10,6 +10,10 @@ there is skipped and listed (`score --weights` needs a binary built with `--feat
 Mutations, seeded and deterministic: single-bit flips in the first 128 bytes and anywhere,
 truncations, 8-byte overwrites; for BVH and CSV also numeric-token replacements, line
 duplication/deletion and header edits (BVH `Frames:`/`Frame Time:`, the CSV time column).
+Large inputs, generated as scripts/reader_growth.py makes them (a swaying T-pose at 360 Hz): a
+long keypoint CSV, a JSON array and JSON Lines of --large-mb MB each, a CSV header of 100 000
+columns and a JSON of 50 000 landmark names, each through `inspect` unmutated and as
+--large-count mutants (flips, truncations, overwrites, a line duplicated or deleted).
 
 Outcome of each run, from its exit status and stderr:
   hang      ran past --timeout (its process group is killed)
@@ -19,6 +23,10 @@ Outcome of each run, from its exit status and stderr:
   memory bomb, counted on top: peak RSS over 1 GiB (/usr/bin/time -f %M, when present). Runs are
   capped at 4 GiB of address space (prlimit, when present), so a runaway allocation aborts
   instead of exhausting the machine.
+  over memory, counted on top: peak RSS over F + 10 times the input's size, F being twice the
+  command's own peak on the unmutated bundled file, or for the large inputs twice `inspect`'s
+  on the one-row T-pose fixture (the process's own baseline, about 5 MB): a floor for small
+  inputs, whose own cost is lost in the process's and in what an error message allocates.
 Checksummed formats (.pcr, .pcw, .pclog), per bit flip: rejected, accepted with identical output,
 or accepted with different output = a silent corruption. A .pclog frame carries its own CRC, so a
 flip should lose only its frame: an accepted flip whose replay counts the damage (crc_errors,
@@ -26,12 +34,13 @@ malformed, overflows, refused) is "noticed", not silent; the swing count is comp
 Text/motion formats carry no checksum, so acceptance is no corruption; "implausible" counts
 accepted runs whose mutant `inspect --json` gives a height_m outside 0.5-2.75 m (or none).
 
-Usage: scripts/hostile_campaign.py [--seed 1] [--count 2000] [--jobs 2] [--timeout 10] [--json]
-                                   [--keep DIR] [--bin target/release/posecoach]
-The default, 2000 mutants per source (30000 runs), takes about 3.5 CPU-minutes: 2 minutes on 2
-idle cores. --keep DIR saves every mutant that hung, panicked, aborted, bombed or was silently
-accepted, with a .txt beside it (mutation, command, exit, stderr tail). Exit status 1 when any
-of those occurred.
+Usage: scripts/hostile_campaign.py [--seed 1] [--count 2000] [--large-count 10] [--large-mb 16]
+                                   [--jobs 2] [--timeout 10] [--json] [--keep DIR]
+                                   [--bin target/release/posecoach]
+The default, 2000 mutants per source and 10 per large input (30055 runs), took 2.5 minutes on
+a busy two-core machine (2026-12-06). --keep DIR saves every mutant that hung, panicked, aborted,
+bombed, went over its memory bound or was silently accepted, with a .txt beside it (mutation,
+command, exit, stderr tail). Exit status 1 when any of those occurred.
 """
 import argparse
 import concurrent.futures
@@ -48,6 +57,8 @@ import sys
 import tempfile
 import time
 
+import reader_growth
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DRIVER, IRON, LOG = "tests/fixtures/golf_driver_60hz.csv", "tests/fixtures/golf_iron_60hz.csv", "tests/logs/device_h36m_30hz.pclog"
 INSPECT = ("inspect", ["inspect", "--json", "{file}"])
@@ -63,12 +74,22 @@ SOURCES = ([(f, "bvh", [INSPECT]) for f in sorted(glob.glob("tests/fixtures/*.bv
               ("weights/distilled-int8.pcw", "pcw-int8", [INSPECT, REPLAY_WEIGHTS]),
               ("weights/distilled.pcw", "pcw-float", [INSPECT, SCORE_WEIGHTS]), (LOG, "pclog", [REPLAY])])
 CHECKSUMMED = {"pcr", "pcw-int8", "pcw-float", "pclog"}
-MOTION = {"bvh", "c3d", "csv"}
+TPOSE = "tests/fixtures/h36m17_tpose.csv"
+MB = 1 << 20
+# Large inputs: (file name, kind, writer of the file at a path, given the size in MB).
+LARGE = [("long.csv", "csv-long", lambda path, mb: reader_growth.write_sized(path, reader_growth.csv_frames, mb * MB)),
+         ("wide.csv", "csv-wide", lambda path, mb: reader_growth.write_wide_csv(path)),
+         ("names.json", "json-names", lambda path, mb: reader_growth.write_wide_json(path)),
+         ("large.json", "json-large", lambda path, mb: reader_growth.write_sized(path, reader_growth.json_frames, mb * MB)),
+         ("large.jsonl", "jsonl-large", lambda path, mb: reader_growth.write_sized(path, reader_growth.jsonl_frames, mb * MB))]
+LARGE_KINDS = {kind for _, kind, _ in LARGE}
+MOTION = {"bvh", "c3d", "csv"} | LARGE_KINDS
 OUTCOMES = ["accepted", "refused", "panic", "abort", "hang", "other"]
 FLIP_VERDICTS = ["flips", "rejected", "identical", "noticed", "silent"]
 KEEP_WORTHY = {"hang", "panic", "abort"}
 TOTALS = [("hangs", "hang"), ("panics", "panic"), ("aborts", "abort"), ("memory bombs", "memory bomb"),
-          ("silently accepted corruptions", "silent")]
+          ("runs over their memory bound", "over memory"), ("silently accepted corruptions", "silent")]
+MEMORY_FACTOR, FLOOR_FACTOR = 10, 2
 BOMB_KB, AS_CAP = 1 << 20, 4 << 30
 TIME, PRLIMIT = shutil.which("time", path="/usr/bin"), shutil.which("prlimit")
 NUMBERS = ["0", "-0", "1e9", "1e-9", "1e300", "-1e300", "nan", "inf", "99999999999999999999", ""]
@@ -138,7 +159,8 @@ def csv_time(data, rng):
 
 
 BINARY_OPS = [flip_header, flip_any, truncate, overwrite]
-OPS = {"bvh": BINARY_OPS + [number, line, bvh_header], "csv": BINARY_OPS + [number, line, csv_time]}
+OPS = {"bvh": BINARY_OPS + [number, line, bvh_header], "csv": BINARY_OPS + [number, line, csv_time],
+       **{kind: BINARY_OPS + [line] for kind in LARGE_KINDS}}
 
 
 def classify(rc, err):
@@ -193,7 +215,7 @@ def attack(binary, work, job, timeout):
         f.write(data)
     runs = [run(command(binary, cmd, path, folder), timeout, os.path.join(folder, "peak")) for cmd in cmds]
     return {"src": src, "kind": kind, "cmds": cmds, "name": f"{stem}-{index:05d}{ext}", "path": path, "folder": folder,
-            "mutation": desc, "flip": op in (flip_header, flip_any), "runs": runs}
+            "mutation": desc, "flip": op in (flip_header, flip_any), "size": len(data), "runs": runs}
 
 
 def parsed(stdout):
@@ -225,14 +247,25 @@ def flip_verdict(kind, r, base, mutant):
     return "noticed" if kind == "pclog" and damage(r["stdout"]) > damage(base["stdout"]) else "silent"
 
 
+def memory_bound_kb(mutant, cmd, baselines):
+    """F + 10 times the input's size, F twice the command's peak on the unmutated bundled file (for
+    a large input, `inspect`'s on the one-row T-pose fixture); None when a peak is unknown."""
+    floor = baselines[(TPOSE, "inspect") if mutant["kind"] in LARGE_KINDS else (mutant["src"], cmd[0])]["peak_kb"]
+    return None if floor is None else FLOOR_FACTOR * floor + MEMORY_FACTOR * mutant["size"] / 1024
+
+
 def tally(rows, findings, mutant, baselines, keep, binary):
     kind, cmds = mutant["kind"], mutant["cmds"]
     for cmd, r in zip(cmds, mutant["runs"]):
-        row, base = rows[(kind, cmd[0])], baselines[(mutant["src"], cmd[0])]
+        # A large input's own run is tallied whatever its outcome, and has no baseline but itself.
+        row, base = rows[(kind, cmd[0])], baselines.get((mutant["src"], cmd[0]))
         row["runs"] += 1
         row[r["outcome"]] += 1
         bomb = (r["peak_kb"] or 0) > BOMB_KB
         row["memory bomb"] += bomb
+        bound = memory_bound_kb(mutant, cmd, baselines)
+        over = r["peak_kb"] is not None and bound is not None and r["peak_kb"] > bound
+        row["over memory"] += over
         verdict = flip_verdict(kind, r, base, mutant) if kind in CHECKSUMMED and mutant["flip"] else None
         if verdict:
             row["flips"] += 1
@@ -241,8 +274,9 @@ def tally(rows, findings, mutant, baselines, keep, binary):
             row["implausible"] += 1
         if kind == "pclog" and verdict in ("identical", "noticed", "silent"):
             row["swings changed"] += len((parsed(r["stdout"]) or {}).get("swings", [])) != len(parsed(base["stdout"])["swings"])
-        what = r["outcome"] if r["outcome"] in KEEP_WORTHY else "memory bomb" if bomb else "silent corruption"
-        if r["outcome"] in KEEP_WORTHY or bomb or verdict == "silent":
+        what = (r["outcome"] if r["outcome"] in KEEP_WORTHY else "memory bomb" if bomb
+                else "over memory" if over else "silent corruption")
+        if r["outcome"] in KEEP_WORTHY or bomb or over or verdict == "silent":
             findings.append(finding(what, mutant, cmd, r, keep, binary))
 
 
@@ -272,8 +306,24 @@ def baseline(binary, work, timeout):
     return runs, skipped
 
 
+def large_sources(work, mb):
+    """Writes the large inputs into work; returns them as sources."""
+    sources = []
+    for name, kind, write in LARGE:
+        path = os.path.join(work, name)
+        write(path, mb)
+        sources.append((path, kind, [INSPECT]))
+    return sources
+
+
+def unmutated(src, kind, cmds, result):
+    """A large input's own run, tallied as a mutant that changed nothing."""
+    return {"src": src, "kind": kind, "cmds": cmds, "name": os.path.basename(src), "path": src, "folder": None,
+            "mutation": "none", "flip": False, "size": os.path.getsize(src), "runs": [result]}
+
+
 def report(rows, findings, skipped, totals, header):
-    cols = OUTCOMES + ["memory bomb", "implausible"]
+    cols = OUTCOMES + ["memory bomb", "over memory", "implausible"]
     print(header)
     print(f"{'kind':10} {'command':17} {'runs':>6} " + " ".join(f"{c:>11}" for c in cols))
     for (kind, cmd), row in rows.items():
@@ -296,10 +346,12 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--count", type=int, default=2000, help="mutants per source")
+    p.add_argument("--large-count", type=int, default=10, help="mutants per large input")
+    p.add_argument("--large-mb", type=int, default=16, help="size of the long CSV, large JSON and JSON Lines")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--timeout", type=float, default=10.0, help="seconds per command; past it, a hang")
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--keep", help="save every hanging, panicking, aborting, bombing or silently accepted mutant here")
+    p.add_argument("--keep", help="save every hanging, panicking, aborting, bombing, over-memory or silently accepted mutant here")
     p.add_argument("--bin", default=os.path.join(ROOT, "target/release/posecoach"))
     args = p.parse_args()
     if not os.access(args.bin, os.X_OK):
@@ -307,13 +359,21 @@ def main():
     if args.keep:
         os.makedirs(args.keep, exist_ok=True)
     rng, start = random.Random(args.seed), time.monotonic()
-    rows = {(kind, cmd[0]): dict.fromkeys(["runs"] + OUTCOMES + FLIP_VERDICTS + ["memory bomb", "implausible", "swings changed"], 0)
-            for _, kind, cmds in SOURCES for cmd in cmds}
     findings = []
     with tempfile.TemporaryDirectory(prefix="hostile-") as work:
+        large = large_sources(work, args.large_mb)
+        rows = {(kind, cmd[0]): dict.fromkeys(["runs"] + OUTCOMES + FLIP_VERDICTS
+                                              + ["memory bomb", "over memory", "implausible", "swings changed"], 0)
+                for _, kind, cmds in SOURCES + large for cmd in cmds}
         baselines, skipped = baseline(args.bin, work, args.timeout)
+        for src, kind, cmds in large:
+            r = run(command(args.bin, INSPECT, src, work), args.timeout, os.path.join(work, "peak"))
+            tally(rows, findings, unmutated(src, kind, cmds, r), baselines, args.keep, args.bin)
+            if r["outcome"] == "accepted":
+                baselines[(src, INSPECT[0])] = r
         jobs = [(src, kind, [c for c in cmds if (src, c[0]) in baselines], i, rng.getrandbits(64))
-                for src, kind, cmds in SOURCES for i in range(args.count)]
+                for sources, count in ((SOURCES, args.count), (large, args.large_count))
+                for src, kind, cmds in sources for i in range(count)]
         with concurrent.futures.ThreadPoolExecutor(args.jobs) as pool:
             for fut in concurrent.futures.as_completed([pool.submit(attack, args.bin, work, j, args.timeout) for j in jobs]):
                 mutant = fut.result()

@@ -10,6 +10,7 @@ use posecoach_core::weights::{self, Dense, Table, Weights};
 use posecoach_io::{Motion, Reading};
 use posecoach_teachfile::{self as teachfile, Header};
 use serde_json::{json, Value};
+use std::io::Read;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -25,34 +26,41 @@ pub struct Args {
     json: bool,
 }
 
+/// Bytes enough to tell a weights file by its magic.
+const MAGIC_BYTES: u64 = 16;
+
 pub fn run(args: &Args) -> Result<String> {
-    let bytes =
-        std::fs::read(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
+    let context = || format!("reading {}", args.file.display());
+    // A motion file is read once, by its reader: only a weights file is read here whole.
+    let mut head = Vec::new();
+    std::fs::File::open(&args.file)
+        .and_then(|f| f.take(MAGIC_BYTES).read_to_end(&mut head))
+        .with_context(context)?;
+    let weights = head.starts_with(&weights::MAGIC) || teachfile::is_float_weights(&head);
+    if !weights {
+        let (motion, reading) = args.input.load_read(&args.file)?;
+        let mut report = describe(&args.file, &motion);
+        if let Some(r) = &reading {
+            report["reading"] = reading_json(r);
+        }
+        return Ok(if args.json {
+            format!("{report}\n")
+        } else {
+            text(&report)
+        });
+    }
+    let bytes = std::fs::read(&args.file).with_context(context)?;
     if bytes.starts_with(&weights::MAGIC) {
-        let header =
-            weights_header(&bytes).with_context(|| format!("reading {}", args.file.display()))?;
+        let header = weights_header(&bytes).with_context(context)?;
         return Ok(match args.json {
             true => format!("{header}\n"),
             false => weights_text(&header),
         });
     }
-    if teachfile::is_float_weights(&bytes) {
-        let report =
-            float_weights(&bytes).with_context(|| format!("reading {}", args.file.display()))?;
-        return Ok(match args.json {
-            true => format!("{report}\n"),
-            false => float_text(&report),
-        });
-    }
-    let (motion, reading) = args.input.load_read(&args.file)?;
-    let mut report = describe(&args.file, &motion);
-    if let Some(r) = &reading {
-        report["reading"] = reading_json(r);
-    }
-    Ok(if args.json {
-        format!("{report}\n")
-    } else {
-        text(&report)
+    let report = float_weights(&bytes).with_context(context)?;
+    Ok(match args.json {
+        true => format!("{report}\n"),
+        false => float_text(&report),
     })
 }
 

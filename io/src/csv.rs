@@ -18,11 +18,14 @@
 //! from the standard T-pose and its bone lengths from the mean over the frames.
 
 use crate::keypoints::{self, Hints, KeypointError, Reading, Samples, MIN_CONFIDENCE};
-use crate::landmarks::{self, Landmarks};
+use crate::landmarks;
 use crate::motion::Motion;
+use crate::places::Places;
 use posecoach_core::joint::Joint;
 use posecoach_core::Vec3;
+use std::cell::Cell;
 use std::fmt;
+use std::num::NonZeroUsize;
 
 /// A CSV problem, with the 1-based line and column where it was found.
 #[derive(Clone, Debug, PartialEq)]
@@ -132,19 +135,24 @@ enum Axis {
     Confidence,
 }
 
-/// A landmark's columns: x, y, z and a confidence, 0-based.
-#[derive(Clone, Debug, Default)]
-struct Columns {
-    name: String,
+/// A 1-based column (a wide header's landmarks are many: a column and its absence fit in a
+/// word).
+type Column = NonZeroUsize;
+
+/// A landmark's columns: x, y, z and a confidence.
+#[derive(Clone, Debug)]
+struct Columns<'a> {
+    /// The name as the first column spells it.
+    name: &'a str,
     /// How the first column spelt the separator and axis case, for naming a missing one.
-    pattern: (String, bool),
-    first: usize,
-    xyz: [Option<usize>; 3],
-    confidence: Option<usize>,
+    pattern: (char, bool),
+    first: Column,
+    xyz: [Option<Column>; 3],
+    confidence: Option<Column>,
 }
 
 /// The landmark name and axis of a header cell, if it is one.
-fn column(cell: &str) -> Option<(&str, &str, Axis)> {
+fn column(cell: &str) -> Option<(&str, char, Axis)> {
     const AXES: [(&str, Axis); 10] = [
         ("x", Axis::Coordinate(0)),
         ("y", Axis::Coordinate(1)),
@@ -162,7 +170,7 @@ fn column(cell: &str) -> Option<(&str, &str, Axis)> {
         let rest = lower.strip_suffix(word)?;
         let sep = rest.chars().last().filter(|c| "_.:- ".contains(*c))?;
         let name = &cell[..rest.len() - sep.len_utf8()];
-        (!name.is_empty()).then_some((name, &cell[rest.len() - sep.len_utf8()..rest.len()], axis))
+        (!name.is_empty()).then_some((name, sep, axis))
     })
 }
 
@@ -186,19 +194,8 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         .trim(::csv::Trim::All)
         .from_reader(bytes);
     let mut records = reader.byte_records();
-    // The line of a byte: the parser's own line count leaves out the blank lines it skips.
-    let line_at = |byte: u64| {
-        let start = usize::try_from(byte).unwrap_or(usize::MAX).min(bytes.len());
-        let blank = bytes[start..]
-            .iter()
-            .take_while(|b| b"\r\n".contains(b))
-            .count();
-        1 + bytes[..start + blank]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
-    };
-    let line_of = |p: Option<&::csv::Position>| p.map_or(0, |p| line_at(p.byte()));
+    let lines = Lines::new(bytes);
+    let line_of = |p: Option<&::csv::Position>| p.map_or(0, |p| lines.line_at(p.byte()));
     let syntax = |e: ::csv::Error| {
         let line = line_of(e.position());
         err(line, 0, CsvErrorKind::Syntax(e.to_string()))
@@ -208,10 +205,8 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         .ok_or(err(1, 0, CsvErrorKind::Empty))?
         .map_err(syntax)?;
     let header_line = line_of(header.position()).max(1);
-    let cells: Vec<String> = header
-        .iter()
-        .map(|c| String::from_utf8_lossy(c).into_owned())
-        .collect();
+    // Text as the parser holds it, in place: a wide header's cells are many.
+    let cells = ::csv::StringRecord::from_byte_record_lossy(header);
     // The time column: one whose name says time, before one that only counts frames (pandas
     // writes its row index first, unnamed, before a file's own time column).
     let clocks = || {
@@ -226,35 +221,32 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         .or_else(|| clocks().next())
         .map(|(i, _)| i);
     let mut landmarks: Vec<Columns> = Vec::new();
+    // Each landmark's place in `landmarks`, by its key.
+    let mut by_key = Places::default();
     let mut ignored = Vec::new();
     for (i, cell) in cells.iter().enumerate() {
         if Some(i) == clock {
             continue;
         }
         let Some((name, sep, axis)) = column(cell) else {
-            ignored.push(match cell.as_str() {
+            ignored.push(match cell {
                 "" => format!("column {} (no name)", i + 1),
                 named => named.to_string(),
             });
             continue;
         };
         let key = landmarks::key(name);
-        let at = match landmarks
-            .iter()
-            .position(|c| landmarks::key(&c.name) == key)
-        {
-            Some(at) => at,
-            None => {
-                let upper = cell.ends_with(|c: char| c.is_ascii_uppercase());
-                landmarks.push(Columns {
-                    name: name.to_string(),
-                    pattern: (sep.to_string(), upper),
-                    first: i,
-                    ..Columns::default()
-                });
-                landmarks.len() - 1
-            }
-        };
+        let at = by_key.first_or(&key, landmarks.len(), |j| landmarks::key(landmarks[j].name));
+        if at == landmarks.len() {
+            let upper = cell.ends_with(|c: char| c.is_ascii_uppercase());
+            landmarks.push(Columns {
+                name,
+                pattern: (sep, upper),
+                first: Column::MIN.saturating_add(i),
+                xyz: [None; 3],
+                confidence: None,
+            });
+        }
         let slot = match axis {
             Axis::Coordinate(a) => &mut landmarks[at].xyz[a],
             Axis::Confidence => &mut landmarks[at].confidence,
@@ -263,22 +255,16 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
             return Err(err(
                 header_line,
                 i + 1,
-                CsvErrorKind::DuplicateColumn(cell.clone()),
+                CsvErrorKind::DuplicateColumn(cell.to_string()),
             ));
         }
-        *slot = Some(i);
+        *slot = Some(Column::MIN.saturating_add(i));
     }
     // A landmark some vocabulary knows must have all three coordinates; others are set aside.
-    let known = |name: &str| {
-        let k = landmarks::key(name);
-        Landmarks::ALL
-            .iter()
-            .any(|l| l.names().iter().any(|n| landmarks::key(n) == k))
-    };
-    let mut read = Vec::new();
-    for c in landmarks {
+    let known = landmarks::known();
+    for c in &landmarks {
         if let Some(a) = c.xyz.iter().position(Option::is_none) {
-            if known(&c.name) {
+            if known.contains(&landmarks::key(c.name)) {
                 let axis = ["x", "y", "z"][a];
                 let axis = if c.pattern.1 {
                     axis.to_ascii_uppercase()
@@ -288,7 +274,7 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
                 let expected = format!("{}{}{axis}", c.name, c.pattern.0);
                 return Err(err(
                     header_line,
-                    c.first + 1,
+                    c.first.get(),
                     CsvErrorKind::MissingColumn(expected),
                 ));
             }
@@ -297,16 +283,18 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
                     .iter()
                     .chain([&c.confidence])
                     .flatten()
-                    .map(|&i| cells[i].clone()),
+                    .map(|c| cells[c.get() - 1].to_string()),
             );
-            continue;
         }
-        read.push(c);
     }
+    // In place: a wide header's landmarks are many.
+    landmarks.retain(|c| c.xyz.iter().all(Option::is_some));
+    drop(by_key);
+    let read = landmarks;
 
     let mut out = Samples {
-        names: read.iter().map(|c| c.name.clone()).collect(),
-        clock: clock.map(|i| cells[i].clone()),
+        names: read.iter().map(|c| c.name.to_string()).collect(),
+        clock: clock.map(|i| cells[i].to_string()),
         ignored,
         ..Samples::default()
     };
@@ -320,8 +308,8 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
             };
             return Err(err(line, 0, kind));
         }
-        let cell = |i: usize| String::from_utf8_lossy(&record[i]).into_owned();
-        let bad = |i: usize| err(line, i + 1, CsvErrorKind::BadNumber(cell(i)));
+        let cell = |i: usize| String::from_utf8_lossy(&record[i]);
+        let bad = |i: usize| err(line, i + 1, CsvErrorKind::BadNumber(cell(i).into_owned()));
         let coordinate = |i: usize| number::<f32>(&cell(i), sep).map_err(|()| bad(i));
         if let Some(i) = clock {
             let t = number::<f64>(&cell(i), sep)
@@ -333,9 +321,9 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
             out.times.push(t);
         }
         for c in &read {
-            let [x, y, z] = c.xyz.map(|i| i.unwrap_or_default());
+            let [x, y, z] = c.xyz.map(|c| c.map_or(0, |c| c.get() - 1));
             let unsure = match c.confidence {
-                Some(i) => coordinate(i)?.is_some_and(|v| v < MIN_CONFIDENCE),
+                Some(c) => coordinate(c.get() - 1)?.is_some_and(|v| v < MIN_CONFIDENCE),
                 None => false,
             };
             match (coordinate(x)?, coordinate(y)?, coordinate(z)?) {
@@ -347,7 +335,13 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
                     out.positions.push(Vec3::zeros());
                     out.missing.push(true);
                 }
-                _ => return Err(err(line, x + 1, CsvErrorKind::PartialJoint(c.name.clone()))),
+                _ => {
+                    return Err(err(
+                        line,
+                        x + 1,
+                        CsvErrorKind::PartialJoint(c.name.to_string()),
+                    ))
+                }
             }
         }
     }
@@ -355,6 +349,50 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
         return Err(err(header_line + 1, 0, CsvErrorKind::Empty));
     }
     Ok(out)
+}
+
+/// The lines of a file's byte offsets, counted on from the offset asked for before: reading a
+/// file front to back counts each byte once.
+struct Lines<'a> {
+    bytes: &'a [u8],
+    /// The offset last asked for, and its line: one more than the newlines before it.
+    at: Cell<(usize, usize)>,
+}
+
+impl<'a> Lines<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        Lines {
+            bytes,
+            at: Cell::new((0, 1)),
+        }
+    }
+
+    /// The 1-based line of the record starting at `byte`. The parser's own line count leaves
+    /// out the blank and comment lines it skips, and a record's position precedes them: they
+    /// are passed over.
+    fn line_at(&self, byte: u64) -> usize {
+        let bytes = self.bytes;
+        let mut end = usize::try_from(byte).unwrap_or(usize::MAX).min(bytes.len());
+        loop {
+            let rest = &bytes[end..];
+            let skipped = match rest.first() {
+                Some(b'\r' | b'\n') => 1,
+                // A comment runs to the end of its line.
+                Some(b'#') => rest.iter().take_while(|b| !b"\r\n".contains(b)).count(),
+                _ => break,
+            };
+            end += skipped;
+        }
+        let newlines = |range: &[u8]| range.iter().filter(|&&b| b == b'\n').count();
+        let (at, line) = self.at.get();
+        let line = if end >= at {
+            line + newlines(&bytes[at..end])
+        } else {
+            line - newlines(&bytes[end..at])
+        };
+        self.at.set((end, line));
+        line
+    }
 }
 
 /// A cell's number: `None` for an empty cell or `nan`; with `;` separators a decimal comma is
@@ -412,7 +450,9 @@ pub fn write(motion: &Motion) -> String {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+    use crate::landmarks::Landmarks;
     use posecoach_core::skeleton::SkeletonError;
+    use proptest::prelude::*;
 
     const T_POSE: &str = "time,pelvis_x,pelvis_y,pelvis_z,left_hip_x,left_hip_y,left_hip_z,\
 left_ankle_x,left_ankle_y,left_ankle_z,right_hip_x,right_hip_y,right_hip_z,\
@@ -464,6 +504,16 @@ right_wrist_x,right_wrist_y,right_wrist_z\n\
             ),
             ("time,pelvis_x,pelvis_y,pelvis_z\n0,0,inf,0\n", 2, 3),
             ("time,pelvis_x,pelvis_y,pelvis_z\n", 2, 0),
+            (
+                "# from a tool\ntime,pelvis_x,pelvis_y,pelvis_q\n0,0,0,0\n",
+                2,
+                2,
+            ),
+            (
+                "time,pelvis_x,pelvis_y,pelvis_z\n# a\n\n# b\n0,0,x,0\n",
+                5,
+                3,
+            ),
         ];
         for (text, line, column) in cases {
             let e = read(text).unwrap_err();
@@ -682,5 +732,111 @@ right_wrist_x,right_wrist_y,right_wrist_z\n\
             "{e}"
         );
         assert_eq!(e.line, 1);
+    }
+
+    /// What may stand between two rows: a blank line (LF or CRLF) or a comment.
+    const FILLERS: [&str; 3] = ["", "\r", "# a comment, with a comma"];
+
+    proptest! {
+        #[test]
+        fn an_error_names_the_line_it_was_written_on(
+            fillers in proptest::collection::vec(proptest::option::of(0..FILLERS.len()), 1..300),
+            crlf in any::<bool>(),
+            bad in any::<prop::sample::Index>(),
+        ) {
+            let end = if crlf { "\r\n" } else { "\n" };
+            let bad = bad.index(fillers.len());
+            let mut text = format!("time,pelvis_x,pelvis_y,pelvis_z{end}");
+            let mut line = 1;
+            let mut written = 0;
+            for (row, filler) in fillers.iter().enumerate() {
+                if let Some(f) = filler {
+                    text.push_str(FILLERS[*f]);
+                    text.push_str(end);
+                    line += 1;
+                }
+                line += 1;
+                if row == bad {
+                    written = line;
+                    text.push_str(&format!("{row},0,abc,0{end}"));
+                } else {
+                    text.push_str(&format!("{row},0,1,0{end}"));
+                }
+            }
+            let e = read(&text).unwrap_err();
+            prop_assert_eq!((e.line, e.column), (written, 3), "{}", e);
+        }
+
+        #[test]
+        fn lines_are_counted_on_from_any_offset(
+            bytes in proptest::collection::vec(prop::sample::select(b"\n\ra#".to_vec()), 0..200),
+            offsets in proptest::collection::vec(0u64..220, 1..20),
+        ) {
+            let lines = Lines::new(&bytes);
+            for byte in offsets {
+                // The first line from `byte` on that is neither blank nor a comment.
+                let mut start = (byte as usize).min(bytes.len());
+                while start < bytes.len() && b"\r\n#".contains(&bytes[start]) {
+                    start += match bytes[start] {
+                        b'#' => bytes[start..].iter().take_while(|&&b| b != b'\r' && b != b'\n').count(),
+                        _ => 1,
+                    };
+                }
+                let expected = 1 + bytes[..start].iter().filter(|&&b| b == b'\n').count();
+                prop_assert_eq!(lines.line_at(byte), expected);
+            }
+        }
+    }
+
+    #[test]
+    fn a_late_row_names_its_line() {
+        let mut lines = DRIVER.lines();
+        let mut text = format!("{}\n", lines.next().unwrap());
+        let rows: Vec<&str> = lines.collect();
+        for k in 0..20_000 {
+            let (_, cells) = rows[k % rows.len()].split_once(',').unwrap();
+            text.push_str(&format!("{},{cells}", k as f64 / 60.0));
+            text.push_str(if k % 7 == 0 { "\n\n" } else { "\n" });
+        }
+        text.push_str("1e9,x\n");
+        let e = read(&text).unwrap_err();
+        assert_eq!(
+            (e.line, e.column),
+            (1 + 20_000 + 20_000 / 7 + 1 + 1, 0),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_wide_header_reads_as_a_narrow_one() {
+        let narrow = read_with(T_POSE.as_bytes(), &Hints::default()).unwrap();
+        // Each landmark's columns spelt anew, with 999 columns of 333 landmarks no vocabulary
+        // knows after each column.
+        let (header, row) = T_POSE.split_once('\n').unwrap();
+        let (mut names, mut cells, mut extra) = (vec![], vec![], vec![]);
+        let spell = ["{}_x", "{}.Y", "{} z"];
+        for (k, (name, cell)) in header.split(',').zip(row.trim().split(',')).enumerate() {
+            names.push(match name.rsplit_once('_') {
+                Some((landmark, axis)) => {
+                    let a = "xyz".find(axis).unwrap();
+                    spell[a].replace("{}", &landmark.to_uppercase())
+                }
+                None => name.to_string(),
+            });
+            cells.push(cell.to_string());
+            for j in 0..333 {
+                extra.push(format!("extra{k}n{j}"));
+                for axis in ["x", "y", "z"] {
+                    names.push(format!("extra{k}n{j}_{axis}"));
+                    cells.push("0".into());
+                }
+            }
+        }
+        let text = format!("{}\n{}\n", names.join(","), cells.join(","));
+        let (motion, reading) = read_with(text.as_bytes(), &Hints::default()).unwrap();
+        assert_eq!(motion.positions, narrow.0.positions);
+        assert_eq!(motion.names, narrow.0.names);
+        assert_eq!(reading.landmarks, narrow.1.landmarks);
+        assert_eq!(reading.ignored, extra);
     }
 }

@@ -17,13 +17,23 @@
 //! `visibility`, `presence`, `score`, `confidence` or `likelihood`; `null` is a missing sample.
 //! The first frame's landmarks are the file's; a landmark absent from a later frame is missing
 //! there. Units, up axis and clock are decided as for CSV ([`keypoints::motion`]).
+//!
+//! The document is never held as `serde_json` values (36 times its size): its syntax is
+//! checked as a whole first, allocating nothing, so that a fault anywhere is reported before
+//! any frame is read; then each frame is read from its own text, its points straight into the
+//! samples ([`value`]). Reading takes the file, the samples and one frame's keys.
+
+mod value;
 
 use crate::keypoints::{self, Hints, KeypointError, Reading, Samples, MIN_CONFIDENCE};
 use crate::landmarks::Landmarks;
 use crate::motion::Motion;
+use crate::places::Places;
 use posecoach_core::Vec3;
-use serde_json::{Map, Value};
+use serde_json::value::RawValue;
+use std::collections::HashSet;
 use std::fmt;
+use value::{Item, Kind, Object, Point};
 
 /// A JSON problem, with the 1-based frame where it was found.
 #[derive(Clone, Debug, PartialEq)]
@@ -126,194 +136,299 @@ const LANDMARK_KEYS: [&str; 8] = [
     "pose_keypoints_3d",
 ];
 
-/// Keys a point's confidence is found under.
-const CONFIDENCE_KEYS: [&str; 5] = [
-    "visibility",
-    "presence",
-    "score",
-    "confidence",
-    "likelihood",
-];
+fn syntax(message: String) -> JsonError {
+    err(0, JsonErrorKind::Syntax(message))
+}
 
-/// Keys a point's name is found under.
-const NAME_KEYS: [&str; 4] = ["name", "label", "type", "joint"];
+/// The file's frames: the texts of an array's items, or a single frame already read.
+enum Frames<'a> {
+    Texts(Vec<&'a RawValue>),
+    One(Object<'a>),
+}
 
-/// The file's frames.
-fn frames(bytes: &[u8]) -> Result<Vec<Value>, JsonError> {
-    let values: Vec<Value> = serde_json::Deserializer::from_slice(bytes)
-        .into_iter::<Value>()
+/// The file's frames, after its syntax is checked as a whole: a fault anywhere is reported
+/// before any frame is read, as when the file was read into one value.
+fn frames(bytes: &[u8]) -> Result<Frames<'_>, JsonError> {
+    value::check(bytes).map_err(|e| syntax(e.to_string()))?;
+    let values: Vec<&RawValue> = serde_json::Deserializer::from_slice(bytes)
+        .into_iter()
         .collect::<Result<_, _>>()
-        .map_err(|e| err(0, JsonErrorKind::Syntax(e.to_string())))?;
-    let frames = match <[Value; 1]>::try_from(values) {
-        Ok([Value::Array(frames)]) => frames,
-        Ok([Value::Object(mut top)]) => match top.remove("frames") {
-            Some(Value::Array(frames)) => frames,
-            _ => vec![Value::Object(top)],
+        .map_err(|e| syntax(e.to_string()))?;
+    let frames = match <[&RawValue; 1]>::try_from(values) {
+        Ok([one]) => match (value::items(one), value::object(one)) {
+            (Some(frames), _) => Frames::Texts(frames),
+            (None, Some(mut top)) => match top.swap_remove("frames").and_then(value::items) {
+                Some(frames) => Frames::Texts(frames),
+                None => Frames::One(top),
+            },
+            (None, None) => Frames::Texts(vec![one]),
         },
-        Ok([other]) => vec![other],
-        Err(values) => values,
+        Err(values) => Frames::Texts(values),
     };
-    if frames.is_empty() {
-        return Err(err(0, JsonErrorKind::NoFrames));
+    match frames {
+        Frames::Texts(texts) if texts.is_empty() => Err(err(0, JsonErrorKind::NoFrames)),
+        frames => Ok(frames),
     }
-    Ok(frames)
+}
+
+/// Where a frame's landmarks are.
+enum Found<'a> {
+    /// Name → point: an object, or the frame's other keys.
+    Named(Object<'a>),
+    /// An array of points, named or not, or of numbers.
+    List(&'a RawValue),
+    /// Neither.
+    None,
 }
 
 /// A frame's landmarks: the value under a [`LANDMARK_KEYS`] key (inside the first of `people`
 /// or `instances`), else the frame's other keys.
-fn landmarks_of(frame: &Map<String, Value>, clock: Option<&str>) -> Value {
+fn landmarks_of<'a>(frame: Object<'a>, clock: Option<&str>) -> Found<'a> {
     for holder in ["people", "instances"] {
-        if let Some(Value::Object(first)) = frame.get(holder).and_then(|v| v.get(0)) {
+        let first = frame.get(holder).and_then(|v| value::first(v));
+        if let Some(first) = first.and_then(value::object) {
             return landmarks_of(first, None);
         }
     }
     if let Some(v) = LANDMARK_KEYS.iter().find_map(|k| frame.get(*k)) {
-        // `{"landmark": [...]}`, as a landmark list converted to JSON nests it.
-        if let Value::Object(inner) = v {
-            if let (1, Some(list @ Value::Array(_))) = (inner.len(), inner.get("landmark")) {
-                return list.clone();
-            }
-        }
-        return v.clone();
+        return match (value::kind(v), value::object(v)) {
+            (Kind::Array, _) => Found::List(v),
+            (_, Some(inner)) => match (inner.len(), inner.get("landmark")) {
+                // `{"landmark": [...]}`, as a landmark list converted to JSON nests it.
+                (1, Some(list)) if value::kind(list) == Kind::Array => Found::List(list),
+                _ => Found::Named(inner),
+            },
+            _ => Found::None,
+        };
     }
     // Only values that may be points: a frame's other numbers and strings (a rate, a source)
     // are not landmarks.
-    let rest: Map<String, Value> = frame
-        .iter()
-        .filter(|(k, v)| {
-            Some(k.as_str()) != clock && (v.is_array() || v.is_object() || v.is_null())
-        })
-        .map(|(k, v)| (k.clone(), v.clone()))
-        .collect();
-    Value::Object(rest)
+    let mut rest = frame;
+    rest.retain(|k, v| Some(&**k) != clock && value::kind(v) != Kind::Scalar);
+    Found::Named(rest)
 }
 
-/// A point's position and confidence; `None` for `null`.
-fn point(v: &Value) -> Result<Option<(Vec3, f64)>, ()> {
-    let num = |v: Option<&Value>| v.and_then(Value::as_f64).filter(|x| x.is_finite());
-    let (xyz, confidence) = match v {
-        Value::Null => return Ok(None),
-        Value::Array(a) if a.len() == 3 || a.len() == 4 => {
-            ([num(a.first()), num(a.get(1)), num(a.get(2))], a.get(3))
-        }
-        Value::Object(o) => (
-            [num(o.get("x")), num(o.get("y")), num(o.get("z"))],
-            CONFIDENCE_KEYS.iter().find_map(|k| o.get(*k)),
-        ),
-        _ => return Err(()),
-    };
-    let [Some(x), Some(y), Some(z)] = xyz else {
-        return Err(());
-    };
-    let confidence = match confidence {
-        None => 1.0,
-        Some(c) => num(Some(c)).ok_or(())?,
-    };
-    Ok(Some((Vec3::new(x as f32, y as f32, z as f32), confidence)))
+/// The first frame's landmark names (a name may repeat), each found at its first place.
+struct Names {
+    names: Vec<String>,
+    places: Places,
 }
 
-/// One frame's landmarks as (name, point) pairs, and whether they were named by position
-/// (unnamed, named by their vocabulary).
-fn named(landmarks: Value, frame: usize) -> Result<(Vec<(String, Value)>, bool), JsonError> {
-    let unnamed = |points: Vec<Value>| {
-        let vocabulary = Landmarks::of_count(points.len())
-            .ok_or(err(frame, JsonErrorKind::Count(points.len())))?;
-        let names = vocabulary.names().into_iter().map(str::to_string);
-        Ok((names.zip(points).collect(), true))
-    };
-    match landmarks {
-        Value::Object(map) => Ok((map.into_iter().collect(), false)),
-        Value::Array(items) if items.iter().all(Value::is_number) => {
-            let per = [4, 3]
-                .into_iter()
-                .find(|&per| {
-                    items.len() % per == 0 && Landmarks::of_count(items.len() / per).is_some()
-                })
-                .ok_or(err(frame, JsonErrorKind::Count(items.len() / 3)))?;
-            unnamed(
-                items
-                    .chunks(per)
-                    .map(|c| Value::Array(c.to_vec()))
-                    .collect(),
-            )
+impl Names {
+    fn new(names: Vec<String>) -> Names {
+        let mut places = Places::default();
+        for (k, name) in names.iter().enumerate() {
+            places.first_or(name, k, |j| names[j].as_str());
         }
-        Value::Array(items) => {
-            let name = |v: &Value| {
-                NAME_KEYS
-                    .iter()
-                    .find_map(|k| v.get(*k).and_then(Value::as_str))
-                    .map(str::to_string)
-            };
-            match items.iter().map(name).collect::<Option<Vec<String>>>() {
-                Some(names) if !names.is_empty() => {
-                    Ok((names.into_iter().zip(items).collect(), false))
-                }
-                _ => unnamed(items),
-            }
-        }
-        _ => Err(err(frame, JsonErrorKind::NoLandmarks)),
+        Names { names, places }
+    }
+
+    /// The first place of `name`.
+    fn place(&self, name: &str) -> Option<usize> {
+        self.places.find(name, |k| self.names[k].as_str())
     }
 }
 
-/// The file's samples, as written.
-fn samples(bytes: &[u8]) -> Result<Samples, JsonError> {
-    let frames = frames(bytes)?;
-    let mut out = Samples::default();
-    let mut count = None;
-    for (f, frame) in frames.into_iter().enumerate() {
-        let at = f + 1;
-        let Value::Object(frame) = frame else {
-            return Err(err(at, JsonErrorKind::NotAnObject));
-        };
+/// How a landmark list is made: its items' count, whether they are all numbers, and whether
+/// they all name themselves (with their names, gathered for the first frame only).
+struct Shape {
+    count: usize,
+    numbers: bool,
+    names: Option<Vec<String>>,
+}
+
+/// The samples read so far, and what reading the next frame needs.
+#[derive(Default)]
+struct Reader {
+    out: Samples,
+    /// The first frame's landmarks.
+    names: Option<Names>,
+    /// Names already reported as not read.
+    ignored: HashSet<String>,
+}
+
+impl Reader {
+    /// Reads frame `at` (1-based): its time, then its landmarks.
+    fn frame(&mut self, at: usize, frame: Option<Object>) -> Result<(), JsonError> {
+        let frame = frame.ok_or(err(at, JsonErrorKind::NotAnObject))?;
         let clock = frame
             .keys()
             .find(|k| keypoints::clock_of(k).is_some())
-            .cloned();
-        if f == 0 {
-            out.clock.clone_from(&clock);
+            .map(|k| k.to_string());
+        if at == 1 {
+            self.out.clock.clone_from(&clock);
         }
-        if let Some(key) = &out.clock {
+        if let Some(key) = &self.out.clock {
             let t = frame
-                .get(key)
-                .and_then(Value::as_f64)
+                .get(key.as_str())
+                .and_then(|v| value::number(v))
                 .filter(|t| t.is_finite())
                 .ok_or(err(at, JsonErrorKind::BadTime))?;
-            if out.times.last().is_some_and(|&last| t <= last) {
+            if self.out.times.last().is_some_and(|&last| t <= last) {
                 return Err(err(at, JsonErrorKind::TimeNotIncreasing));
             }
-            out.times.push(t);
+            self.out.times.push(t);
         }
-        let (points, positional) = named(landmarks_of(&frame, clock.as_deref()), at)?;
-        match count {
-            None => {
-                out.names = points.iter().map(|(n, _)| n.clone()).collect();
-                count = Some(points.len());
-            }
-            // By position the count must hold; by name a landmark may be absent.
-            Some(expected) if positional && points.len() != expected => {
-                let actual = points.len();
-                return Err(err(at, JsonErrorKind::CountChanged { expected, actual }));
-            }
-            Some(_) => {}
-        }
-        let row = out.positions.len();
-        out.positions.resize(row + out.names.len(), Vec3::zeros());
-        out.missing.resize(row + out.names.len(), true);
-        for (name, value) in points {
-            let Some(k) = out.names.iter().position(|n| *n == name) else {
-                if !out.ignored.contains(&name) {
-                    out.ignored.push(name);
+        match landmarks_of(frame, clock.as_deref()) {
+            Found::Named(points) => {
+                let names = || points.keys().map(|k| k.to_string()).collect();
+                let row = self.start(at, points.len(), false, names)?;
+                for (name, v) in &points {
+                    self.sample(at, row, name, || value::point_of(v))?;
                 }
-                continue;
+                Ok(())
+            }
+            Found::List(list) => self.list(at, list),
+            Found::None => Err(err(at, JsonErrorKind::NoLandmarks)),
+        }
+    }
+
+    /// Reads a landmark list: points that name themselves, or points or their numbers (4 a
+    /// landmark where that count fits, else 3) named by the vocabulary with that many
+    /// landmarks.
+    fn list(&mut self, at: usize, list: &RawValue) -> Result<(), JsonError> {
+        let shape = self.shape(list)?;
+        let count = |count| err(at, JsonErrorKind::Count(count));
+        if shape.numbers {
+            let fits = |per: &usize| {
+                shape.count % per == 0 && Landmarks::of_count(shape.count / per).is_some()
             };
-            let p = point(&value).map_err(|()| err(at, JsonErrorKind::BadPoint(name.clone())))?;
-            if let Some((position, confidence)) = p {
-                out.positions[row + k] = position;
-                out.missing[row + k] = confidence < f64::from(MIN_CONFIDENCE);
+            let per = [4, 3]
+                .into_iter()
+                .find(fits)
+                .ok_or(count(shape.count / 3))?;
+            let numbers = gather(list, |item| item.number)?;
+            let points = numbers
+                .chunks(per)
+                .map(|c| value::point([c[0], c[1], c[2]], c.get(3).copied()));
+            return self.by_position(at, points.collect());
+        }
+        match shape.names {
+            Some(names) if shape.count > 0 => {
+                let row = self.start(at, shape.count, false, || names)?;
+                let each = |item: Item| {
+                    let name = item.name.unwrap_or_default();
+                    self.sample(at, row, &name, || item.point)
+                };
+                value::each_item(list, each, syntax)
+            }
+            _ => {
+                // Checked before the points are gathered: a vocabulary's are few.
+                Landmarks::of_count(shape.count).ok_or(count(shape.count))?;
+                self.by_position(at, gather(list, |item| item.point)?)
             }
         }
     }
-    Ok(out)
+
+    /// Reads unnamed points, named by the vocabulary with as many landmarks.
+    fn by_position(&mut self, at: usize, points: Vec<Point>) -> Result<(), JsonError> {
+        let n = points.len();
+        let names = Landmarks::of_count(n)
+            .ok_or(err(at, JsonErrorKind::Count(n)))?
+            .names();
+        let first = || names.iter().take(n).map(|s| s.to_string()).collect();
+        let row = self.start(at, n, true, first)?;
+        for (name, point) in names.iter().zip(points) {
+            self.sample(at, row, name, || point)?;
+        }
+        Ok(())
+    }
+
+    /// How a landmark list is made, in one pass over it.
+    fn shape(&self, list: &RawValue) -> Result<Shape, JsonError> {
+        let first = self.names.is_none();
+        let mut shape = Shape {
+            count: 0,
+            numbers: true,
+            names: Some(Vec::new()),
+        };
+        let each = |item: Item| {
+            shape.count += 1;
+            shape.numbers &= item.number.is_some();
+            match (&mut shape.names, item.name) {
+                (Some(names), Some(name)) if first => names.push(name),
+                (Some(_), Some(_)) => {}
+                _ => shape.names = None,
+            }
+            Ok(())
+        };
+        value::each_item(list, each, syntax)?;
+        Ok(shape)
+    }
+
+    /// Starts a frame of `count` landmarks, named by position or not: the first frame's names
+    /// (`names`) are the file's; by position the count must hold, by name a landmark may be
+    /// absent. Every sample of the row starts missing; returns the row's first.
+    fn start(
+        &mut self,
+        at: usize,
+        count: usize,
+        positional: bool,
+        names: impl FnOnce() -> Vec<String>,
+    ) -> Result<usize, JsonError> {
+        let width = match &self.names {
+            None => self.names.insert(Names::new(names())).names.len(),
+            Some(first) if positional && count != first.names.len() => {
+                let expected = first.names.len();
+                let actual = count;
+                return Err(err(at, JsonErrorKind::CountChanged { expected, actual }));
+            }
+            Some(first) => first.names.len(),
+        };
+        let row = self.out.positions.len();
+        self.out.positions.resize(row + width, Vec3::zeros());
+        self.out.missing.resize(row + width, true);
+        Ok(row)
+    }
+
+    /// Reads landmark `name`'s sample in the row from `row`, or sets the name aside as not
+    /// read where the first frame has no such landmark.
+    fn sample(
+        &mut self,
+        at: usize,
+        row: usize,
+        name: &str,
+        point: impl FnOnce() -> Point,
+    ) -> Result<(), JsonError> {
+        let Some(k) = self.names.as_ref().and_then(|n| n.place(name)) else {
+            if self.ignored.insert(name.to_string()) {
+                self.out.ignored.push(name.to_string());
+            }
+            return Ok(());
+        };
+        let p = point().map_err(|()| err(at, JsonErrorKind::BadPoint(name.to_string())))?;
+        if let Some((position, confidence)) = p {
+            self.out.positions[row + k] = position;
+            self.out.missing[row + k] = confidence < f64::from(MIN_CONFIDENCE);
+        }
+        Ok(())
+    }
+}
+
+/// What `take` keeps of each item of `list`.
+fn gather<T>(list: &RawValue, take: impl Fn(Item) -> T) -> Result<Vec<T>, JsonError> {
+    let mut kept = Vec::new();
+    let keep = |item| {
+        kept.push(take(item));
+        Ok(())
+    };
+    value::each_item(list, keep, syntax)?;
+    Ok(kept)
+}
+
+/// The file's samples, as written, read one frame at a time.
+fn samples(bytes: &[u8]) -> Result<Samples, JsonError> {
+    let mut reader = Reader::default();
+    match frames(bytes)? {
+        Frames::One(frame) => reader.frame(1, Some(frame))?,
+        Frames::Texts(texts) => {
+            for (f, text) in texts.into_iter().enumerate() {
+                reader.frame(f + 1, value::object(text))?;
+            }
+        }
+    }
+    reader.out.names = reader.names.map(|n| n.names).unwrap_or_default();
+    Ok(reader.out)
 }
 
 #[cfg(test)]
@@ -322,6 +437,7 @@ mod tests {
     use super::*;
     use posecoach_core::format::t_pose;
     use posecoach_core::joint::Joint;
+    use proptest::prelude::*;
 
     /// The standard T-pose as `frames` BlazePose frames in millimetres, as `shape` writes one
     /// frame from its 33 landmarks (name, position).
@@ -442,6 +558,126 @@ mod tests {
             let e = read_with(text.as_bytes(), &Hints::default()).unwrap_err();
             assert_eq!(e.frame, frame, "{text}: {e}");
             assert!(kind(&e.kind), "{text}: {e}");
+        }
+    }
+
+    /// The standard T-pose's body joints as `frames` frames at 30 Hz, each with `extra`
+    /// landmarks more, keys as landmarks.
+    fn t_poses(frames: usize, extra: impl Fn(usize) -> Vec<String>) -> String {
+        let joints = Joint::ALL.iter().filter(|j| !j.is_club());
+        let lines: Vec<String> = (0..frames)
+            .map(|f| {
+                let mut points: Vec<String> = joints
+                    .clone()
+                    .map(|&j| {
+                        let p = t_pose(j);
+                        format!("\"{j}\": [{}, {}, {}]", p.x, p.y, p.z)
+                    })
+                    .collect();
+                points.extend(extra(f).iter().map(|n| format!("\"{n}\": [0, 0, 0]")));
+                format!("{{\"t\": {}, {}}}", f as f64 / 30.0, points.join(", "))
+            })
+            .collect();
+        lines.join("\n")
+    }
+
+    #[test]
+    fn a_frame_of_many_names_reads_as_one_of_few() {
+        let hints = Hints::default();
+        let (few, _) = read_with(t_poses(3, |_| vec![]).as_bytes(), &hints).unwrap();
+        let names: Vec<String> = (0..20_000).map(|k| format!("extra{k}")).collect();
+        let many = t_poses(3, |_| names.clone());
+        let (motion, reading) = read_with(many.as_bytes(), &hints).unwrap();
+        assert_eq!(motion.positions, few.positions);
+        assert_eq!(reading.ignored, names);
+        // Names the first frame lacks are set aside once each, in the order first met.
+        let later = t_poses(4, |f| {
+            (0..f).map(|k| format!("late{}", (k * 7) % 5)).collect()
+        });
+        let samples = samples(later.as_bytes()).unwrap();
+        assert_eq!(samples.ignored, ["late0", "late2", "late4"]);
+    }
+
+    #[test]
+    fn the_whole_file_is_checked_before_a_frame_is_read() {
+        let cases = [
+            (
+                "{\"t\": 0, \"pelvis\": [0, \"a\", 0]}\n{",
+                "EOF while parsing",
+            ),
+            ("{\"t\": 0, \"source\": 1e400}", "number out of range"),
+            ("[{\"t\": 0, \"a\": \"\\ud800\"}]", "hex escape"),
+        ];
+        for (text, message) in cases {
+            let e = samples(text.as_bytes()).unwrap_err();
+            assert!(
+                matches!(&e.kind, JsonErrorKind::Syntax(m) if m.contains(message)),
+                "{text}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_key_given_twice_keeps_its_first_place_and_last_value() {
+        let text =
+            "{\"frames\": 5, \"t\": 0, \"neck\": null, \"pelvis\": {\"x\": \"a\", \"x\": 1, \
+                    \"y\": 2, \"z\": 3}, \"neck\": [4, 5, 6]}";
+        let samples = samples(text.as_bytes()).unwrap();
+        // `frames` that holds no frames is set aside, its place taken by the last key.
+        assert_eq!(samples.names, ["pelvis", "neck"]);
+        assert_eq!(
+            samples.positions,
+            [Vec3::new(1.0, 2.0, 3.0), Vec3::new(4.0, 5.0, 6.0)]
+        );
+        assert_eq!(samples.missing, [false, false]);
+    }
+
+    /// A frame: its landmarks' names (from a few), each a point as an array, an object with a
+    /// visibility, or null.
+    fn frame() -> impl Strategy<Value = Vec<(usize, u8, [i8; 3])>> {
+        proptest::collection::vec((0usize..6, 0u8..3, any::<[i8; 3]>()), 0..6)
+    }
+
+    proptest! {
+        #[test]
+        fn every_framing_of_the_same_frames_reads_alike(
+            frames in proptest::collection::vec(frame(), 1..5),
+            named_list in any::<bool>(),
+        ) {
+            const NAMES: [&str; 6] = ["pelvis", "left_hip", "head", "neck", "extra", "t2"];
+            let text: Vec<String> = frames
+                .iter()
+                .enumerate()
+                .map(|(f, points)| {
+                    let point = |&(n, shape, [x, y, z]): &(usize, u8, [i8; 3])| {
+                        let name = NAMES[n];
+                        match (named_list, shape) {
+                            (false, 0) => format!("\"{name}\": [{x}, {y}, {z}]"),
+                            (false, 1) => format!(
+                                "\"{name}\": {{\"x\": {x}, \"y\": {y}, \"z\": {z}, \"visibility\": 0.{n}}}"
+                            ),
+                            (false, _) => format!("\"{name}\": null"),
+                            (true, 0) => format!("{{\"name\": \"{name}\", \"x\": {x}, \"y\": {y}, \"z\": {z}}}"),
+                            (true, 1) => format!(
+                                "{{\"x\": {x}, \"y\": {y}, \"z\": {z}, \"label\": \"{name}\", \"score\": 0.{n}}}"
+                            ),
+                            (true, _) => format!("{{\"joint\": \"{name}\"}}"),
+                        }
+                    };
+                    let body: Vec<String> = points.iter().map(point).collect();
+                    match named_list {
+                        true => format!("{{\"time\": {f}.5, \"landmarks\": [{}]}}", body.join(", ")),
+                        false => format!("{{\"time\": {f}.5, \"landmarks\": {{{}}}}}", body.join(", ")),
+                    }
+                })
+                .collect();
+            let lines = samples(text.join("\n").as_bytes());
+            let array = samples(format!("[{}]", text.join(",")).as_bytes());
+            let wrapped = format!("{{\"rate\": 30, \"frames\": [{}]}}", text.join(", "));
+            prop_assert_eq!(&array, &samples(wrapped.as_bytes()));
+            if frames.len() > 1 {
+                prop_assert_eq!(&lines, &array);
+            }
         }
     }
 }

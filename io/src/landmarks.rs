@@ -16,6 +16,7 @@
 
 use posecoach_core::format::{Format, Source};
 use posecoach_core::joint::Joint;
+use std::collections::HashSet;
 use std::fmt;
 
 /// A vocabulary of landmark names.
@@ -167,6 +168,15 @@ pub fn key(name: &str) -> String {
     name.chars()
         .filter(char::is_ascii_alphanumeric)
         .map(|c| c.to_ascii_lowercase())
+        .collect()
+}
+
+/// The [`key`]s of every name some vocabulary knows.
+pub fn known() -> HashSet<String> {
+    Landmarks::ALL
+        .iter()
+        .flat_map(|l| l.names())
+        .map(key)
         .collect()
 }
 

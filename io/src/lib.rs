@@ -14,6 +14,7 @@ pub mod keypoints;
 pub mod landmarks;
 pub mod limits;
 pub mod motion;
+mod places;
 pub mod units;
 
 pub use keypoints::{Hints, Reading};
