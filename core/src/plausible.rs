@@ -365,6 +365,17 @@ mod tests {
         skeleton.with_bone_lengths(&lengths).unwrap()
     }
 
+    /// Both arms' bones: the upper arms and forearms, by their child joints.
+    fn arm_bones() -> [usize; 4] {
+        [
+            Joint::LeftElbow,
+            Joint::LeftWrist,
+            Joint::RightElbow,
+            Joint::RightWrist,
+        ]
+        .map(index)
+    }
+
     fn index(j: Joint) -> usize {
         Skeleton::standard(Format::H36m17)
             .unwrap()
@@ -374,17 +385,7 @@ mod tests {
 
     #[test]
     fn every_standard_body_passes() {
-        let all = [
-            Format::Canonical,
-            Format::Cmu31,
-            Format::Bandai22,
-            Format::H36m17,
-            Format::Coco17,
-            Format::BlazePose33,
-            Format::Smpl24,
-            Format::GolfMarkers,
-        ];
-        for format in all {
+        for format in [Format::Canonical].into_iter().chain(Format::BUILT_IN) {
             if let Ok(skeleton) = Skeleton::standard(format) {
                 assert_eq!(body(&skeleton), Ok(()), "{format:?}");
             }
@@ -405,13 +406,7 @@ mod tests {
             body(&long)
         );
         // Arms of zero length: both upper arms named, the left first.
-        let arms = [
-            Joint::LeftElbow,
-            Joint::LeftWrist,
-            Joint::RightElbow,
-            Joint::RightWrist,
-        ]
-        .map(index);
+        let arms = arm_bones();
         let none = reshaped(|k, l| if arms.contains(&k) { 0.0 } else { l });
         assert!(
             matches!(body(&none), Err(Implausible::Bone { joint, metres: 0.0, .. }) if joint == elbow),
@@ -435,13 +430,7 @@ mod tests {
     fn arms_count_toward_the_bodys_size() {
         // Every arm bone 1.45 times its length and the shoulders three times theirs (each bone
         // within its range): the span is not.
-        let arms = [
-            Joint::LeftElbow,
-            Joint::LeftWrist,
-            Joint::RightElbow,
-            Joint::RightWrist,
-        ]
-        .map(index);
+        let arms = arm_bones();
         let shoulders = [Joint::LeftShoulder, Joint::RightShoulder].map(index);
         let wide = reshaped(|k, l| match k {
             k if arms.contains(&k) => 1.45 * l,
