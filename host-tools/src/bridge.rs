@@ -372,7 +372,7 @@ fn serial_loop(
     stop: &AtomicBool,
 ) {
     let mut backoff = MIN_BACKOFF;
-    let mut outbox = Outbox::default();
+    let mut outbox = Outbox::new(OUTBOX_FRAMES);
     let mut buf = [0u8; MAX_FRAME];
     while !stop.load(Ordering::Relaxed) {
         let mut link = match device_sim::open(port, baud) {
@@ -398,11 +398,9 @@ fn serial_loop(
             if stop.load(Ordering::Relaxed) {
                 return;
             }
-            while outbox.len() < OUTBOX_FRAMES {
-                match frames.try_recv() {
-                    Ok(frame) => outbox.push(frame),
-                    Err(_) => break,
-                }
+            for frame in frames.try_iter().take(outbox.room()) {
+                let queued = outbox.push(frame);
+                debug_assert!(queued, "room was made for it");
             }
             let queued = outbox.len();
             if let Err(e) = outbox.flush(&mut link) {
