@@ -17,7 +17,7 @@
 //! name holding its fields, `{"CoachSelect": {"coach": 1}}`, `{"Ack": {"seq": 7}}`; enums
 //! without fields as their name (`"H36m17"`).
 //!
-//! One thread ([`hub`]) serves every client with `mio`: no thread per client, and a client
+//! One thread (the `hub` module) serves every client with `mio`: no thread per client, and a client
 //! costs one descriptor. At most [`Policy::max_clients`] clients hold a role; the first is the
 //! controller, the others watchers, and when the controller leaves the watcher connected
 //! longest takes control. Where a token is needed (always, unless the bridge listens on
@@ -28,7 +28,7 @@
 //! as it comes; the controller's frames wait in a queue of [`TO_DEVICE_QUEUE`] frames, and
 //! when it is full the controller is not read (TCP pushes back on it), nothing dropped.
 //!
-//! The serial side ([`serial`]) has a thread of its own: it reconnects with backoff (0.1 s
+//! The serial side (the `serial` module) has a thread of its own: it reconnects with backoff (0.1 s
 //! doubling to 2 s) whenever the port fails or disappears; the decoder starts afresh on each
 //! link, and a frame whose write failed is written again, whole, on the next (the device drops
 //! the part it got).

@@ -6,7 +6,7 @@ use serde::Deserialize;
 /// Bytes of randomness in a token the bridge makes (written as twice as many hex digits).
 const RANDOM_BYTES: usize = 16;
 /// Longest token `--token` takes, bytes.
-pub const MAX_TOKEN: usize = 256;
+const MAX_TOKEN: usize = 256;
 
 /// A pairing token. Its `Debug` does not show it.
 #[derive(Clone, PartialEq, Eq)]
@@ -26,7 +26,7 @@ struct TokenLine {
 }
 
 impl PairingToken {
-    /// `given` as a token: 1 to [`MAX_TOKEN`] bytes, no control characters.
+    /// `given` as a token: 1 to 256 bytes, no control characters.
     ///
     /// # Errors
     /// Saying which rule `given` breaks.
@@ -43,7 +43,7 @@ impl PairingToken {
         Ok(PairingToken(given.to_string()))
     }
 
-    /// A fresh token: [`RANDOM_BYTES`] bytes from the operating system's generator (through
+    /// A fresh token: 16 bytes from the operating system's generator (through
     /// `rand`'s thread generator, which it seeds), as lowercase hex.
     pub fn generate() -> PairingToken {
         let bytes: [u8; RANDOM_BYTES] = rand::rng().random();
