@@ -273,8 +273,8 @@ impl Device {
     }
 }
 
-/// A phone paired with a bridge that needs [`TOKEN`], as its controller: connects again while
-/// it is turned away (the places are full, or new connections pushed it out before its token
+/// A phone paired with a bridge that needs [`TOKEN`], once it is the controller: connects
+/// again while it is turned away (the places are full, or new connections pushed it out before its token
 /// was read). Returns its connection and whether it saw the bridge's serial port open.
 fn controller(addr: SocketAddr) -> (BufReader<TcpStream>, bool) {
     let start = Instant::now();
@@ -292,8 +292,11 @@ fn controller(addr: SocketAddr) -> (BufReader<TcpStream>, bool) {
             let value: Value = serde_json::from_str(&line).unwrap();
             connected |= value["bridge"]["serial"] == "connected";
             connected |= value["bridge"]["event"] == "serial_connected";
-            if value["bridge"]["event"] == "paired" {
-                assert_eq!(value["bridge"]["role"], "controller", "{line}");
+            // A client the bridge has not yet seen leave may hold control a moment longer.
+            let paired = value["bridge"]["event"] == "paired";
+            if (paired && value["bridge"]["role"] == "controller")
+                || value["bridge"]["event"] == "control"
+            {
                 return (reader, connected);
             }
             if value["bridge"]["event"] == "full" {
