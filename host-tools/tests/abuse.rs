@@ -51,7 +51,8 @@ impl Bridge {
         Bridge::start_in(name, port, flags, None)
     }
 
-    /// [`Bridge::start`], under a shell's `ulimit -n` of `descriptors` if given.
+    /// [`Bridge::start`], under a shell's `ulimit -n` of `descriptors` if given. The bridge's
+    /// log goes to this test's standard error when `ABUSE_LOG` is set, else nowhere.
     fn start_in(
         name: &str,
         port: Option<&Path>,
