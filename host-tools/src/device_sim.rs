@@ -6,7 +6,9 @@
 //! It answers with wire frames: a `SwingReport` and then a `Status` (the decoder's counters)
 //! per scored swing, and a `Nack` per refused message (the `seq` of the pose frame refused,
 //! else 0). Frames not yet written when the link fails are kept and written, whole, once a
-//! link is back; the session carries on across links.
+//! link is back; the session carries on across links. At most [`REPLY_QUEUE`] replies wait for
+//! the link: when its peer does not read and the queue is full, a new reply is dropped and
+//! counted, so a peer that never reads costs a bounded amount of memory.
 
 use crate::coaches;
 use anyhow::{Context, Result};
@@ -26,6 +28,9 @@ pub const DEFAULT_BAUD: u32 = 115_200;
 pub const READ_TIMEOUT: Duration = Duration::from_millis(20);
 /// Wait before trying a port again that could not be opened or failed.
 const RETRY: Duration = Duration::from_millis(200);
+/// Replies waiting for the link (each at most [`MAX_FRAME`] bytes): when the peer reads, a
+/// handful at most wait.
+pub const REPLY_QUEUE: usize = 256;
 
 /// A serial port's arguments, as `device-sim` and `bridge` take them.
 #[derive(clap::Args)]
@@ -61,6 +66,8 @@ pub struct Totals {
     pub reports: u32,
     /// Messages refused.
     pub refused: u32,
+    /// Replies dropped because [`REPLY_QUEUE`] replies were waiting for a peer that did not read.
+    pub dropped: u64,
 }
 
 pub fn run(args: &Args) -> Result<String> {
@@ -90,12 +97,13 @@ pub fn run(args: &Args) -> Result<String> {
         simulate(connect, &stop, weights)
     })?;
     if args.json {
-        let doc = serde_json::json!({"links": totals.links, "reports": totals.reports, "refused": totals.refused});
+        let doc = serde_json::json!({"links": totals.links, "reports": totals.reports,
+                                     "refused": totals.refused, "dropped_replies": totals.dropped});
         return Ok(format!("{doc}\n"));
     }
     Ok(format!(
-        "{} links, {} swing reports, {} refused\n",
-        totals.links, totals.reports, totals.refused
+        "{} links, {} swing reports, {} refused, {} replies dropped for a peer that did not read\n",
+        totals.links, totals.reports, totals.refused, totals.dropped
     ))
 }
 
@@ -147,7 +155,7 @@ fn serve<L: Read + Write>(
     stop: &AtomicBool,
 ) -> Totals {
     let mut totals = Totals::default();
-    let mut unsent = Outbox::default();
+    let mut unsent = Outbox::new(REPLY_QUEUE);
     let mut buf = [0u8; MAX_FRAME];
     while !stop.load(Ordering::Relaxed) {
         let Some(mut link) = connect() else {
@@ -175,7 +183,7 @@ fn serve<L: Read + Write>(
             // Frames of another protocol version are told so, once per read.
             if let Some(nack) = decoder.reply() {
                 totals.refused += 1;
-                unsent.extend(frame(&nack));
+                totals.send(&mut unsent, &nack);
             }
             for message in &messages {
                 session.handle(message, |outcome| {
@@ -188,10 +196,9 @@ fn serve<L: Read + Write>(
                         Outcome::Accepted => {}
                     }
                     if let Some(reply) = outcome.reply(message) {
-                        let scored = matches!(reply, Message::SwingReport(_));
-                        unsent.extend(frame(&reply));
-                        if scored {
-                            unsent.extend(frame(&Message::Status(decoder.counters())));
+                        totals.send(&mut unsent, &reply);
+                        if matches!(reply, Message::SwingReport(_)) {
+                            totals.send(&mut unsent, &Message::Status(decoder.counters()));
                         }
                     }
                 });
@@ -202,6 +209,17 @@ fn serve<L: Read + Write>(
     totals
 }
 
+impl Totals {
+    /// Queues `reply` in `unsent`, or counts it dropped when the queue is full.
+    fn send(&mut self, unsent: &mut Outbox, reply: &Message) {
+        if let Some(frame) = frame(reply) {
+            if !unsent.push(frame) {
+                self.dropped += 1;
+            }
+        }
+    }
+}
+
 /// A read or write that found the link not ready, rather than failed.
 pub fn transient(e: &std::io::Error) -> bool {
     matches!(
@@ -210,28 +228,43 @@ pub fn transient(e: &std::io::Error) -> bool {
     )
 }
 
-/// Frames queued for a link, in order, the first possibly written in part.
-#[derive(Debug, Default)]
+/// Frames queued for a link, in order, the first possibly written in part; at most a capacity
+/// of them.
+#[derive(Debug)]
 pub struct Outbox {
     frames: VecDeque<Vec<u8>>,
     written: usize,
-}
-
-impl Extend<Vec<u8>> for Outbox {
-    fn extend<I: IntoIterator<Item = Vec<u8>>>(&mut self, frames: I) {
-        self.frames.extend(frames);
-    }
+    capacity: usize,
 }
 
 impl Outbox {
-    /// Queues a frame.
-    pub fn push(&mut self, frame: Vec<u8>) {
+    /// An empty queue that holds up to `capacity` frames.
+    pub fn new(capacity: usize) -> Outbox {
+        Outbox {
+            frames: VecDeque::with_capacity(capacity),
+            written: 0,
+            capacity,
+        }
+    }
+
+    /// Queues a frame, unless the queue is full: whether it was queued.
+    #[must_use]
+    pub fn push(&mut self, frame: Vec<u8>) -> bool {
+        if self.frames.len() >= self.capacity {
+            return false;
+        }
         self.frames.push_back(frame);
+        true
     }
 
     /// Frames queued.
     pub fn len(&self) -> usize {
         self.frames.len()
+    }
+
+    /// Frames that may still be queued.
+    pub fn room(&self) -> usize {
+        self.capacity - self.frames.len()
     }
 
     /// Whether nothing is queued.
@@ -276,7 +309,6 @@ pub fn frame(message: &Message) -> Option<Vec<u8>> {
     Some(out[..n].to_vec())
 }
 
-/// The `Nack` reason a refusal is sent with.
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -315,10 +347,18 @@ mod tests {
             .collect()
     }
 
+    fn full(frames: Vec<Vec<u8>>) -> Outbox {
+        let mut outbox = Outbox::new(frames.len());
+        for frame in frames {
+            assert!(outbox.push(frame));
+        }
+        assert_eq!(outbox.room(), 0);
+        outbox
+    }
+
     #[test]
     fn a_busy_link_gets_every_frame_whole_and_in_order() {
-        let mut outbox = Outbox::default();
-        outbox.extend(frames());
+        let mut outbox = full(frames());
         let mut link = Stingy {
             got: Vec::new(),
             chunk: 2,
@@ -336,8 +376,7 @@ mod tests {
 
     #[test]
     fn a_frame_cut_by_a_failed_link_is_sent_again_whole() {
-        let mut outbox = Outbox::default();
-        outbox.extend(frames());
+        let mut outbox = full(frames());
         let first = frames()[0].len();
         let mut broken = Stingy {
             got: Vec::new(),
@@ -362,5 +401,59 @@ mod tests {
             outbox.flush(&mut next).unwrap();
         }
         assert_eq!(next.got, frames()[1..].concat());
+    }
+
+    /// A peer that sends a pose frame on every read, `left` in all (then stops the device),
+    /// and never reads a reply.
+    struct Deaf<'a> {
+        frames: Vec<Vec<u8>>,
+        sent: usize,
+        left: usize,
+        stop: &'a AtomicBool,
+    }
+
+    impl Read for Deaf<'_> {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            if self.sent == self.left {
+                self.stop.store(true, Ordering::Relaxed);
+                return Err(ErrorKind::TimedOut.into());
+            }
+            let frame = &self.frames[self.sent % self.frames.len()];
+            buf[..frame.len()].copy_from_slice(frame);
+            self.sent += 1;
+            Ok(frame.len())
+        }
+    }
+
+    impl Write for Deaf<'_> {
+        fn write(&mut self, _: &[u8]) -> std::io::Result<usize> {
+            Err(ErrorKind::WouldBlock.into())
+        }
+
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn replies_to_a_peer_that_never_reads_are_dropped_and_counted_past_the_queue() {
+        const EXTRA: usize = 100;
+        let log = include_bytes!("../../tests/logs/short_cmu_30hz.pclog");
+        // Pose frames without a student profile: each is refused with a `Nack`.
+        let frames: Vec<Vec<u8>> = posecoach_adapters::log::LogReader::new(log)
+            .unwrap()
+            .filter(|m| matches!(m, Message::PoseFrame(_)))
+            .map(|m| frame(&m).unwrap())
+            .collect();
+        let stop = AtomicBool::new(false);
+        let mut peer = Some(Deaf {
+            frames,
+            sent: 0,
+            left: REPLY_QUEUE + EXTRA,
+            stop: &stop,
+        });
+        let totals = simulate(|| peer.take(), &stop, None).unwrap();
+        assert_eq!(totals.refused as usize, REPLY_QUEUE + EXTRA);
+        assert_eq!(totals.dropped as usize, EXTRA);
     }
 }

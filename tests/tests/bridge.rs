@@ -5,7 +5,7 @@
 //! port is pulled away in the middle of a swing and plugged back in.
 
 use posecoach_adapters::log::LogReader;
-use posecoach_cli::bridge::{serve, Counters};
+use posecoach_cli::bridge::{serve, Counters, Policy};
 use posecoach_cli::device_sim::{self, simulate, Totals};
 use posecoach_cli::replay::replay;
 use posecoach_core::checks::CHECKS;
@@ -128,7 +128,9 @@ impl Rig {
         let addr = listener.local_addr().unwrap();
         let bridge = {
             let (port, stop) = (dir.join(PORT), stop.clone());
-            std::thread::spawn(move || serve(&port, 0, listener, &stop).unwrap())
+            std::thread::spawn(move || {
+                serve(&port, 0, listener, &Policy::default(), &stop).unwrap()
+            })
         };
         let mut rig = Rig {
             dir,
