@@ -4,8 +4,8 @@
 //! Every frame read goes through the device's [`Decoder`] into the device's
 //! [`Session`] with the bundled coach references, exactly as `posecoach replay` runs a log.
 //! It answers with wire frames: a `SwingReport` and then a `Status` (the decoder's counters)
-//! per scored swing, and a `Nack` per refused message (the `seq` of the pose frame refused,
-//! else 0). Frames not yet written when the link fails are kept and written, whole, once a
+//! per scored swing, an `Ack` per set-up message taken and a `Nack` per refused message (each
+//! of the message's `seq`, else 0). Frames not yet written when the link fails are kept and written, whole, once a
 //! link is back; the session carries on across links. At most [`REPLY_QUEUE`] replies wait for
 //! the link: when its peer does not read and the queue is full, a new reply is dropped and
 //! counted, so a peer that never reads costs a bounded amount of memory.
