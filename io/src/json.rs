@@ -21,7 +21,7 @@
 //! The document is never held as `serde_json` values (36 times its size): its syntax is
 //! checked as a whole first, allocating nothing, so that a fault anywhere is reported before
 //! any frame is read; then each frame is read from its own text, its points straight into the
-//! samples ([`value`]). Reading takes the file, the samples and one frame's keys.
+//! samples (`json/value.rs`). Reading takes the file, the samples and one frame's keys.
 
 mod value;
 
