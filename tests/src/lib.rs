@@ -58,6 +58,19 @@ pub fn paused(swing: &posecoach_io::Motion, frame: usize, frames: usize) -> pose
     }
 }
 
+/// The time of each swing's top in the recorded session `log` (`tests/logs`, without its
+/// extension), microseconds on the sender's clock, from its sidecar.
+pub fn swing_tops_us(log: &str) -> Vec<u64> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("logs")
+        .join(format!("{log}.swings.json"));
+    let text = std::fs::read_to_string(&path).unwrap_or_default();
+    let sidecar: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+    let swings = sidecar["swings"].as_array().map_or(&[][..], Vec::as_slice);
+    let top = |s: &serde_json::Value| s["events_s"]["top"].as_f64().map(|t| (t * 1e6) as u64);
+    swings.iter().filter_map(top).collect()
+}
+
 /// A committed fixture in `tests/fixtures`.
 pub fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

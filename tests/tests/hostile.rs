@@ -274,15 +274,6 @@ fn imu_tail(last_t_us: u64) -> Vec<Sent> {
     out
 }
 
-/// The time of each swing's top in the clean session, µs (its sidecar's).
-fn tops_us() -> Vec<u64> {
-    let text = std::fs::read_to_string(logs().join(format!("{CLEAN}.swings.json"))).unwrap();
-    let sidecar: Value = serde_json::from_str(&text).unwrap();
-    let swings = sidecar["swings"].as_array().unwrap();
-    let top = |s: &Value| (s["events_s"]["top"].as_f64().unwrap() * 1e6) as u64;
-    swings.iter().map(top).collect()
-}
-
 /// The hostile log's bytes, and how many of its messages the device must refuse.
 fn make() -> (Vec<u8>, usize) {
     let clean = std::fs::read(logs().join(format!("{CLEAN}.pclog"))).unwrap();
@@ -306,7 +297,7 @@ fn make() -> (Vec<u8>, usize) {
     // Layouts before any profile: refused, and the session still takes its set-up.
     let mut sent: Vec<Sent> = broken_layouts().into_iter().map(refused).collect();
     let mut bursts = BURSTS_S.iter().map(|s| (s * 1e6) as u64).peekable();
-    let mut tops = tops_us().into_iter().peekable();
+    let mut tops = posecoach_tests::swing_tops_us(CLEAN).into_iter().peekable();
     let mut last: Option<PoseFrame> = None;
     for message in messages {
         if let Message::PoseFrame(frame) = &message {

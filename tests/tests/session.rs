@@ -504,15 +504,9 @@ fn a_set_up_sent_again_mid_swing_loses_nothing_and_a_change_waits_for_the_swing_
     let other_coach = Message::CoachSelect { seq: 77, coach: 1 };
     // The whole set-up again every 10 frames (a third of a second), as a phone that missed its
     // acknowledgements sends it, and another coach at each swing's top (its sidecar's time).
-    let logs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("logs");
-    let sidecar = std::fs::read_to_string(logs.join("device_h36m_30hz.swings.json")).unwrap();
-    let sidecar: serde_json::Value = serde_json::from_str(&sidecar).unwrap();
-    let mut tops = sidecar["swings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|s| (s["events_s"]["top"].as_f64().unwrap() * 1e6) as u64)
-        .peekable();
+    let tops = posecoach_tests::swing_tops_us("device_h36m_30hz");
+    assert_eq!(tops.len(), 2);
+    let mut tops = tops.into_iter().peekable();
     let mut sent = Vec::new();
     for (n, m) in clean.iter().enumerate() {
         if n > setup.len() && n % 10 == 0 {
