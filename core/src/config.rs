@@ -14,5 +14,6 @@ pub const MAX_SWING_FRAMES: usize = 256;
 /// Joint deviations a report keeps per swing event, largest first.
 pub const DEVIATIONS_PER_EVENT: usize = 3;
 
-/// Most deviations a report holds, and a `SwingReport` carries (every one of the 8 events).
+/// Most deviations a report holds, and a `SwingReport` carries (every one of the 8 events,
+/// `events::Event::COUNT`, which checks it).
 pub const MAX_DEVIATIONS: usize = 8 * DEVIATIONS_PER_EVENT;

@@ -99,8 +99,11 @@ pub enum Event {
 }
 
 impl Event {
+    /// How many events a swing has.
+    pub const COUNT: usize = 8;
+
     /// All events in swing order.
-    pub const ALL: [Event; 8] = [
+    pub const ALL: [Event; Event::COUNT] = [
         Event::Address,
         Event::ToeUp,
         Event::MidBackswing,
@@ -382,6 +385,10 @@ impl SwingEvents {
             .filter_map(|p| self.frame(p).map(|f| (p, f)))
     }
 }
+
+// A report keeps its deviations event by event.
+const _: () =
+    assert!(crate::config::MAX_DEVIATIONS == Event::COUNT * crate::config::DEVIATIONS_PER_EVENT);
 
 /// Why events could not be found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

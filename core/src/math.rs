@@ -50,6 +50,9 @@ pub fn rooted_distances(here: &[crate::Vec3], frames: &[crate::Vec3], scale: f32
     imp::rooted_distances(here, frames, scale, out);
 }
 
+/// A normal spread's standard deviation over its median absolute deviation: `1 / Φ⁻¹(3/4)`.
+pub const MAD_SIGMA: f32 = 1.4826;
+
 /// The median of `values` (reordered; the upper one of an even count), 0 for none.
 pub fn median(values: &mut [f32]) -> f32 {
     let mid = values.len() / 2;

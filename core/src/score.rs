@@ -37,7 +37,7 @@ use crate::dtw::{self, Band, DtwError, Sequence, Window};
 use crate::events::{self, Event, EventError, Position, Side, SwingEvents};
 use crate::frames::Frames;
 use crate::joint::Joint;
-use crate::math::{median, norm, select};
+use crate::math::{median, norm, select, MAD_SIGMA};
 use crate::sequence::{self, Downswing, Gap, GAPS, GAP_TOLERANCE_S};
 use crate::skeleton::Skeleton;
 use crate::wire::{SwingReport, WireCheck, WireDeviation, WireGap};
@@ -813,7 +813,7 @@ pub fn compare(
     }
 
     // Alignment, on the swings where they lie (each joint measured from its frame's root).
-    let mut anchors: HVec<(u16, u16), 8> = HVec::new();
+    let mut anchors: HVec<(u16, u16), { Event::COUNT }> = HVec::new();
     for event in Event::ALL {
         let (Some(i), Some(j)) = (student_events.frame(event), coach_events.frame(event)) else {
             continue;
@@ -883,7 +883,7 @@ pub fn compare(
     };
     // Each joint's usual offset from the coach over the swing, takeaway to finish (per axis the
     // median: a keypoint's constant bias, or a joint another format places elsewhere), and how
-    // much the offset wanders around it (per axis 1.4826 times the median absolute deviation,
+    // much the offset wanders around it (per axis `MAD_SIGMA` times the median absolute deviation,
     // the standard deviation of a normal spread). Neither moves for a flaw confined to part of
     // the swing.
     let (from, to) = (
@@ -931,7 +931,7 @@ pub fn compare(
             for v in values.iter_mut() {
                 *v = libm::fabsf(*v - u[axis]);
             }
-            w[axis] = 1.4826 * median(values);
+            w[axis] = MAD_SIGMA * median(values);
         }
     }
     // Over one swing a keypoint error that drifts for most of a second is seen at a few
@@ -963,7 +963,7 @@ pub fn compare(
     // it moves by about as long as their velocity takes to change by its noise (its vertical
     // part at the finish, which their height defines), the shorter way; the noise is the
     // velocity the still set-up shows, before the takeaway.
-    let mut timing = [MAX_EVENT_TIMING_S; 8];
+    let mut timing = [MAX_EVENT_TIMING_S; Event::COUNT];
     // Where the hands paused at the top, the takeaway is fitted up to their arrival there
     // ([`SwingEvents::arrival`]): how early or late that may be found.
     let paused = student_events.pause() > 0.0;
@@ -1267,7 +1267,7 @@ struct Swing<'a> {
 /// sway and thrust are not checked).
 struct Input {
     noise: Vec3,
-    timing: [f32; 8],
+    timing: [f32; Event::COUNT],
     root_held: bool,
 }
 

@@ -20,7 +20,7 @@
 use crate::body::{Body, BodyError, Link};
 use crate::events::{Position, SwingEvents, SwingKind};
 use crate::frames::Frames;
-use crate::math::median;
+use crate::math::{median, MAD_SIGMA};
 use crate::skeleton::Skeleton;
 use crate::Vec3;
 use heapless::Vec as HVec;
@@ -259,7 +259,7 @@ fn timed(
 const ROUGHNESS_SAMPLES: usize = 32;
 
 /// The variance of `speed`'s noise from frame `from` to `to`, told from its second differences
-/// (a smooth curve's are small): `(1.4826 · median |v[t-1] − 2 v[t] + v[t+1]|)² / 6`, over at
+/// (a smooth curve's are small): `(MAD_SIGMA · median |v[t-1] − 2 v[t] + v[t+1]|)² / 6`, over at
 /// most [`ROUGHNESS_SAMPLES`] of them spread evenly; 0 from fewer than three.
 fn roughness(speed: &dyn Fn(usize) -> Option<f32>, from: usize, to: usize) -> f32 {
     let mut differences = [0.0f32; ROUGHNESS_SAMPLES];
@@ -279,7 +279,7 @@ fn roughness(speed: &dyn Fn(usize) -> Option<f32>, from: usize, to: usize) -> f3
     if n < 3 {
         return 0.0;
     }
-    let spread = 1.4826 * median(&mut differences[..n]);
+    let spread = MAD_SIGMA * median(&mut differences[..n]);
     spread * spread / 6.0
 }
 
