@@ -1,0 +1,254 @@
+//! The body stage: the body checks ([`CHECKS`], see [`crate::checks`]) and the kinematic
+//! sequence's gaps ([`crate::sequence`]) of the student against the coach.
+//!
+//! A check reads both swings' poses as the joint comparison does ([`Pair`]): the student's at
+//! the position, the coach's at its matching frame. Its uncertainty: each joint the check is
+//! measured from moved by the input's noise along each stance axis, at the position and at
+//! address (`√2`), and the coach's change within the event's timing uncertainty. A check is
+//! not made where a joint it is measured from was unsure, nor, where the input held the root
+//! still, the pelvis's sway and thrust.
+
+use super::align::Pair;
+use super::noise::Noise;
+use super::timing::Timing;
+use crate::body::{Body, Measure};
+use crate::checks::{BodyDeviation, CHECKS};
+use crate::config::MAX_JOINTS;
+use crate::events::{Event, Position, SwingEvents};
+use crate::sequence::{self, Downswing, Gap, GAPS};
+use crate::skeleton::Skeleton;
+use crate::Vec3;
+use heapless::Vec as HVec;
+
+/// The least noise per axis a body check's uncertainty is measured with, metres.
+pub const LEAST_NOISE_M: f32 = 0.001;
+
+/// Every joint of the student (`student` true) or the coach at its frame `x`, as the joint
+/// comparison reads them.
+fn pose(pair: &Pair<'_>, student: bool, joints: usize, x: f32, out: &mut [Vec3; MAX_JOINTS]) {
+    let (half_s, half_c) = pair.half;
+    for (k, p) in out.iter_mut().enumerate().take(joints) {
+        *p = match student {
+            true => pair.student_at(k, x, half_s),
+            false => pair.coach_at(k, x, half_c),
+        };
+    }
+}
+
+/// The body checks of `pair`'s student (events `events.0`) against its coach (events
+/// `events.1`, at `coach_hz`), with the noise and timing the earlier stages found: those both
+/// swings could be measured at, in [`CHECKS`] order. None for a skeleton that lacks a joint the
+/// metrics need.
+#[inline(never)]
+pub(super) fn checks(
+    skeleton: &Skeleton,
+    pair: &Pair<'_>,
+    (events, coach_hz): ((&SwingEvents, &SwingEvents), f32),
+    noise: &Noise,
+    timing: &Timing,
+) -> HVec<BodyDeviation, { CHECKS.len() }> {
+    let mut out = HVec::new();
+    let joints = skeleton.len();
+    let (events_s, events_c) = events;
+    let (Ok(body_s), Ok(body_c)) = (
+        Body::new(skeleton, events_s.lead),
+        Body::new(skeleton, events_c.lead),
+    ) else {
+        return out;
+    };
+    let (Some(from_s), Some(from_c)) =
+        (events_s.time(Event::Address), events_c.time(Event::Address))
+    else {
+        return out;
+    };
+    let [mut address_s, mut address_c, mut at_s, mut at_c, mut later, mut earlier] =
+        [[Vec3::zeros(); MAX_JOINTS]; 6];
+    pose(pair, true, joints, from_s, &mut address_s);
+    pose(pair, false, joints, from_c, &mut address_c);
+    let (address_s, address_c) = (&address_s[..joints], &address_c[..joints]);
+    let (stance_s, stance_c) = (&pair.stance_s, &pair.stance_c);
+    let axes = [stance_s.toward_target(), stance_s.toward_ball(), Vec3::y()];
+    let mut at: Option<Position> = None;
+    for check in CHECKS {
+        let shift = matches!(check.measure, Measure::PelvisSway | Measure::PelvisThrust);
+        let Some(event) = check
+            .position
+            .event()
+            .filter(|_| !(pair.root_held && shift))
+        else {
+            continue;
+        };
+        let Some(x) = events_s.time(event) else {
+            continue;
+        };
+        let c = pair.time_map.at(x);
+        // Each position's poses once: the student's, the coach's and the coach's within the
+        // event's timing uncertainty.
+        let h = (timing.event[event as usize] * coach_hz).max(0.5);
+        if at != Some(check.position) {
+            at = Some(check.position);
+            pose(pair, true, joints, x, &mut at_s);
+            pose(pair, false, joints, c, &mut at_c);
+            pose(pair, false, joints, c + h, &mut later);
+            pose(pair, false, joints, c - h, &mut earlier);
+        }
+        let measure = check.measure;
+        let value_s = |pose: &[Vec3]| body_s.value(measure, stance_s, address_s, pose);
+        let value_c = |pose: &[Vec3]| body_c.value(measure, stance_c, address_c, pose);
+        let (Some(zero_s), Some(here_s), Some(zero_c), Some(here_c)) = (
+            value_s(address_s),
+            value_s(&at_s[..joints]),
+            value_c(address_c),
+            value_c(&at_c[..joints]),
+        ) else {
+            continue;
+        };
+        let moved_by = body_s.joints_of(measure);
+        let unsure = |k: usize, x: f32| pair.unsure_near(k, x, pair.half.0);
+        if moved_by.iter().any(|&k| unsure(k, x) || unsure(k, from_s)) {
+            continue;
+        }
+        // Each joint it is measured from moved by the noise along each axis.
+        let mut variance = 0.0f32;
+        for &k in &moved_by {
+            for (axis, direction) in axes.iter().enumerate() {
+                let kept = at_s[k];
+                at_s[k] = kept + direction * noise.input[axis].max(LEAST_NOISE_M);
+                let moved = value_s(&at_s[..joints]);
+                at_s[k] = kept;
+                let d = moved.map_or(0.0, |m| m - here_s);
+                variance += d * d;
+            }
+        }
+        // The coach's change within the event's timing uncertainty.
+        let along = match (value_c(&later[..joints]), value_c(&earlier[..joints])) {
+            (Some(l), Some(e)) => 0.5 * (l - e),
+            _ => 0.0,
+        };
+        let _ = out.push(BodyDeviation {
+            check,
+            student: here_s - zero_s,
+            coach: here_c - zero_c,
+            uncertainty: libm::sqrtf(2.0 * variance + along * along),
+        });
+    }
+    out
+}
+
+/// The gaps of the kinematic sequence of `pair`'s student (events `events.0` at `hz.0`)
+/// against its coach's (events `events.1` at `hz.1`), on the swings as they lie.
+pub(super) fn gaps(
+    skeleton: &Skeleton,
+    pair: &Pair<'_>,
+    events: (&SwingEvents, &SwingEvents),
+    hz: (f32, f32),
+) -> HVec<Gap, { GAPS.len() }> {
+    let (Ok(body_s), Ok(body_c)) = (
+        Body::new(skeleton, events.0.lead),
+        Body::new(skeleton, events.1.lead),
+    ) else {
+        return HVec::new();
+    };
+    sequence::gaps(
+        &Downswing {
+            body: &body_s,
+            positions: pair.student,
+            hz: hz.0,
+            events: events.0,
+        },
+        &Downswing {
+            body: &body_c,
+            positions: pair.coach,
+            hz: hz.1,
+            events: events.1,
+        },
+        &|k, from, to| pair.unsure_between(k, from, to),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::checks;
+    use crate::body::Measure;
+    use crate::events::{Event, Position};
+    use crate::format::Format;
+    use crate::score::align::tests::events;
+    use crate::score::align::Pair;
+    use crate::score::noise::Noise;
+    use crate::score::timing::Timing;
+    use crate::score::{Detected, Unsure};
+    use crate::skeleton::Skeleton;
+    use crate::Vec3;
+
+    /// A standing skeleton's 100 frames, everything above the hips turned `degrees` about the
+    /// vertical through the pelvis from frame 30 on.
+    fn swing(skeleton: &Skeleton, degrees: f32) -> std::vec::Vec<Vec3> {
+        let mut rest = [Vec3::zeros(); 17];
+        skeleton.rest_positions(&mut rest);
+        let pelvis = rest[0];
+        let (sin, cos) = degrees.to_radians().sin_cos();
+        let mut out = std::vec::Vec::new();
+        for f in 0..100 {
+            for p in rest {
+                let d = p - pelvis;
+                let turned = f >= 30 && d.y > 0.1;
+                out.push(match turned {
+                    true => pelvis + Vec3::new(cos * d.x + sin * d.z, d.y, -sin * d.x + cos * d.z),
+                    false => p,
+                });
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn a_turned_chest_reads_as_the_thorax_turn_alone_within_its_uncertainty() {
+        let skeleton = Skeleton::standard(Format::H36m17).unwrap();
+        let (student, coach) = (swing(&skeleton, 25.0), swing(&skeleton, 0.0));
+        let frames = events([10, 20, 30, 40, 50, 60, 70, 90]);
+        let detected = |positions| Detected {
+            positions: crate::frames::Frames::metres(positions, 17),
+            hz: 30.0,
+            events: frames,
+            unsure: Unsure::default(),
+        };
+        let (student, coach) = (detected(&student), detected(&coach));
+        let pair = Pair::new(&skeleton, (&student, &frames), &coach);
+        let noise = Noise {
+            usual: [Vec3::zeros(); 40],
+            wander: [Vec3::zeros(); 40],
+            input: Vec3::repeat(0.01),
+        };
+        let timing = Timing {
+            event: [0.01; Event::COUNT],
+            top_gain: 0.0,
+            paused: false,
+        };
+        let found = checks(
+            &skeleton,
+            &pair,
+            ((&frames, &frames), 30.0),
+            &noise,
+            &timing,
+        );
+        let at = |measure| {
+            found
+                .iter()
+                .find(|b| b.check.position == Position::P4 && b.check.measure == measure)
+                .unwrap()
+        };
+        let (thorax, pelvis) = (at(Measure::ThoraxTurn), at(Measure::PelvisTurn));
+        assert!(
+            (libm::fabsf(thorax.student - thorax.coach) - 25.0).abs() < 0.5,
+            "{thorax:?}"
+        );
+        assert!(
+            thorax.uncertainty > 0.1 && thorax.uncertainty < 5.0,
+            "{thorax:?}"
+        );
+        assert!(
+            libm::fabsf(pelvis.student - pelvis.coach) < 0.5,
+            "{pelvis:?}"
+        );
+    }
+}
