@@ -42,7 +42,11 @@ use crate::joint::Joint;
 use crate::math::norm;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
-use core::cell::Cell;
+use signal::{between, crossed, crossing, turning};
+use track::{Hands, Memo, Track};
+
+mod signal;
+mod track;
 
 /// Half-width of the smoothing window, in seconds.
 pub const SMOOTHING_S: f32 = 0.034;
@@ -421,128 +425,9 @@ impl core::fmt::Display for EventError {
 
 impl core::error::Error for EventError {}
 
-/// Frames of a speed [`Memo`] keeps (1 KiB of stack); later frames are computed each time.
-const MEMO_FRAMES: usize = crate::config::MAX_SWING_FRAMES;
-
-/// A function of the frame, each of the first [`MEMO_FRAMES`] values computed once: the
-/// searches ask for the same speeds many times (a still stretch is a maximum over a window at
-/// every frame), and each speed is four smoothed positions.
-struct Memo<F> {
-    f: F,
-    /// NaN until computed (speeds of finite positions are finite).
-    values: [Cell<f32>; MEMO_FRAMES],
-}
-
-impl<F: Fn(usize) -> f32> Memo<F> {
-    fn new(f: F) -> Memo<F> {
-        Memo {
-            f,
-            values: core::array::from_fn(|_| Cell::new(f32::NAN)),
-        }
-    }
-
-    fn get(&self, t: usize) -> f32 {
-        let Some(cell) = self.values.get(t) else {
-            return (self.f)(t);
-        };
-        if cell.get().is_nan() {
-            cell.set((self.f)(t));
-        }
-        cell.get()
-    }
-}
-
-/// Smoothed trajectories of one motion.
-struct Track<'a> {
-    positions: Frames<'a>,
-    frames: usize,
-    half: usize,
-    rate: f32,
-}
-
-impl<'a> Track<'a> {
-    /// `positions` at `rate` frames per second, smoothed over ±[`SMOOTHING_S`].
-    fn new(positions: Frames<'a>, rate: f32) -> Track<'a> {
-        Track {
-            positions,
-            frames: positions.len(),
-            half: libm::roundf(SMOOTHING_S * rate) as usize,
-            rate,
-        }
-    }
-
-    /// Joint `j` at frame `t`, averaged over `t ± half` (clamped to the motion).
-    fn at(&self, j: usize, t: usize) -> Vec3 {
-        let (lo, hi) = (
-            t.saturating_sub(self.half),
-            (t + self.half).min(self.frames - 1),
-        );
-        let sum = (lo..=hi).fold(Vec3::zeros(), |s, f| s + self.positions.at(f, j));
-        sum / (hi - lo + 1) as f32
-    }
-
-    /// Speed of `point` at `t` in metres per second, by a central difference over ±half.
-    fn speed(&self, point: impl Fn(usize) -> Vec3, t: usize) -> f32 {
-        let (lo, hi) = (
-            t.saturating_sub(self.half.max(1)),
-            (t + self.half.max(1)).min(self.frames - 1),
-        );
-        norm(&(point(hi) - point(lo))) * self.rate / (hi - lo).max(1) as f32
-    }
-}
-
 /// Elevation of `v` above the horizontal plane, degrees.
 fn elevation(v: Vec3) -> f32 {
     libm::atan2f(v.y, libm::hypotf(v.x, v.z)).to_degrees()
-}
-
-/// The first frame in `range` (walking in its direction) where `f` crosses `level` upwards
-/// (`rising`) or downwards, whichever of the two frames around the crossing is nearer the level.
-fn crossing(
-    range: impl Iterator<Item = usize>,
-    f: impl Fn(usize) -> f32,
-    level: f32,
-    rising: bool,
-) -> Option<usize> {
-    let mut previous: Option<(usize, f32)> = None;
-    for t in range {
-        let v = f(t) - level;
-        if let Some((p, pv)) = previous {
-            let (before, after) = if p < t { (pv, v) } else { (v, pv) };
-            let crossed = if rising {
-                before < 0.0 && after >= 0.0
-            } else {
-                before > 0.0 && after <= 0.0
-            };
-            if crossed {
-                return Some(if v.abs() < pv.abs() { t } else { p });
-            }
-        }
-        previous = Some((t, v));
-    }
-    None
-}
-
-/// Where a parabola through `(−1, a)`, `(0, b)`, `(1, c)` turns, in −0.5..=0.5 (0 where the
-/// three are on a line): a turning point found at a frame, placed between frames.
-fn vertex(a: f32, b: f32, c: f32) -> f32 {
-    let curve = a - 2.0 * b + c;
-    if curve.abs() > f32::EPSILON {
-        (0.5 * (a - c) / curve).clamp(-0.5, 0.5)
-    } else {
-        0.0
-    }
-}
-
-/// Where `f` crosses `level` between frames `a` and `b` (linear), as a fractional frame.
-fn between(f: impl Fn(usize) -> f32, level: f32, a: usize, b: usize) -> f32 {
-    let (fa, fb) = (f(a), f(b));
-    let w = if fb != fa {
-        ((level - fa) / (fb - fa)).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    a as f32 + (b as f32 - a as f32) * w
 }
 
 /// The hands' progress toward the top is fitted between these shares of it (well above pose
@@ -823,9 +708,9 @@ pub fn detect(
         .index_of(Joint::ClubGrip)
         .zip(skeleton.index_of(Joint::ClubHead));
     let track = &Track::new(positions, rate_hz);
-    let hands = |t: usize| (track.at(wrists[0], t) + track.at(wrists[1], t)) * 0.5;
-    let hand_speeds = Memo::new(|t| track.speed(hands, t));
-    let hand_speed = |t: usize| hand_speeds.get(t);
+    let path = &Hands::new(track, wrists);
+    let hands = |t: usize| path.at(t);
+    let hand_speed = |t: usize| path.speed(t);
 
     // The fastest hands of the swing, then back to the first minimum of hand speed where the
     // hands are high (in the upper half of their range): the top. A low minimum (the dip at
@@ -861,13 +746,14 @@ pub fn detect(
         Some((_, head)) => &move |t| track.at(head, t),
         None => &hands,
     };
-    let probe_speeds = Memo::new(|t| track.speed(probe, t));
-    let peak = (0..top).map(|t| probe_speeds.get(t)).fold(0.0, f32::max);
+    let probe_speeds = Memo::new();
+    let probe_speed = |t: usize| probe_speeds.get(t, |t| track.speed(probe, t));
+    let peak = (0..top).map(probe_speed).fold(0.0, f32::max);
     let window = (libm::roundf(STILL_S * rate_hz) as usize).max(1);
     // The fastest the hands go in a stretch of `window` frames ending at `t`.
     let stir = |t: usize| {
         (t.saturating_sub(window)..=t)
-            .map(|s| probe_speeds.get(s))
+            .map(probe_speed)
             .fold(0.0, f32::max)
     };
     // Pose noise makes still hands seem to move: the threshold is at least NOISE_MARGIN times
@@ -955,24 +841,17 @@ pub fn detect(
         return Err(EventError::NoSwing);
     }
     // Turning points between frames: the slowest hands at the top, the nearest at impact.
-    let turning = |f: &dyn Fn(usize) -> f32, t: usize| {
-        if t == 0 || t + 1 >= frames {
-            t as f32
-        } else {
-            t as f32 + vertex(f(t - 1), f(t), f(t + 1))
-        }
-    };
     let (top_time, arrival) = match pause {
         Some((begin, end)) => (end as f32, begin as f32),
         None => {
-            let time = turning(&hand_speed, top);
+            let time = turning(&hand_speed, top, frames);
             (time, time)
         }
     };
     let impact_time = match club {
         // The hands lead the club head through impact (shaft lean).
-        None if !putt => turning(&away, impact) + IMPACT_LAG_S * rate_hz,
-        _ => turning(&away, impact),
+        None if !putt => turning(&away, impact, frames) + IMPACT_LAG_S * rate_hz,
+        _ => turning(&away, impact, frames),
     }
     .min((frames - 1) as f32);
 
@@ -1034,15 +913,6 @@ pub fn detect(
     let follow = follow.ok_or(EventError::NoSwing)?;
     let mid_backswing = crossing(toe_up..top, arm, 0.0, true).ok_or(EventError::NoSwing)?;
     let mid_downswing = crossing(top..impact, arm, 0.0, false).ok_or(EventError::NoSwing)?;
-    // A crossing found at frame `t` of `f` past `level`, placed between the two frames around it.
-    let crossed = |f: &dyn Fn(usize) -> f32, level: f32, t: usize| {
-        let next = (t + 1).min(frames - 1);
-        if (f(t) - level) * (f(next) - level) <= 0.0 {
-            between(f, level, t, next)
-        } else {
-            between(f, level, t.saturating_sub(1), t)
-        }
-    };
     let (lift, lift_level) = match club {
         Some(_) => (&shaft as &dyn Fn(usize) -> f32, (0.0, 0.0)),
         None => (
@@ -1060,28 +930,27 @@ pub fn detect(
 
     // P6, where the shaft falls through horizontal (without a club, SHAFT_DOWN_SHARE of the way
     // from P5 to impact); P9, where the trail arm rises through horizontal after impact.
-    let p5 = crossed(&arm, 0.0, mid_downswing);
+    let p5 = crossed(&arm, 0.0, mid_downswing, frames);
     let shaft_down = match club {
-        Some(_) => {
-            crossing(mid_downswing..impact, shaft, 0.0, false).map(|t| (t, crossed(&shaft, 0.0, t)))
-        }
+        Some(_) => crossing(mid_downswing..impact, shaft, 0.0, false)
+            .map(|t| (t, crossed(&shaft, 0.0, t, frames))),
         None => {
             let time = p5 + SHAFT_DOWN_SHARE * (impact_time - p5);
             Some((libm::roundf(time) as usize, time))
         }
     };
-    let trail_up =
-        crossing(impact..finish, trail_arm, 0.0, true).map(|t| (t, crossed(&trail_arm, 0.0, t)));
+    let trail_up = crossing(impact..finish, trail_arm, 0.0, true)
+        .map(|t| (t, crossed(&trail_arm, 0.0, t, frames)));
 
     let times = [
         taken,
-        crossed(lift, lift_level.0, toe_up),
-        crossed(&arm, 0.0, mid_backswing),
+        crossed(lift, lift_level.0, toe_up, frames),
+        crossed(&arm, 0.0, mid_backswing, frames),
         top_time,
         p5,
         impact_time,
-        crossed(lift, lift_level.1, follow),
-        turning(&height, finish),
+        crossed(lift, lift_level.1, follow, frames),
+        turning(&height, finish, frames),
     ];
     let mut frames = [
         address,
