@@ -43,10 +43,16 @@ use crate::math::norm;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
 use signal::{between, crossed, crossing, turning};
+use takeaway::onset;
 use track::{Hands, Memo, Track};
 
 mod signal;
+#[cfg(test)]
+mod synthetic;
+mod takeaway;
 mod track;
+
+pub use takeaway::{takeaway_against, Takeaway, ONSET_SHARES};
 
 /// Half-width of the smoothing window, in seconds.
 pub const SMOOTHING_S: f32 = 0.034;
@@ -430,241 +436,6 @@ fn elevation(v: Vec3) -> f32 {
     libm::atan2f(v.y, libm::hypotf(v.x, v.z)).to_degrees()
 }
 
-/// The hands' progress toward the top is fitted between these shares of it (well above pose
-/// noise, early enough to be a start from rest).
-pub const ONSET_SHARES: (f32, f32) = (0.08, 0.3);
-
-/// The takeaway, in frames: when the `hands` start back from `home` (their set-up position)
-/// toward where they are at `top`, searching from frame `from`. Starting from rest with a
-/// smooth push, the hands' progress along their first direction grows as the cube of the time
-/// since the takeaway (the start of a minimum-jerk reach; 3.1 to 3.2 on the tour swings), so
-/// its cube root is fitted with a line between [`ONSET_SHARES`] of the way to the top and
-/// extrapolated back to zero. `None` without enough frames in that stretch.
-fn takeaway(hands: impl Fn(usize) -> Vec3, home: Vec3, from: usize, top: usize) -> Option<f32> {
-    let reach = norm(&(hands(top) - home));
-    if reach <= 0.0 {
-        return None;
-    }
-    let (lo, hi) = (ONSET_SHARES.0 * reach, ONSET_SHARES.1 * reach);
-    let last = (from..=top).find(|&t| norm(&(hands(t) - home)) >= hi)?;
-    let way = (hands(last) - home) / norm(&(hands(last) - home));
-    let progress = |t: usize| (hands(t) - home).dot(&way);
-    let mut first = last;
-    while first > from && progress(first - 1) >= lo {
-        first -= 1;
-    }
-    if last - first < 1 {
-        return None;
-    }
-    // Pose noise of σ in the progress p is σ / (3 p^(2/3)) in its cube root: each frame is
-    // weighted by p^(4/3), the inverse of that variance.
-    let (mut sw, mut st, mut sy, mut stt, mut sty) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
-    for t in first..=last {
-        let (x, y) = ((t - first) as f32, libm::cbrtf(progress(t).max(0.0)));
-        let w = y * y * y * y;
-        sw += w;
-        st += w * x;
-        sy += w * y;
-        stt += w * x * x;
-        sty += w * x * y;
-    }
-    let slope = (sw * sty - st * sy) / (sw * stt - st * st);
-    if !(slope.is_finite() && slope > 0.0) {
-        return None;
-    }
-    let intercept = (sy - slope * st) / sw;
-    Some(first as f32 - intercept / slope)
-}
-
-/// The shares of the way from the set-up to the top at which [`takeaway_against`] compares
-/// the hands' progress: the 13 from 0.1 to 0.7 in steps of 0.05.
-const PROGRESS_SHARES: (f32, f32, usize) = (0.1, 0.05, 13);
-
-/// A student's takeaway timed against a coach's backswing ([`takeaway_against`]), with what
-/// moves it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Takeaway {
-    /// The takeaway, frames (between frames).
-    pub time: f32,
-    /// How much earlier it comes for each frame later the hands' arrival at the top is found
-    /// (the top, where they do not pause there): without a pause the backswing's length moves
-    /// by `1 + top_gain` times the top's error.
-    pub top_gain: f32,
-    /// Its standard deviation from the crossings' scatter about the fit alone, frames.
-    pub spread: f32,
-}
-
-/// The student's takeaway (frames, between frames) timed against the coach's: the arms'
-/// (wrists and elbows) progress along the line from their set-up to their top pose passes 10 %
-/// to 70 % of the way at moments that, were the student's backswing the coach's run at its own
-/// pace, would lie at the same shares of the time from the takeaway to the hands' arrival at
-/// the top ([`SwingEvents::arrival`]: a pause there is no part of the pace); the takeaway that fits
-/// them best (least squares, each crossing weighted by how sharply the progress passes it) is
-/// the student's. It uses half a second of the backswing where
-/// [`detect`] uses a fifth, so pose noise moves it less. `None` when a swing lacks the joints
-/// (or is not read in the skeleton's), the events or a crossing.
-pub fn takeaway_against(
-    skeleton: &Skeleton,
-    student: Frames<'_>,
-    student_events: &SwingEvents,
-    student_hz: f32,
-    coach: Frames<'_>,
-    coach_events: &SwingEvents,
-    coach_hz: f32,
-) -> Option<Takeaway> {
-    // The arms: wrists (or hands) and elbows, whose pose errors are independent.
-    let arms = [
-        skeleton.find(&[Joint::LeftWrist, Joint::LeftHand])?,
-        skeleton.find(&[Joint::RightWrist, Joint::RightHand])?,
-        skeleton.index_of(Joint::LeftElbow)?,
-        skeleton.index_of(Joint::RightElbow)?,
-    ];
-    if student.joints() != skeleton.len() || coach.joints() != skeleton.len() {
-        return None;
-    }
-    let (s, c) = (Track::new(student, student_hz), Track::new(coach, coach_hz));
-    if s.frames == 0 || c.frames == 0 {
-        return None;
-    }
-    type Arms = [Vec3; 4];
-    let pose = |t: &Track<'_>, x: f32| -> Arms {
-        let f = (x.max(0.0) as usize).min(t.frames - 1);
-        let g = (f + 1).min(t.frames - 1);
-        let w = (x - f as f32).clamp(0.0, 1.0);
-        if w == 0.0 {
-            // At a frame: the next one's smoothed read would be weighed by zero.
-            return arms.map(|k| t.at(k, f));
-        }
-        arms.map(|k| t.at(k, f) * (1.0 - w) + t.at(k, g) * w)
-    };
-    // Each backswing runs from the takeaway to the hands' arrival at the top (a pause there
-    // is no part of the coach's pace).
-    let (c0, c_top) = (
-        coach_events.time(Event::Address)?,
-        coach_events
-            .time(Event::Top)
-            .map(|_| coach_events.arrival())?,
-    );
-    let (s0, s_top) = (
-        student_events.time(Event::Address)?,
-        student_events
-            .time(Event::Top)
-            .map(|_| student_events.arrival())?,
-    );
-    if c_top <= c0 || s_top <= s0 {
-        return None;
-    }
-    // Progress along the set-up → top line of the arms' pose, 0 at the set-up and 1 at the
-    // top.
-    let progress = |t: &Track<'_>, home: &Arms, top: &Arms, f: usize| {
-        let now = pose(t, f as f32);
-        let (mut along, mut length) = (0.0f32, 0.0f32);
-        for i in 0..4 {
-            let line = top[i] - home[i];
-            along += (now[i] - home[i]).dot(&line);
-            length += line.norm_squared();
-        }
-        along / length
-    };
-    // Each swing's set-up: the arms' mean over the still stretch before its own takeaway.
-    let home = |t: &Track<'_>, taken: f32| {
-        let still = (libm::roundf(STILL_S * t.rate) as usize).max(1);
-        let end = (taken as usize).saturating_sub(1);
-        let start = end.saturating_sub(still);
-        let mut mean = [Vec3::zeros(); 4];
-        for f in start..=end {
-            for (m, p) in mean.iter_mut().zip(pose(t, f as f32)) {
-                *m += p / (end - start + 1) as f32;
-            }
-        }
-        (start, mean)
-    };
-    let ((c_start, c_home), (start, s_home)) = (home(&c, c0), home(&s, s0));
-    let c_line = (c_home, pose(&c, c_top));
-    let s_line = (s_home, pose(&s, s_top));
-    // The first moment (frames, between frames) the progress passes `share` in `from..=to`.
-    // The moments (frames, between frames) the progress first passes each share, in one walk
-    // from `from` to `to`; `None` for a share it never reaches.
-    const SHARES: usize = PROGRESS_SHARES.2;
-    let passes = |t: &Track<'_>, line: &(Arms, Arms), from: usize, to: usize| {
-        let mut at = [None; SHARES];
-        let mut next = 0;
-        let mut before = progress(t, &line.0, &line.1, from);
-        for f in from..to {
-            let after = progress(t, &line.0, &line.1, f + 1);
-            while next < SHARES {
-                let share = PROGRESS_SHARES.0 + PROGRESS_SHARES.1 * next as f32;
-                if after < share {
-                    break;
-                }
-                let w = if before >= share || after <= before {
-                    0.0
-                } else {
-                    (share - before) / (after - before)
-                };
-                at[next] = Some(f as f32 + w);
-                next += 1;
-            }
-            before = after;
-        }
-        at
-    };
-    let (c_at, s_at) = (
-        passes(&c, &c_line, c_start, c_top as usize),
-        passes(&s, &s_line, start, s_top as usize),
-    );
-    let c_span = c_top - c0;
-    // Per crossing: the coach's share f of its backswing's time there, the weight, and the
-    // student's moment.
-    let mut points = [(0.0f32, 0.0f32, 0.0f32); SHARES];
-    let mut count = 0;
-    for (c_at, s_at) in c_at.into_iter().zip(s_at) {
-        let (c_at, s_at) = (c_at?, s_at?);
-        // s_at = t0 + f (s_top − t0), f the coach's share of its backswing's time there. Pose
-        // noise moves a crossing in time inversely to how fast the progress goes through it
-        // (the coach's pace there, per share of the backswing): each is weighted so.
-        let f = ((c_at - c0) / c_span).clamp(0.0, 0.95);
-        let k = c_at as usize;
-        let pace = (progress(&c, &c_line.0, &c_line.1, (k + 1).min(c.frames - 1))
-            - progress(&c, &c_line.0, &c_line.1, k.saturating_sub(1)))
-            * 0.5
-            * c_span;
-        points[count] = (f, pace * pace, s_at);
-        count += 1;
-    }
-    let points = &points[..count];
-    let (num, den, gain) =
-        points
-            .iter()
-            .fold((0.0f32, 0.0f32, 0.0f32), |(n, d, g), &(f, w, s_at)| {
-                (
-                    n + w * (1.0 - f) * (s_at - f * s_top),
-                    d + w * (1.0 - f) * (1.0 - f),
-                    g + w * (1.0 - f) * f,
-                )
-            });
-    // (A NaN sum gives no takeaway.)
-    let time = Some(num / den).filter(|_| den > 0.0)?;
-    // The crossings' own scatter about the fit, carried into the takeaway (a sandwich
-    // estimate, with n / (n − 1) for the fitted parameter).
-    let scatter = points
-        .iter()
-        .map(|&(f, w, s_at)| {
-            let r = s_at - (time * (1.0 - f) + f * s_top);
-            let lever = w * (1.0 - f);
-            lever * lever * r * r
-        })
-        .sum::<f32>()
-        / (den * den)
-        * count as f32
-        / count.saturating_sub(1).max(1) as f32;
-    Some(Takeaway {
-        time,
-        top_gain: gain / den,
-        spread: libm::sqrtf(scatter),
-    })
-}
-
 /// Finds the events of the one swing (eight) or putt (four) in `positions` (frames × skeleton joints,
 /// metres, +Y up) recorded at `rate_hz`.
 ///
@@ -774,7 +545,7 @@ pub fn detect(
     // address is the end of the still set-up.
     let taken = match putt {
         true => settled as f32,
-        false => takeaway(hands, rested, rest, top)
+        false => onset(hands, rested, rest, top)
             .map_or(settled as f32, |t| t.clamp(0.0, (top - 1) as f32)),
     };
     let address = taken as usize;
