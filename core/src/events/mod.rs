@@ -39,13 +39,19 @@
 
 use crate::frames::Frames;
 use crate::joint::Joint;
-use crate::math::norm;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
-use signal::{between, crossed, crossing, turning};
-use takeaway::onset;
-use track::{Hands, Memo, Track};
+use limbs::Limbs;
+use track::{Hands, Track};
 
+// The stages of `detect`: a typed result each.
+mod address;
+mod finish;
+mod impact;
+mod parallels;
+mod top;
+// What the stages read the motion with.
+mod limbs;
 mod signal;
 #[cfg(test)]
 mod synthetic;
@@ -431,9 +437,110 @@ impl core::fmt::Display for EventError {
 
 impl core::error::Error for EventError {}
 
-/// Elevation of `v` above the horizontal plane, degrees.
-fn elevation(v: Vec3) -> f32 {
-    libm::atan2f(v.y, libm::hypotf(v.x, v.z)).to_degrees()
+/// One event found: its frame, and its time in frames from the first (between frames).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Moment {
+    frame: usize,
+    time: f32,
+}
+
+impl Moment {
+    /// The event at `frame`, at `time`.
+    const fn new(frame: usize, time: f32) -> Moment {
+        Moment { frame, time }
+    }
+}
+
+impl SwingEvents {
+    /// A swing of `kind` led by `lead` with no event yet, its hands arriving at the top at
+    /// `arrival`.
+    fn new(kind: SwingKind, lead: Side, club: bool, arrival: f32) -> SwingEvents {
+        SwingEvents {
+            kind,
+            lead,
+            club,
+            frames: [ABSENT; 10],
+            times: [0.0; 10],
+            arrival,
+        }
+    }
+
+    /// Puts `position` at `frame`, at `time`.
+    fn put(&mut self, position: Position, frame: u16, time: f32) {
+        self.frames[position as usize] = frame;
+        self.times[position as usize] = time;
+    }
+
+    /// A putt's events from its address, top, impact and finish, in that order.
+    fn putt(lead: Side, club: bool, four: [Moment; 4], arrival: f32) -> SwingEvents {
+        let mut events = SwingEvents::new(SwingKind::Putt, lead, club, arrival);
+        let putt = [Event::Address, Event::Top, Event::Impact, Event::Finish];
+        for (event, at) in putt.into_iter().zip(four) {
+            events.put(event.position(), at.frame as u16, at.time);
+        }
+        events
+    }
+
+    /// A full swing's events from its eight in swing order ([`Event::ALL`]), and P6 and P9
+    /// where they were found and fall strictly between their neighbours.
+    ///
+    /// # Errors
+    /// [`EventError::NoSwing`] where the eight are not in swing order.
+    fn full(
+        lead: Side,
+        club: bool,
+        eight: [Moment; Event::COUNT],
+        arrival: f32,
+        p6_p9: [Option<Moment>; 2],
+    ) -> Result<SwingEvents, EventError> {
+        let mut frames = eight.map(|at| at.frame as u16);
+        if frames.windows(2).any(|w| w[1] <= w[0]) {
+            return Err(EventError::NoSwing);
+        }
+        // Impact's frame is the one nearest its time (later than the hands' return by the lag),
+        // between its neighbours.
+        let i = Event::Impact as usize;
+        frames[i] = (libm::roundf(eight[i].time) as u16)
+            .clamp(frames[i - 1] + 1, frames[i + 1] - 1)
+            .max(frames[i]);
+        let mut events = SwingEvents::new(SwingKind::Full, lead, club, arrival);
+        for (k, event) in Event::ALL.into_iter().enumerate() {
+            events.put(event.position(), frames[k], eight[k].time);
+        }
+        for (position, found) in [Position::P6, Position::P9].into_iter().zip(p6_p9) {
+            let i = position as usize;
+            if let Some(at) = found {
+                let frame = at.frame as u16;
+                if events.frames[i - 1] < frame && frame < events.frames[i + 1] {
+                    events.put(position, frame, at.time);
+                }
+            }
+        }
+        Ok(events)
+    }
+}
+
+/// [`detect`]'s checks of the rate and the motion, before any joint is looked for.
+///
+/// # Errors
+/// [`EventError::Rate`], [`EventError::Length`] or [`EventError::NonFinite`], as [`detect`]
+/// documents them.
+fn check(skeleton: &Skeleton, positions: Frames<'_>, rate_hz: f32) -> Result<(), EventError> {
+    if !(rate_hz.is_finite() && rate_hz > 0.0) {
+        return Err(EventError::Rate);
+    }
+    let frames = positions.len();
+    if !positions.is_whole()
+        || positions.joints() != skeleton.len()
+        || (frames as f32) < rate_hz
+        || frames > u16::MAX as usize
+    {
+        return Err(EventError::Length);
+    }
+    if !positions.is_finite() {
+        return Err(EventError::NonFinite);
+    }
+    Ok(())
 }
 
 /// Finds the events of the one swing (eight) or putt (four) in `positions` (frames × skeleton joints,
@@ -450,323 +557,42 @@ pub fn detect(
     positions: Frames<'_>,
     rate_hz: f32,
 ) -> Result<SwingEvents, EventError> {
-    if !(rate_hz.is_finite() && rate_hz > 0.0) {
-        return Err(EventError::Rate);
-    }
-    let frames = positions.len();
-    if !positions.is_whole()
-        || positions.joints() != skeleton.len()
-        || (frames as f32) < rate_hz
-        || frames > u16::MAX as usize
-    {
-        return Err(EventError::Length);
-    }
-    if !positions.is_finite() {
-        return Err(EventError::NonFinite);
-    }
-    let need = |j: Joint| skeleton.index_of(j).ok_or(EventError::MissingJoint(j));
-    let either = |a: Joint, b: Joint| skeleton.find(&[a, b]).ok_or(EventError::MissingJoint(b));
-    let wrists = [
-        either(Joint::LeftWrist, Joint::LeftHand)?,
-        either(Joint::RightWrist, Joint::RightHand)?,
-    ];
-    let shoulders = [need(Joint::LeftShoulder)?, need(Joint::RightShoulder)?];
-    let feet = [
-        either(Joint::LeftAnkle, Joint::LeftToe)?,
-        either(Joint::RightAnkle, Joint::RightToe)?,
-    ];
-    let club = skeleton
-        .index_of(Joint::ClubGrip)
-        .zip(skeleton.index_of(Joint::ClubHead));
+    check(skeleton, positions, rate_hz)?;
+    let limbs = Limbs::find(skeleton)?;
     let track = &Track::new(positions, rate_hz);
-    let path = &Hands::new(track, wrists);
-    let hands = |t: usize| path.at(t);
-    let hand_speed = |t: usize| path.speed(t);
-
-    // The fastest hands of the swing, then back to the first minimum of hand speed where the
-    // hands are high (in the upper half of their range): the top. A low minimum (the dip at
-    // impact, when the fastest hands come in the follow-through) is passed over.
-    let (low, high) = (0..frames).fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), t| {
-        let y = hands(t).y;
-        (lo.min(y), hi.max(y))
-    });
-    let fastest = (0..frames)
-        .max_by(|&a, &b| hand_speed(a).total_cmp(&hand_speed(b)))
-        .ok_or(EventError::NoSwing)?;
-    let mut top = fastest;
-    loop {
-        while top > 0 && hand_speed(top - 1) <= hand_speed(top) {
-            top -= 1;
-        }
-        let putt = high - low < PUTT_RISE_M;
-        if top == 0 || putt || hands(top).y > 0.5 * (low + high) {
-            break;
-        }
-        // Step off the low minimum (every pass moves back at least one frame), then climb.
-        top -= 1;
-        while top > 0 && hand_speed(top - 1) >= hand_speed(top) {
-            top -= 1;
-        }
-    }
-    if top == 0 {
-        return Err(EventError::NoSwing);
-    }
-
-    // Address: the last frame of a still set-up before the top.
-    let probe: &dyn Fn(usize) -> Vec3 = match club {
+    let hands = &Hands::new(track, limbs.wrists);
+    let turn = top::turn(hands)?;
+    // The set-up's stillness and impact are read from the club head where it is tracked, else
+    // from the hands.
+    let probe: &dyn Fn(usize) -> Vec3 = match limbs.club {
         Some((_, head)) => &move |t| track.at(head, t),
-        None => &hands,
+        None => &|t| hands.at(t),
     };
-    let probe_speeds = Memo::new();
-    let probe_speed = |t: usize| probe_speeds.get(t, |t| track.speed(probe, t));
-    let peak = (0..top).map(probe_speed).fold(0.0, f32::max);
-    let window = (libm::roundf(STILL_S * rate_hz) as usize).max(1);
-    // The fastest the hands go in a stretch of `window` frames ending at `t`.
-    let stir = |t: usize| {
-        (t.saturating_sub(window)..=t)
-            .map(probe_speed)
-            .fold(0.0, f32::max)
-    };
-    // Pose noise makes still hands seem to move: the threshold is at least NOISE_MARGIN times
-    // the quietest stretch before the top.
-    let quietest = (0..top).map(stir).fold(f32::INFINITY, f32::min);
-    let still = (STILL_FRACTION * peak).max(NOISE_MARGIN * quietest);
-    // A still stretch that runs into the start of the recording counts as long enough.
-    let settled = (0..top)
-        .rev()
-        .find(|&t| stir(t) < still)
-        .ok_or(EventError::NoSwing)?;
-    // The takeaway: from where the hands rested in that stretch, the start of their way back.
-    let rest = settled.saturating_sub(window);
-    let rested =
-        (rest..=settled).fold(Vec3::zeros(), |s, t| s + hands(t)) / (settled - rest + 1) as f32;
-    let putt = high - low < PUTT_RISE_M;
-    // A putt's stroke moves the hands a few centimetres: too little to fit its start, so its
-    // address is the end of the still set-up.
-    let taken = match putt {
-        true => settled as f32,
-        false => onset(hands, rested, rest, top)
-            .map_or(settled as f32, |t| t.clamp(0.0, (top - 1) as f32)),
-    };
-    let address = taken as usize;
-
-    // The backswing takes the hands toward the trail foot.
-    let across = track.at(feet[1], address) - track.at(feet[0], address);
-    let lead = if (hands(top) - hands(address)).dot(&across) > 0.0 {
-        Side::Left
-    } else {
-        Side::Right
-    };
-    let (lead_shoulder, lead_wrist) = match lead {
-        Side::Left => (shoulders[0], wrists[0]),
-        Side::Right => (shoulders[1], wrists[1]),
-    };
-    let arm = |t: usize| elevation(track.at(lead_wrist, t) - track.at(lead_shoulder, t));
-    let (trail_shoulder, trail_wrist) = match lead {
-        Side::Left => (shoulders[1], wrists[1]),
-        Side::Right => (shoulders[0], wrists[0]),
-    };
-    let trail_arm = |t: usize| elevation(track.at(trail_wrist, t) - track.at(trail_shoulder, t));
-
-    // A pause at the top: the hands as still as the set-up's quietest stretch (the club
-    // head's where it is tracked, else the hands'; at least a standing body's sway) for longer
-    // than a speed's smoothing reaches, where that stillness can be told from the hands'
-    // turn (under STILL_FRACTION of their fastest in the backswing, as the set-up's is). The
-    // backswing lasts until the downswing starts, so the top is the pause's end; the hands
-    // arrived at its start. A speed reads positions smoothed over ±half frames, `half.max(1)`
-    // frames either side, so still speeds run that far inside either end of the still frames.
-    let quiet = (NOISE_MARGIN * quietest).max(STILL_SWAY_M_S);
-    let backswing = (address..top).map(hand_speed).fold(0.0, f32::max);
-    let inset = track.half + track.half.max(1);
-    let (mut begin, mut end) = (top, top);
-    if quiet < STILL_FRACTION * backswing && hand_speed(top) <= quiet {
-        while begin > address + 1 && hand_speed(begin - 1) <= quiet {
-            begin -= 1;
-        }
-        while end + 2 < frames && hand_speed(end + 1) <= quiet {
-            end += 1;
-        }
+    let address = address::find(hands, probe, turn)?;
+    let lead = limbs.lead(hands, address.at.frame, turn.frame);
+    let top = turn.top(hands, address.at.frame, address.quietest);
+    let impact = impact::find(track, &limbs, probe, &address, top.at.frame, turn.putt)?;
+    let club = limbs.club.is_some();
+    if turn.putt {
+        let finish = finish::putt(hands, impact.frame)?;
+        let four = [address.at, top.at, impact, finish];
+        return Ok(SwingEvents::putt(lead, club, four, top.arrival));
     }
-    let pause = (end - begin >= inset).then(|| {
-        (
-            (begin.saturating_sub(inset)).max(address + 1),
-            (end + inset).min(frames - 2),
-        )
-    });
-    let top = pause.map_or(top, |(_, end)| end);
-
-    // Impact: after the top, where the club head (or the hands) comes closest to where it was
-    // at address.
-    let home = match club {
-        Some(_) => probe(address),
-        None => rested,
-    };
-    let away = |t: usize| norm(&(probe(t) - home));
-    let reach = top + 1 + (libm::roundf(IMPACT_WITHIN_S * rate_hz) as usize).min(frames);
-    let impact = (top + 1..reach.min(frames))
-        .min_by(|&a, &b| away(a).total_cmp(&away(b)))
-        .filter(|&t| t + 1 < frames)
-        .ok_or(EventError::NoSwing)?;
-    let stance = |t: usize| (track.at(feet[0], t) + track.at(feet[1], t)) * 0.5;
-    if (address..=impact).any(|t| norm(&(stance(t) - stance(address))) > PLANTED_M) {
-        return Err(EventError::NoSwing);
-    }
-    // Turning points between frames: the slowest hands at the top, the nearest at impact.
-    let (top_time, arrival) = match pause {
-        Some((begin, end)) => (end as f32, begin as f32),
-        None => {
-            let time = turning(&hand_speed, top, frames);
-            (time, time)
-        }
-    };
-    let impact_time = match club {
-        // The hands lead the club head through impact (shaft lean).
-        None if !putt => turning(&away, impact, frames) + IMPACT_LAG_S * rate_hz,
-        _ => turning(&away, impact, frames),
-    }
-    .min((frames - 1) as f32);
-
-    if putt {
-        // A putt: the finish is where the forward stroke stops, the hands slower than
-        // STILL_FRACTION of their fastest after impact (a speed minimum would come late,
-        // once the smoothing window has passed the stop).
-        let mut peak = impact;
-        while peak + 1 < frames && hand_speed(peak + 1) >= hand_speed(peak) {
-            peak += 1;
-        }
-        let stopped = STILL_FRACTION * hand_speed(peak);
-        let finish = (peak..frames)
-            .find(|&t| hand_speed(t) < stopped)
-            .unwrap_or(frames - 1);
-        if finish <= impact {
-            return Err(EventError::NoSwing);
-        }
-        let mut frames = [ABSENT; 10];
-        let mut times = [0.0; 10];
-        for (event, frame, time) in [
-            (Event::Address, address, taken),
-            (Event::Top, top, top_time),
-            (Event::Impact, impact, impact_time),
-            (
-                Event::Finish,
-                finish,
-                between(hand_speed, stopped, finish.saturating_sub(1), finish),
-            ),
-        ] {
-            frames[event.position() as usize] = frame as u16;
-            times[event.position() as usize] = time;
-        }
-        return Ok(SwingEvents {
-            kind: SwingKind::Putt,
-            lead,
-            club: club.is_some(),
-            frames,
-            times,
-            arrival,
-        });
-    }
-
-    let shaft = |t: usize| match club {
-        Some((grip, head)) => elevation(track.at(head, t) - track.at(grip, t)),
-        None => 0.0,
-    };
-    let (toe_up, follow) = match club {
-        Some(_) => (
-            crossing(address..top, shaft, 0.0, true),
-            crossing(impact..frames, shaft, 0.0, true),
-        ),
-        None => (
-            crossing(address..top, arm, TOE_UP_ARM_DEG, true),
-            crossing(impact..frames, arm, FOLLOW_ARM_DEG, true),
-        ),
-    };
-    let toe_up = toe_up.ok_or(EventError::NoSwing)?;
-    let follow = follow.ok_or(EventError::NoSwing)?;
-    let mid_backswing = crossing(toe_up..top, arm, 0.0, true).ok_or(EventError::NoSwing)?;
-    let mid_downswing = crossing(top..impact, arm, 0.0, false).ok_or(EventError::NoSwing)?;
-    let (lift, lift_level) = match club {
-        Some(_) => (&shaft as &dyn Fn(usize) -> f32, (0.0, 0.0)),
-        None => (
-            &arm as &dyn Fn(usize) -> f32,
-            (TOE_UP_ARM_DEG, FOLLOW_ARM_DEG),
-        ),
-    };
-
-    // Finish: the hands' highest point after the follow-through.
-    let mut finish = follow;
-    while finish + 1 < frames && hands(finish + 1).y >= hands(finish).y {
-        finish += 1;
-    }
-    let height = |t: usize| hands(t).y;
-
-    // P6, where the shaft falls through horizontal (without a club, SHAFT_DOWN_SHARE of the way
-    // from P5 to impact); P9, where the trail arm rises through horizontal after impact.
-    let p5 = crossed(&arm, 0.0, mid_downswing, frames);
-    let shaft_down = match club {
-        Some(_) => crossing(mid_downswing..impact, shaft, 0.0, false)
-            .map(|t| (t, crossed(&shaft, 0.0, t, frames))),
-        None => {
-            let time = p5 + SHAFT_DOWN_SHARE * (impact_time - p5);
-            Some((libm::roundf(time) as usize, time))
-        }
-    };
-    let trail_up = crossing(impact..finish, trail_arm, 0.0, true)
-        .map(|t| (t, crossed(&trail_arm, 0.0, t, frames)));
-
-    let times = [
-        taken,
-        crossed(lift, lift_level.0, toe_up, frames),
-        crossed(&arm, 0.0, mid_backswing, frames),
-        top_time,
-        p5,
-        impact_time,
-        crossed(lift, lift_level.1, follow, frames),
-        turning(&height, finish, frames),
-    ];
-    let mut frames = [
-        address,
-        toe_up,
-        mid_backswing,
-        top,
-        mid_downswing,
+    let arms = limbs.arms(track, lead);
+    let p = parallels::find(&arms, limbs.club, address.at.frame, top.at.frame, impact)?;
+    let finish = finish::full(hands, p.follow.frame);
+    let trail_up = parallels::trail_up(&arms, impact.frame, finish.frame);
+    let eight = [
+        address.at,
+        p.toe_up,
+        p.mid_backswing,
+        top.at,
+        p.mid_downswing,
         impact,
-        follow,
+        p.follow,
         finish,
-    ]
-    .map(|f| f as u16);
-    if frames.windows(2).any(|w| w[1] <= w[0]) {
-        return Err(EventError::NoSwing);
-    }
-    // Impact's frame is the one nearest its time (later than the hands' return by the lag),
-    // between its neighbours.
-    let i = Event::Impact as usize;
-    frames[i] = (libm::roundf(times[i]) as u16)
-        .clamp(frames[i - 1] + 1, frames[i + 1] - 1)
-        .max(frames[i]);
-    let mut events = SwingEvents {
-        kind: SwingKind::Full,
-        lead,
-        club: club.is_some(),
-        frames: [ABSENT; 10],
-        times: [0.0; 10],
-        arrival,
-    };
-    for (k, event) in Event::ALL.into_iter().enumerate() {
-        events.frames[event.position() as usize] = frames[k];
-        events.times[event.position() as usize] = times[k];
-    }
-    // P6 and P9 where they fall strictly between their neighbours.
-    for (position, found) in [(Position::P6, shaft_down), (Position::P9, trail_up)] {
-        let i = position as usize;
-        if let Some((frame, time)) = found {
-            let frame = frame as u16;
-            if events.frames[i - 1] < frame && frame < events.frames[i + 1] {
-                events.frames[i] = frame;
-                events.times[i] = time;
-            }
-        }
-    }
-    Ok(events)
+    ];
+    SwingEvents::full(lead, club, eight, top.arrival, [p.shaft_down, trail_up])
 }
 
 #[cfg(test)]
@@ -801,6 +627,61 @@ mod tests {
         assert_eq!(named, Event::ALL);
         assert_eq!(Position::P6.event(), None);
         assert_eq!(Position::P9.event(), None);
+    }
+
+    /// Events at `frames`, each a quarter frame later.
+    fn at(frames: [usize; 8]) -> [Moment; 8] {
+        frames.map(|f| Moment::new(f, f as f32 + 0.25))
+    }
+
+    #[test]
+    fn a_full_swing_keeps_its_events_in_swing_order() {
+        let eight = at([10, 20, 30, 40, 50, 60, 70, 80]);
+        let full = |eight, p6_p9| SwingEvents::full(Side::Left, true, eight, 38.5, p6_p9);
+        let both = [Some(Moment::new(55, 55.5)), Some(Moment::new(75, 75.0))];
+        let events = full(eight, both).unwrap();
+        assert_eq!(events.kind, SwingKind::Full);
+        let frames: Vec<_> = events.positions().map(|(_, f)| f).collect();
+        assert_eq!(frames, [10, 20, 30, 40, 50, 55, 60, 70, 75, 80]);
+        assert_eq!(events.time(Event::Finish), Some(80.25));
+        assert_eq!(events.time(Position::P6), Some(55.5));
+        assert_eq!((events.arrival(), events.pause()), (38.5, 1.75));
+        // Impact's frame is the one nearest its time, short of its neighbours.
+        for (time, frame) in [(62.6, 63), (75.0, 69), (58.0, 60)] {
+            let mut late = eight;
+            late[Event::Impact as usize].time = time;
+            assert_eq!(full(late, both).unwrap().impact(), frame);
+        }
+        // P6 and P9 only strictly between their neighbours.
+        let outside = [Some(Moment::new(60, 60.0)), Some(Moment::new(70, 70.0))];
+        let events = full(eight, outside).unwrap();
+        assert_eq!(
+            (events.frame(Position::P6), events.frame(Position::P9)),
+            (None, None)
+        );
+        let mut swapped = eight;
+        swapped.swap(1, 2);
+        assert_eq!(full(swapped, both), Err(EventError::NoSwing));
+    }
+
+    #[test]
+    fn a_putt_has_address_top_impact_and_finish() {
+        let [address, top, impact, finish, ..] = at([10, 30, 40, 60, 0, 0, 0, 0]);
+        let events = SwingEvents::putt(Side::Right, false, [address, top, impact, finish], 29.0);
+        assert_eq!(
+            (events.kind, events.lead, events.club),
+            (SwingKind::Putt, Side::Right, false)
+        );
+        let found: Vec<_> = events.iter().collect();
+        let expected = [
+            (Event::Address, 10),
+            (Event::Top, 30),
+            (Event::Impact, 40),
+            (Event::Finish, 60),
+        ];
+        assert_eq!(found, expected);
+        assert_eq!(events.time(Event::Top), Some(30.25));
+        assert_eq!(events.positions().count(), 4);
     }
 
     proptest::proptest! {

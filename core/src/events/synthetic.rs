@@ -3,6 +3,9 @@
 use crate::Vec3;
 use std::vec::Vec;
 
+/// The frame rate of every synthetic motion.
+pub(super) const RATE_HZ: f32 = 60.0;
+
 /// Where the hands are at address (and back at impact), metres.
 pub(super) const HOME: [f32; 3] = [0.0, 1.0, 0.0];
 
@@ -37,4 +40,26 @@ pub(super) fn eased(keys: &[(usize, [f32; 3])], frames: usize) -> Vec<Vec3> {
             }
         })
         .collect()
+}
+
+/// Frames of one joint per path, in the order given.
+pub(super) fn joints(paths: &[&[Vec3]]) -> Vec<Vec3> {
+    (0..paths[0].len())
+        .flat_map(|f| paths.iter().map(move |p| p[f]))
+        .collect()
+}
+
+/// Left and right wrist, 10 cm apart across `hands` (their midpoint), as two paths.
+pub(super) fn wrists(hands: &[Vec3]) -> [Vec<Vec3>; 2] {
+    let apart = Vec3::new(0.0, 0.0, 0.05);
+    [
+        hands.iter().map(|h| h + apart).collect(),
+        hands.iter().map(|h| h - apart).collect(),
+    ]
+}
+
+/// The two wrists' frames around `hands` (joints 0 and 1).
+pub(super) fn hands_only(hands: &[Vec3]) -> Vec<Vec3> {
+    let [left, right] = wrists(hands);
+    joints(&[&left, &right])
 }
