@@ -246,6 +246,9 @@ pub fn takeaway_against(
 /// The takeaway that best fits the crossings `points` (the coach's share of its backswing's
 /// time, the weight, the student's moment) of a student whose hands arrive at the top at
 /// `s_top`: weighted least squares. `None` without a weight (or with a NaN).
+// In its one caller: out of line it costs the firmware 0.1 KiB of flash and 16 bytes of the
+// stack's high-water mark.
+#[inline(always)]
 fn fit(points: &[(f32, f32, f32)], s_top: f32) -> Option<Takeaway> {
     let (num, den, gain) =
         points
