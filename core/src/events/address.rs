@@ -105,10 +105,10 @@ mod tests {
 
     #[test]
     fn the_address_is_the_takeaway_from_the_still_set_up() {
-        // The hands leave at frame 30, easing out of rest: the line fitted to the cube root of
-        // their progress meets zero a few frames before it.
-        let address = address_of(&SWING, 70, false).unwrap();
-        assert!((25.0..=30.0).contains(&address.at.time), "{address:?}");
+        // The hands leave at frame 15, easing out of rest: the line fitted to the cube root of
+        // their progress meets zero a little before it.
+        let address = address_of(&SWING, 35, false).unwrap();
+        assert!((12.5..=15.0).contains(&address.at.time), "{address:?}");
         assert_eq!(address.at.frame, address.at.time as usize);
         assert!((address.rested - Vec3::from(HOME)).norm() < 1e-3);
         assert_eq!(address.quietest, 0.0);
@@ -117,24 +117,24 @@ mod tests {
     #[test]
     fn a_waggle_before_the_set_up_is_skipped() {
         let waggle = [0.2, 1.1, 0.1];
-        let keys = [(0, HOME), (8, waggle), (16, HOME), (30, HOME), SWING[1]];
-        let address = address_of(&keys, 70, false).unwrap();
-        assert!((25.0..=30.0).contains(&address.at.time), "{address:?}");
+        let keys = [(0, HOME), (4, waggle), (8, HOME), (15, HOME), SWING[1]];
+        let address = address_of(&keys, 35, false).unwrap();
+        assert!((12.5..=15.0).contains(&address.at.time), "{address:?}");
     }
 
     #[test]
     fn a_putt_s_address_is_the_end_of_its_still_set_up() {
-        let keys = [(30, HOME), (60, [0.0, 1.0, -0.15])];
-        let address = address_of(&keys, 60, true).unwrap();
+        let keys = [(15, HOME), (30, [0.0, 1.0, -0.15])];
+        let address = address_of(&keys, 30, true).unwrap();
         assert_eq!(address.at.time, address.at.frame as f32);
         // Its last still frame: the hands move under a tenth of their peak speed for a few
         // frames after they start.
-        assert!((31..=38).contains(&address.at.frame), "{address:?}");
+        assert!((15..=19).contains(&address.at.frame), "{address:?}");
     }
 
     #[test]
     fn without_motion_before_the_top_no_set_up_can_be_told() {
         // A turn found while the hands still rest: nothing is slower than their stillness.
-        assert_eq!(address_of(&SWING, 20, false), Err(EventError::NoSwing));
+        assert_eq!(address_of(&SWING, 10, false), Err(EventError::NoSwing));
     }
 }

@@ -57,28 +57,28 @@ mod tests {
         let track = Track::new(Frames::metres(&positions, 2), RATE_HZ);
         let hands = Hands::new(&track, [0, 1]);
         // From anywhere on the way up after impact.
-        for follow in [90, 100] {
+        for follow in [45, 50] {
             let finish = full(&hands, follow);
-            assert!(finish.frame.abs_diff(110) <= 2, "{finish:?}");
+            assert!(finish.frame.abs_diff(55) <= 1, "{finish:?}");
             assert!(
                 (finish.time - finish.frame as f32).abs() <= 0.5,
                 "{finish:?}"
             );
-            assert!(hands.at(finish.frame).y >= hands.at(105).y);
+            assert!(hands.at(finish.frame).y >= hands.at(52).y);
         }
     }
 
     #[test]
     fn a_putt_finishes_where_the_forward_stroke_stops() {
-        // Back to frame 60, through address (at frame 72) to frame 90, still after.
-        let keys = [(30, HOME), (60, [0.0, 1.02, -0.1]), (90, [0.0, 1.02, 0.2])];
+        // Back to frame 30, through address (at frame 36) to frame 45, still after.
+        let keys = [(15, HOME), (30, [0.0, 1.02, -0.1]), (45, [0.0, 1.02, 0.2])];
         let positions = hands_only(&eased(&keys, FRAMES));
         let track = Track::new(Frames::metres(&positions, 2), RATE_HZ);
         let hands = Hands::new(&track, [0, 1]);
-        let finish = putt(&hands, 72).unwrap();
+        let finish = putt(&hands, 36).unwrap();
         // Near the stop, once the hands' smoothed speed is that slow.
-        assert!((84..=92).contains(&finish.frame), "{finish:?}");
-        let stopped = STILL_FRACTION * (72..90).map(|t| hands.speed(t)).fold(0.0, f32::max);
+        assert!((42..=46).contains(&finish.frame), "{finish:?}");
+        let stopped = STILL_FRACTION * (36..45).map(|t| hands.speed(t)).fold(0.0, f32::max);
         assert!(hands.speed(finish.frame) < stopped);
         assert!(hands.speed(finish.frame - 1) >= stopped);
         assert!(finish.time >= (finish.frame - 1) as f32 && finish.time <= finish.frame as f32);

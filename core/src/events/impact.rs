@@ -76,7 +76,7 @@ mod tests {
     const STANCE: [(usize, [f32; 3]); 1] = [(0, [0.0, 0.0, 0.0])];
 
     /// Impact in `positions` (of [`swing`]), with the club head where `club`, the address at
-    /// frame 30 and the top at 70.
+    /// frame 15 and the top at 35.
     fn impact_of(positions: &[Vec3], club: bool, putt: bool) -> Result<Moment, EventError> {
         let track = Track::new(Frames::metres(positions, 5), RATE_HZ);
         let hands = Hands::new(&track, [0, 1]);
@@ -87,8 +87,8 @@ mod tests {
             club: club.then_some((0, 4)),
         };
         let address = Address {
-            at: Moment::new(30, 30.0),
-            rested: hands.at(20),
+            at: Moment::new(15, 15.0),
+            rested: hands.at(10),
             quietest: 0.0,
         };
         let head = |t: usize| track.at(4, t);
@@ -96,15 +96,15 @@ mod tests {
             true => &head,
             false => &|t| hands.at(t),
         };
-        find(&track, &limbs, probe, &address, 70, putt)
+        find(&track, &limbs, probe, &address, 35, putt)
     }
 
     #[test]
     fn impact_is_where_the_hands_are_back_home_the_club_head_a_little_later() {
         let positions = swing(&STANCE, &SWING);
         let putt = impact_of(&positions, false, true).unwrap();
-        assert!(putt.frame.abs_diff(85) <= 1, "{putt:?}");
-        assert!((putt.time - 85.0).abs() <= 1.0, "{putt:?}");
+        assert!(putt.frame.abs_diff(43) <= 1, "{putt:?}");
+        assert!((putt.time - 43.0).abs() <= 1.0, "{putt:?}");
         // A full swing's hands lead its club head.
         let full = impact_of(&positions, false, false).unwrap();
         assert_eq!(full.frame, putt.frame);
@@ -116,28 +116,28 @@ mod tests {
 
     #[test]
     fn with_a_club_impact_is_where_its_head_is_back_at_address() {
-        // The head comes back to its address four frames after the hands.
+        // The head comes back to its address two frames after the hands.
         let head = [
-            (30, HOME),
-            (70, [0.5, 2.5, -0.9]),
-            (89, HOME),
-            (110, [0.5, 2.5, 1.0]),
+            (15, HOME),
+            (35, [0.5, 2.5, -0.9]),
+            (45, HOME),
+            (55, [0.5, 2.5, 1.0]),
         ];
         let impact = impact_of(&swing(&STANCE, &head), true, false).unwrap();
-        assert!(impact.frame.abs_diff(89) <= 1, "{impact:?}");
-        assert!((impact.time - 89.0).abs() <= 1.0, "{impact:?}");
+        assert!(impact.frame.abs_diff(45) <= 1, "{impact:?}");
+        assert!((impact.time - 45.0).abs() <= 1.0, "{impact:?}");
     }
 
     #[test]
     fn feet_that_walk_between_address_and_impact_make_no_stroke() {
-        let walk = [(30, [0.0, 0.0, 0.0]), (80, [0.6, 0.0, 0.0])];
+        let walk = [(15, [0.0, 0.0, 0.0]), (40, [0.6, 0.0, 0.0])];
         let positions = swing(&walk, &SWING);
         assert_eq!(
             impact_of(&positions, false, false),
             Err(EventError::NoSwing)
         );
         // A shuffle of a few centimetres is planted.
-        let shuffle = [(30, [0.0, 0.0, 0.0]), (80, [0.05, 0.0, 0.0])];
+        let shuffle = [(15, [0.0, 0.0, 0.0]), (40, [0.05, 0.0, 0.0])];
         assert!(impact_of(&swing(&shuffle, &SWING), false, false).is_ok());
     }
 }

@@ -122,13 +122,13 @@ mod tests {
         [elevations.iter().map(|_| from).collect(), to.collect()]
     }
 
-    /// The lead arm: -80° at address (frame 20), 40° at the top (60), -80° at impact (80),
-    /// 60° at frame 120; the trail arm: -80° until impact, 60° at frame 110. With a club, the
+    /// The lead arm: -80° at address (frame 10), 40° at the top (30), -80° at impact (40),
+    /// 60° at frame 60; the trail arm: -80° until impact, 60° at frame 55. With a club, the
     /// shaft 10° above the lead arm.
     fn parallels(club: bool, impact_time: f32) -> (Result<Parallels, EventError>, Option<Moment>) {
-        let frames = 140;
-        let lead = angles(&[(20, -80.0), (60, 40.0), (80, -80.0), (120, 60.0)], frames);
-        let trail = angles(&[(80, -80.0), (110, 60.0)], frames);
+        let frames = 70;
+        let lead = angles(&[(10, -80.0), (30, 40.0), (40, -80.0), (60, 60.0)], frames);
+        let trail = angles(&[(40, -80.0), (55, 60.0)], frames);
         let shaft: Vec<f32> = lead.iter().map(|e| e + 10.0).collect();
         let [lead_shoulder, lead_wrist] = segment(Vec3::new(0.0, 1.4, 0.2), &lead);
         let [trail_shoulder, trail_wrist] = segment(Vec3::new(0.0, 1.4, -0.2), &trail);
@@ -149,8 +149,8 @@ mod tests {
             club: club.then_some((4, 5)),
         };
         let arms = limbs.arms(&track, Side::Left);
-        let found = find(&arms, limbs.club, 20, 60, Moment::new(80, impact_time));
-        (found, trail_up(&arms, 80, 130))
+        let found = find(&arms, limbs.club, 10, 30, Moment::new(40, impact_time));
+        (found, trail_up(&arms, 40, 65))
     }
 
     fn near(found: Moment, frame: usize, time: f32) {
@@ -160,43 +160,40 @@ mod tests {
 
     #[test]
     fn without_a_club_the_arms_give_the_parallels() {
-        let (found, p9) = parallels(false, 80.5);
+        let (found, p9) = parallels(false, 40.5);
         let found = found.unwrap();
-        // The lead arm rises 3° a frame to the top, falls 6° to impact, rises 3.5° after it.
-        near(found.toe_up, 29, 20.0 + 28.0 / 3.0);
-        near(found.mid_backswing, 47, 20.0 + 80.0 / 3.0);
-        near(found.mid_downswing, 67, 60.0 + 40.0 / 6.0);
-        near(found.follow, 90, 90.0);
+        // The lead arm rises 6° a frame to the top, falls 12° to impact, rises 7° after it.
+        near(found.toe_up, 15, 10.0 + 28.0 / 6.0);
+        near(found.mid_backswing, 23, 10.0 + 80.0 / 6.0);
+        near(found.mid_downswing, 33, 30.0 + 40.0 / 12.0);
+        near(found.follow, 45, 45.0);
         let p5 = found.mid_downswing.time;
-        let p6 = p5 + SHAFT_DOWN_SHARE * (80.5 - p5);
+        let p6 = p5 + SHAFT_DOWN_SHARE * (40.5 - p5);
         assert_eq!(
             found.shaft_down,
             Some(Moment::new(libm::roundf(p6) as usize, p6))
         );
-        // The trail arm rises 140° in 30 frames.
-        near(p9.unwrap(), 97, 80.0 + 80.0 * 30.0 / 140.0);
+        // The trail arm rises 140° in 15 frames.
+        near(p9.unwrap(), 49, 40.0 + 80.0 * 15.0 / 140.0);
     }
 
     #[test]
     fn with_a_club_the_shaft_gives_toe_up_p6_and_the_follow_through() {
-        let (found, _) = parallels(true, 80.0);
+        let (found, _) = parallels(true, 40.0);
         let found = found.unwrap();
         // The shaft is level where the lead arm is at -10°.
-        near(found.toe_up, 43, 20.0 + 70.0 / 3.0);
-        near(found.shaft_down.unwrap(), 68, 60.0 + 50.0 / 6.0);
-        near(found.follow, 100, 80.0 + 70.0 / 3.5);
+        near(found.toe_up, 22, 10.0 + 70.0 / 6.0);
+        near(found.shaft_down.unwrap(), 34, 30.0 + 50.0 / 12.0);
+        near(found.follow, 50, 40.0 + 70.0 / 7.0);
         // The lead arm's own parallels are the same.
-        near(found.mid_backswing, 47, 20.0 + 80.0 / 3.0);
+        near(found.mid_backswing, 23, 10.0 + 80.0 / 6.0);
     }
 
     #[test]
     fn an_arm_that_never_rises_to_the_level_makes_no_swing() {
         // A top before the lead arm is level: no mid-backswing.
-        let frames = 140;
-        let lead = angles(
-            &[(20, -80.0), (60, -20.0), (80, -80.0), (120, 60.0)],
-            frames,
-        );
+        let frames = 70;
+        let lead = angles(&[(10, -80.0), (30, -20.0), (40, -80.0), (60, 60.0)], frames);
         let [shoulder, wrist] = segment(Vec3::new(0.0, 1.4, 0.2), &lead);
         let positions = joints(&[&shoulder, &wrist]);
         let track = Track::new(Frames::metres(&positions, 2), RATE_HZ);
@@ -208,7 +205,7 @@ mod tests {
         };
         let arms = limbs.arms(&track, Side::Left);
         assert_eq!(
-            find(&arms, None, 20, 60, Moment::new(80, 80.0)),
+            find(&arms, None, 10, 30, Moment::new(40, 40.0)),
             Err(EventError::NoSwing)
         );
     }

@@ -1,26 +1,27 @@
-//! Synthetic motions for the stages' tests: points eased from key to key at 60 Hz.
+//! Synthetic motions for the stages' tests: points eased from key to key at 30 Hz (the
+//! device's model rate; few frames keep the tests short under Miri).
 
 use crate::Vec3;
 use std::vec::Vec;
 
 /// The frame rate of every synthetic motion.
-pub(super) const RATE_HZ: f32 = 60.0;
+pub(super) const RATE_HZ: f32 = 30.0;
 
 /// Where the hands are at address (and back at impact), metres.
 pub(super) const HOME: [f32; 3] = [0.0, 1.0, 0.0];
 
-/// A full swing's hands, as keys (frame, where): still at address until frame 30, at the top
-/// at frame 70, back at address (impact) at 85, highest at the finish at 110, then lowered.
+/// A full swing's hands, as keys (frame, where): still at address until frame 15, at the top
+/// at frame 35, back at address (impact) at 43, highest at the finish at 55, then lowered.
 pub(super) const SWING: [(usize, [f32; 3]); 5] = [
-    (30, HOME),
-    (70, [0.3, 2.0, -0.5]),
-    (85, HOME),
-    (110, [0.3, 2.0, 0.6]),
-    (140, [0.3, 1.5, 0.4]),
+    (15, HOME),
+    (35, [0.3, 2.0, -0.5]),
+    (43, HOME),
+    (55, [0.3, 2.0, 0.6]),
+    (70, [0.3, 1.5, 0.4]),
 ];
 
 /// How many frames [`SWING`] runs: still ones after its last key.
-pub(super) const FRAMES: usize = 150;
+pub(super) const FRAMES: usize = 75;
 
 /// `frames` frames of a point eased with minimum jerk from key to key (frame, where), still
 /// before the first key and after the last.
@@ -28,16 +29,18 @@ pub(super) fn eased(keys: &[(usize, [f32; 3])], frames: usize) -> Vec<Vec3> {
     (0..frames)
         .map(|f| {
             let next = keys.iter().position(|&(k, _)| k > f);
-            match next {
-                Some(0) => Vec3::from(keys[0].1),
-                None => Vec3::from(keys[keys.len() - 1].1),
+            // In plain `f32`s: nalgebra's generic arithmetic is slow under Miri.
+            let [x, y, z] = match next {
+                Some(0) => keys[0].1,
+                None => keys[keys.len() - 1].1,
                 Some(i) => {
                     let ((a, p), (b, q)) = (keys[i - 1], keys[i]);
                     let s = (f - a) as f32 / (b - a) as f32;
                     let e = s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
-                    Vec3::from(p) + (Vec3::from(q) - Vec3::from(p)) * e
+                    core::array::from_fn(|k| p[k] + (q[k] - p[k]) * e)
                 }
-            }
+            };
+            Vec3::new(x, y, z)
         })
         .collect()
 }

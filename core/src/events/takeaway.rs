@@ -285,7 +285,7 @@ fn fit(points: &[(f32, f32, f32)], s_top: f32) -> Option<Takeaway> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::synthetic::{eased, FRAMES, HOME, SWING};
+    use super::super::synthetic::{eased, FRAMES, HOME, RATE_HZ, SWING};
     use super::super::{Position, Side};
     use super::*;
     use crate::format::Format;
@@ -357,31 +357,16 @@ mod tests {
             .collect();
         let frames = Frames::metres(&positions, h36m.len());
         let mut times = [None; 10];
-        times[Position::P1 as usize] = Some(30.4);
-        times[Position::P4 as usize] = Some(70.0);
+        times[Position::P1 as usize] = Some(15.2);
+        let no_top = SwingEvents::at_times(Side::Left, times);
+        times[Position::P4 as usize] = Some(35.0);
         let events = SwingEvents::at_times(Side::Left, times);
-        let found = takeaway_against(&h36m, frames, &events, 60.0, frames, &events, 60.0).unwrap();
-        assert!((found.time - 30.4).abs() < 1e-3, "{found:?}");
+        let against =
+            |events| takeaway_against(&h36m, frames, events, RATE_HZ, frames, events, RATE_HZ);
+        let found = against(&events).unwrap();
+        assert!((found.time - 15.2).abs() < 1e-3, "{found:?}");
         assert!(found.spread < 1e-3, "{found:?}");
         // A swing without a top has no backswing to time.
-        let no_top = SwingEvents::at_times(
-            Side::Left,
-            [
-                Some(30.4),
-                None,
-                None,
-                None,
-                None,
-                None,
-                None,
-                None,
-                None,
-                None,
-            ],
-        );
-        assert_eq!(
-            takeaway_against(&h36m, frames, &no_top, 60.0, frames, &events, 60.0),
-            None
-        );
+        assert_eq!(against(&no_top), None);
     }
 }

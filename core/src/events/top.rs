@@ -119,7 +119,7 @@ mod tests {
         let hands = Hands::new(&track, [0, 1]);
         let turn = turn(&hands)?;
         // The set-up is still: its quietest stretch does not move.
-        Ok((turn, turn.top(&hands, 30, 0.0)))
+        Ok((turn, turn.top(&hands, 15, 0.0)))
     }
 
     #[test]
@@ -128,7 +128,7 @@ mod tests {
         assert!(!turn.putt);
         // The downswing is faster than the backswing: the smoothed speed is slowest a little
         // before the hands stop.
-        assert!(turn.frame.abs_diff(70) <= 2, "{turn:?}");
+        assert!(turn.frame.abs_diff(35) <= 1, "{turn:?}");
         // Without a pause the top is the turn, placed between frames, and the hands arrive
         // there.
         assert_eq!(top.at.frame, turn.frame);
@@ -140,39 +140,38 @@ mod tests {
     fn the_dip_at_impact_is_passed_over_when_the_fastest_hands_come_after_it() {
         // A follow-through far faster than the downswing.
         let mut keys = SWING;
-        keys[3].0 = 92;
+        keys[3].0 = 46;
         let (turn, _) = top_of(&keys).unwrap();
-        assert!(turn.frame.abs_diff(70) <= 2, "{turn:?}");
+        assert!(turn.frame.abs_diff(35) <= 1, "{turn:?}");
     }
 
     #[test]
     fn hands_that_rise_a_little_make_a_putt_whose_top_is_the_first_turn() {
-        let keys = [(30, HOME), (60, [0.0, 1.05, -0.15]), (90, [0.0, 1.05, 0.2])];
+        let keys = [(15, HOME), (30, [0.0, 1.05, -0.15]), (45, [0.0, 1.05, 0.2])];
         let (turn, _) = top_of(&keys).unwrap();
         assert!(turn.putt);
-        assert!(turn.frame.abs_diff(60) <= 1, "{turn:?}");
+        assert!(turn.frame.abs_diff(30) <= 1, "{turn:?}");
     }
 
     #[test]
     fn still_hands_have_no_top() {
-        assert_eq!(top_of(&[(30, HOME)]), Err(EventError::NoSwing));
+        assert_eq!(top_of(&[(15, HOME)]), Err(EventError::NoSwing));
     }
 
     #[test]
     fn a_pause_at_the_top_ends_it_and_the_hands_arrived_at_its_start() {
-        // The swing held at the top from frame 70 to 90.
+        // The swing held at the top from frame 35 to 45.
         let keys = [
             SWING[0],
             SWING[1],
-            (90, SWING[1].1),
-            (105, HOME),
-            (130, SWING[3].1),
+            (45, SWING[1].1),
+            (53, HOME),
+            (65, SWING[3].1),
         ];
         let (turn, top) = top_of(&keys).unwrap();
-        assert!((70..=90).contains(&turn.frame), "{turn:?}");
+        assert!((35..=45).contains(&turn.frame), "{turn:?}");
         assert_eq!(top.at.time, top.at.frame as f32);
-        assert!((top.at.time - 90.0).abs() <= 1.5, "{top:?}");
-        // The hands creep the last millimetres into the top under a standing body's sway.
-        assert!((top.arrival - 70.0).abs() <= 2.5, "{top:?}");
+        assert!((top.at.time - 45.0).abs() <= 1.0, "{top:?}");
+        assert!((top.arrival - 35.0).abs() <= 1.0, "{top:?}");
     }
 }
