@@ -61,8 +61,8 @@ pub(super) fn checks(
     else {
         return out;
     };
-    let [mut address_s, mut address_c, mut at_s, mut at_c, mut later, mut earlier] =
-        [[Vec3::zeros(); MAX_JOINTS]; 6];
+    let [mut address_s, mut address_c, mut at_s, mut at_c, mut moved] =
+        [[Vec3::zeros(); MAX_JOINTS]; 5];
     pose(pair, true, joints, from_s, &mut address_s);
     pose(pair, false, joints, from_c, &mut address_c);
     let (address_s, address_c) = (&address_s[..joints], &address_c[..joints]);
@@ -82,15 +82,12 @@ pub(super) fn checks(
             continue;
         };
         let c = pair.time_map.at(x);
-        // Each position's poses once: the student's, the coach's and the coach's within the
-        // event's timing uncertainty.
+        // Each position's poses once: the student's and the coach's.
         let h = (timing.event[event as usize] * coach_hz).max(0.5);
         if at != Some(check.position) {
             at = Some(check.position);
             pose(pair, true, joints, x, &mut at_s);
             pose(pair, false, joints, c, &mut at_c);
-            pose(pair, false, joints, c + h, &mut later);
-            pose(pair, false, joints, c - h, &mut earlier);
         }
         let measure = check.measure;
         let value_s = |pose: &[Vec3]| body_s.value(measure, stance_s, address_s, pose);
@@ -120,8 +117,13 @@ pub(super) fn checks(
                 variance += d * d;
             }
         }
-        // The coach's change within the event's timing uncertainty.
-        let along = match (value_c(&later[..joints]), value_c(&earlier[..joints])) {
+        // The coach's change within the event's timing uncertainty (its poses made again for
+        // each check, in one buffer: the stack is the device's scarcest memory).
+        let mut coach_at = |x: f32| {
+            pose(pair, false, joints, x, &mut moved);
+            value_c(&moved[..joints])
+        };
+        let along = match (coach_at(c + h), coach_at(c - h)) {
             (Some(l), Some(e)) => 0.5 * (l - e),
             _ => 0.0,
         };
