@@ -439,6 +439,20 @@ impl Body {
         }
     }
 
+    /// The pelvis's and the thorax's frames in `frame` (in whatever coordinates it is given;
+    /// `None` when it is shorter than the skeleton): each an origin, the point between the hips
+    /// and the thorax's point, and its axes (lateral toward the lead side, long, forward: unit vectors).
+    pub fn segments(&self, frame: &[Vec3]) -> Option<[(Vec3, [Vec3; 3]); 2]> {
+        if frame.len() < self.joints {
+            return None;
+        }
+        let same = |d: Vec3| d;
+        Some([
+            (self.between_hips(frame), self.pelvis_axes(frame, same)),
+            (self.chest(frame), self.thorax_axes(frame, same)),
+        ])
+    }
+
     /// The point between the hips (`frame` long enough).
     fn between_hips(&self, frame: &[Vec3]) -> Vec3 {
         (frame[self.hips[0]] + frame[self.hips[1]]) * 0.5

@@ -144,8 +144,9 @@ pub struct BodyDeviation {
     pub uncertainty: f32,
 }
 
-impl core::fmt::Display for BodyDeviation {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+impl BodyDeviation {
+    /// Its sentence without the full stop, for advice to go on from.
+    pub fn sentence(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         let measure = self.check.measure;
         let (whose, verb, [more, less], from) = measure.words();
         let (unit, scale) = match measure.in_degrees() {
@@ -180,6 +181,13 @@ impl core::fmt::Display for BodyDeviation {
         if let Some(fault) = self.check.fault(self.student - self.coach) {
             write!(f, ": {fault}")?;
         }
+        Ok(())
+    }
+}
+
+impl core::fmt::Display for BodyDeviation {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.sentence(f)?;
         f.write_str(".")
     }
 }

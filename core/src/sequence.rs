@@ -341,8 +341,9 @@ const fn words(link: Link) -> (&'static str, bool) {
     }
 }
 
-impl core::fmt::Display for Gap {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+impl Gap {
+    /// Its sentence without the full stop, for advice to go on from.
+    pub fn sentence(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         let ((first, plural), (then, _)) = (words(self.first), words(self.then));
         let ms = |s: f32| libm::roundf(libm::fabsf(s) * 1000.0) as u32;
         let way = |s: f32| if s > 0.0 { "before" } else { "after" };
@@ -364,6 +365,13 @@ impl core::fmt::Display for Gap {
         if let Some(fault) = self.fault() {
             write!(f, ": {fault}")?;
         }
+        Ok(())
+    }
+}
+
+impl core::fmt::Display for Gap {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.sentence(f)?;
         f.write_str(".")
     }
 }

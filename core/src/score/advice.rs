@@ -5,14 +5,15 @@
 //! threshold it is, as a multiple of it); a joint item that states what a body item given at
 //! its event states is left out.
 
-use super::spatial::{Deviation, Direction, NOISE_FACTOR, SPATIAL_THRESHOLD_M};
+use super::cause::{Cause, Explains, Item, Symptom};
+use super::spatial::{severity, Deviation, Direction, NOISE_FACTOR};
 use super::tempo::{Phase, PhaseTempo, Verdict, TEMPO_CONFIDENCE, TEMPO_TOLERANCE};
 use crate::body::Measure;
-use crate::checks::{BodyDeviation, CHECKS};
+use crate::checks::BodyDeviation;
 use crate::config::MAX_DEVIATIONS;
 use crate::events::{Event, Side};
 use crate::joint::Joint;
-use crate::sequence::{Gap, GAPS, GAP_TOLERANCE_S};
+use crate::sequence::{Gap, GAP_TOLERANCE_S};
 use heapless::Vec as HVec;
 
 /// Most advice items a report holds.
@@ -25,24 +26,27 @@ pub const MAX_ADVICE: usize = 8;
 pub enum Advice {
     /// A phase too slow or fast.
     Tempo(PhaseTempo),
-    /// A joint off at an event.
+    /// A joint off at an event that no body-level item explains.
     Spatial(Deviation),
-    /// A body metric's change since address off the coach's at a position.
-    Body(BodyDeviation),
-    /// A gap between two links' peaks in the downswing off the coach's.
-    Sequence(Gap),
+    /// A body metric's change since address off the coach's at a position, and the joint
+    /// offsets it explains.
+    Body(BodyDeviation, Explains),
+    /// A gap between two links' peaks in the downswing off the coach's, and the joint offsets
+    /// it explains.
+    Sequence(Gap, Explains),
 }
 
 impl Advice {
-    /// How far past its threshold this is: the sort key, most important first.
+    /// Its rank, most important first: how far past its threshold it is, a cause ranked by
+    /// the largest offset it explains where that is higher (see the `cause` stage).
     pub fn severity(&self) -> f32 {
         match self {
             Advice::Tempo(t) => {
                 libm::fabsf(libm::logf(t.ratio)) / libm::logf(1.0 + TEMPO_TOLERANCE)
             }
             Advice::Spatial(d) => Advice::severity_of(d),
-            Advice::Body(b) => Advice::severity_of_check(b),
-            Advice::Sequence(g) => libm::fabsf(g.student_s - g.coach_s) / GAP_TOLERANCE_S,
+            Advice::Body(b, explains) => ranked(Advice::severity_of_check(b), explains),
+            Advice::Sequence(g, explains) => ranked(Advice::severity_of_gap(g), explains),
         }
     }
 
@@ -52,10 +56,10 @@ impl Advice {
         libm::fabsf(g.student_s - g.coach_s) - TEMPO_CONFIDENCE * g.uncertainty_s > GAP_TOLERANCE_S
     }
 
-    /// A deviation's severity: how far past the larger of [`SPATIAL_THRESHOLD_M`] and
+    /// A deviation's severity: how far past the larger of [`super::SPATIAL_THRESHOLD_M`] and
     /// [`NOISE_FACTOR`] times its uncertainty it is, as a multiple of that.
     pub fn severity_of(d: &Deviation) -> f32 {
-        d.distance_m / SPATIAL_THRESHOLD_M.max(NOISE_FACTOR * d.uncertainty_m)
+        severity(d.distance_m, d.uncertainty_m)
     }
 
     /// A body check's severity: how far past the larger of its tolerance and [`NOISE_FACTOR`]
@@ -67,6 +71,61 @@ impl Advice {
             .tolerance()
             .max(NOISE_FACTOR * b.uncertainty);
         libm::fabsf(b.student - b.coach) / threshold
+    }
+
+    /// A gap's severity: its difference from the coach's over [`GAP_TOLERANCE_S`].
+    pub fn severity_of_gap(g: &Gap) -> f32 {
+        libm::fabsf(g.student_s - g.coach_s) / GAP_TOLERANCE_S
+    }
+}
+
+/// A cause's own severity `own`, or that of the largest offset it `explains` where higher.
+fn ranked(own: f32, explains: &Explains) -> f32 {
+    explains.worst.map_or(own, |w| own.max(w.severity()))
+}
+
+/// Writes "{at event} your {joint} is {cm} ± {u} cm {which way} than the coach's", the
+/// event's words capitalized where `capital`.
+fn joint_clause(f: &mut core::fmt::Formatter<'_>, d: &Symptom, capital: bool) -> core::fmt::Result {
+    let event = match d.event {
+        Event::Address => "at address",
+        Event::ToeUp => "at toe-up",
+        Event::MidBackswing => "halfway back",
+        Event::Top => "at the top",
+        Event::MidDownswing => "halfway down",
+        Event::Impact => "at impact",
+        Event::MidFollowThrough => "halfway through",
+        Event::Finish => "at the finish",
+    };
+    let mut chars = event.chars();
+    match (capital, chars.next()) {
+        (true, Some(first)) => write!(f, "{}{}", first.to_ascii_uppercase(), chars.as_str())?,
+        _ => f.write_str(event)?,
+    }
+    let cm = libm::roundf(d.distance_m * 100.0) as u32;
+    let within = (libm::ceilf(d.uncertainty_m * 100.0) as u32).max(1);
+    f.write_str(" your ")?;
+    for (i, word) in d.joint.name().split('_').enumerate() {
+        write!(f, "{}{word}", if i > 0 { " " } else { "" })?;
+    }
+    write!(
+        f,
+        " is {cm} ± {within} cm {} than the coach's",
+        d.direction.comparative()
+    )
+}
+
+/// Writes what a cause explains, if anything: ", which is why ...".
+fn explained(f: &mut core::fmt::Formatter<'_>, explains: &Explains) -> core::fmt::Result {
+    let Some(worst) = &explains.worst else {
+        return Ok(());
+    };
+    f.write_str(", which is why ")?;
+    joint_clause(f, worst, false)?;
+    match explains.joints.saturating_sub(1) {
+        0 => Ok(()),
+        1 => f.write_str(" (and one more joint with it)"),
+        n => write!(f, " (and {n} more joints with it)"),
     }
 }
 
@@ -88,40 +147,29 @@ impl core::fmt::Display for Advice {
                 write!(f, "Your {phase} is {percent} ± {within}% {adjective} than the coach's ({:.2} s against {:.2} s): {hint}.", t.student_s, t.coach_s)
             }
             Advice::Spatial(d) => {
-                let event = match d.event {
-                    Event::Address => "At address",
-                    Event::ToeUp => "At toe-up",
-                    Event::MidBackswing => "Halfway back",
-                    Event::Top => "At the top",
-                    Event::MidDownswing => "Halfway down",
-                    Event::Impact => "At impact",
-                    Event::MidFollowThrough => "Halfway through",
-                    Event::Finish => "At the finish",
-                };
-                let cm = libm::roundf(d.distance_m * 100.0) as u32;
-                let within = (libm::ceilf(d.uncertainty_m * 100.0) as u32).max(1);
-                let joint = d.joint.name();
-                write!(f, "{event} your ")?;
-                for (i, word) in joint.split('_').enumerate() {
-                    write!(f, "{}{word}", if i > 0 { " " } else { "" })?;
-                }
-                write!(
-                    f,
-                    " is {cm} ± {within} cm {} than the coach's.",
-                    d.direction.comparative()
-                )
+                joint_clause(f, &Symptom::from(d), true)?;
+                f.write_str(".")
             }
-            Advice::Body(b) => b.fmt(f),
-            Advice::Sequence(g) => g.fmt(f),
+            Advice::Body(b, explains) => {
+                b.sentence(f)?;
+                explained(f, explains)?;
+                f.write_str(".")
+            }
+            Advice::Sequence(g, explains) => {
+                g.sentence(f)?;
+                explained(f, explains)?;
+                f.write_str(".")
+            }
         }
     }
 }
 
-/// The advice of one swing whose lead side is `lead`, from its stages' findings.
+/// The advice of one swing whose lead side is `lead`: its tempo verdicts, its `causes` (a
+/// joint item that states what a body item at its event states folded under it) and the joint
+/// deviations no cause explains, each ranked by [`Advice::severity`].
 pub(super) fn advise(
     tempo: &[PhaseTempo; 3],
-    gaps: &HVec<Gap, { GAPS.len() }>,
-    body: &HVec<BodyDeviation, { CHECKS.len() }>,
+    causes: &mut [Cause],
     spatial: &HVec<Deviation, MAX_DEVIATIONS>,
     lead: Side,
 ) -> HVec<Advice, MAX_ADVICE> {
@@ -129,20 +177,22 @@ pub(super) fn advise(
     for t in tempo.iter().filter(|t| t.verdict != Verdict::Ok) {
         insert_sorted(&mut advice, Advice::Tempo(*t), Advice::severity);
     }
-    for g in gaps.iter().filter(|g| Advice::is_clear(g)) {
-        insert_sorted(&mut advice, Advice::Sequence(*g), Advice::severity);
-    }
-    for b in body.iter().filter(|b| Advice::severity_of_check(b) > 1.0) {
-        insert_sorted(&mut advice, Advice::Body(*b), Advice::severity);
-    }
     for d in spatial {
-        let stated = advice.iter().any(|a| {
-            matches!(a, Advice::Body(b) if b.check.position.event() == Some(d.event)
+        let stating = causes.iter_mut().find(|c| {
+            matches!(c.item, Item::Check(b) if b.check.position.event() == Some(d.event)
                 && states(b.check.measure, d, lead))
         });
-        if !stated {
-            insert_sorted(&mut advice, Advice::Spatial(*d), Advice::severity);
+        match stating {
+            Some(cause) => cause.explains.add(d),
+            None => insert_sorted(&mut advice, Advice::Spatial(*d), Advice::severity),
         }
+    }
+    for c in causes.iter() {
+        let item = match c.item {
+            Item::Check(b) => Advice::Body(b, c.explains),
+            Item::Gap(g) => Advice::Sequence(g, c.explains),
+        };
+        insert_sorted(&mut advice, item, Advice::severity);
     }
     advice
 }
@@ -216,5 +266,68 @@ mod tests {
         // A 6 cm thrust against the 5 cm tolerance, the joints' own threshold.
         assert!((severity(5, 0.06, 0.0, 0.001) - 1.2).abs() < 1e-5);
         assert_eq!(SHIFT_TOLERANCE_M, SPATIAL_THRESHOLD_M);
+    }
+
+    #[test]
+    fn a_cause_folds_the_joint_item_it_states_and_ranks_above_it() {
+        use super::{advise, Advice};
+        use crate::events::{Event, Side};
+        use crate::joint::Joint;
+        use crate::score::cause::causes;
+        use crate::score::{Deviation, Direction, Phase, PhaseTempo, Verdict};
+        // A thorax turn 14° short at the top (severity 1.4) and the left shoulder 20 cm toward
+        // the target there (severity 4), which the turn states; the right knee 12 cm lower
+        // halfway down, which it does not.
+        let body = [BodyDeviation {
+            check: CHECKS[0],
+            student: 81.0,
+            coach: 95.0,
+            uncertainty: 1.0,
+        }];
+        let mut causes = causes(&body, &[]);
+        let joint = |event, joint, direction, distance_m| Deviation {
+            event,
+            joint,
+            distance_m,
+            uncertainty_m: 0.01,
+            offset_m: [distance_m, 0.0, 0.0],
+            direction,
+        };
+        let spatial = [
+            joint(
+                Event::Top,
+                Joint::LeftShoulder,
+                Direction::TowardTarget,
+                0.2,
+            ),
+            joint(Event::MidDownswing, Joint::RightKnee, Direction::Down, 0.12),
+        ]
+        .into_iter()
+        .collect();
+        let tempo = Phase::ALL.map(|phase| PhaseTempo {
+            phase,
+            student_s: 1.0,
+            coach_s: 1.0,
+            ratio: 1.0,
+            ratio_uncertainty: 0.01,
+            verdict: Verdict::Ok,
+        });
+        let advice = advise(&tempo, &mut causes, &spatial, Side::Left);
+        assert_eq!(advice.len(), 2, "{advice:?}");
+        let Advice::Body(b, explains) = advice[0] else {
+            panic!("{advice:?}");
+        };
+        assert_eq!(b.check, CHECKS[0]);
+        assert_eq!(explains.joints, 1);
+        assert!((advice[0].severity() - 4.0).abs() < 1e-5);
+        assert!(matches!(advice[1], Advice::Spatial(d) if d.joint == Joint::RightKnee));
+        assert!(
+            advice[0].to_string().ends_with(
+                ": a short turn, which is why at the top your left shoulder is 20 ± 1 cm closer \
+                 to the target than the coach's."
+            ),
+            "{}",
+            advice[0]
+        );
     }
 }

@@ -12,6 +12,7 @@
 //! | `tempo` | each phase's duration against the coach's, with its uncertainty and verdict |
 //! | `spatial` | the joints off the coach's position at each event, with their uncertainty |
 //! | `body` | the body checks ([`crate::checks`]) and the kinematic sequence's gaps ([`crate::sequence`]) |
+//! | `cause` | the checks and gaps past their thresholds, and the joint offsets each explains: the body-level difference at each event applied to the coach's pose, a joint within its threshold of it folded under the cause |
 //! | `advice` | the items a golfer reads, most important first |
 //! | `to_wire` | the report's compact wire form ([`Report::to_wire`]) |
 //!
@@ -23,12 +24,13 @@
 //!   strictly as a deviation or a tempo change grows, by nearly nothing while it is within its
 //!   noise; on a clean input a 10 cm offset at one event costs 10 points, a phase 30 % slower
 //!   11.
-//! - **Stance frame** ([`Stance`](crate::body::Stance)): each swing in its own, so a pelvis
+//! - **Stance frame** ([`Stance`]): each swing in its own, so a pelvis
 //!   that moves toward the ball is reported as the pelvis moving.
 
 mod advice;
 mod align;
 mod body;
+mod cause;
 mod noise;
 mod spatial;
 mod tempo;
@@ -39,6 +41,7 @@ mod unsure;
 pub use advice::{Advice, MAX_ADVICE};
 pub use align::{HELD_ROOT_M, SPATIAL_SMOOTHING_S};
 pub use body::LEAST_NOISE_M;
+pub use cause::{Explains, MAX_CAUSES};
 pub use noise::WANDER_SAMPLES;
 pub use spatial::{
     Deviation, Direction, NOISE_FACTOR, SPATIAL_POINTS_M, SPATIAL_SOFTNESS_M, SPATIAL_THRESHOLD_M,
@@ -101,8 +104,9 @@ pub struct Report {
     pub student_tempo_ratio: f32,
     /// Backswing over downswing duration, coach.
     pub coach_tempo_ratio: f32,
-    /// At each event, up to [`DEVIATIONS_PER_EVENT`] joints beyond [`SPATIAL_THRESHOLD_M`],
-    /// largest first.
+    /// At each event, up to [`DEVIATIONS_PER_EVENT`](crate::config::DEVIATIONS_PER_EVENT) joints beyond their threshold that no
+    /// body check or gap explains (those are folded under it in the advice: [`Explains`]),
+    /// the most severe first.
     pub spatial: HVec<Deviation, MAX_DEVIATIONS>,
     /// The body checks ([`CHECKS`]) both swings could be measured at, in that order.
     pub body: HVec<BodyDeviation, { CHECKS.len() }>,
@@ -365,7 +369,6 @@ pub fn compare(
         takeaway,
     );
     let tempo = tempo::tempo((&events_s, hz.0), (events_c, hz.1), &timing);
-    let spatial = spatial::spatial(skeleton, &pair, (&events_s, hz.1), &noise, &timing);
     let body = body::checks(
         skeleton,
         &pair,
@@ -374,7 +377,15 @@ pub fn compare(
         &timing,
     );
     let gaps = body::gaps(skeleton, &pair, (&events_s, events_c), hz);
-    let advice = advice::advise(&tempo, &gaps, &body, &spatial.deviations, events_s.lead);
+    let mut causes = cause::causes(&body, &gaps);
+    let spatial = spatial::spatial(
+        skeleton,
+        &pair,
+        (&events_s, hz.1),
+        (&noise, &timing),
+        &mut causes,
+    );
+    let advice = advice::advise(&tempo, &mut causes, &spatial.deviations, events_s.lead);
     let score = 100.0
         * libm::expf(
             -(spatial.excess / SPATIAL_POINTS_M + tempo::excess_of(&tempo) / TEMPO_POINTS),

@@ -4,13 +4,16 @@
 //! depth axis is noisier) and, along its path, how far it moves within the event's timing
 //! uncertainty. A joint is reported past the larger of [`SPATIAL_THRESHOLD_M`] and
 //! [`NOISE_FACTOR`] times that uncertainty, at most [`DEVIATIONS_PER_EVENT`] an event, and a
-//! joint next to one already listed, off the same way, is left out (one fact once).
+//! joint next to one already listed, off the same way, is left out (one fact once). An offset
+//! a body-level item explains is folded under it instead ([`super::cause`]).
 
 use super::advice::{insert_sorted, Advice};
 use super::align::Pair;
+use super::cause::{Cause, Model};
 use super::excess;
 use super::noise::{judged, Noise};
 use super::timing::Timing;
+use crate::body::Body;
 use crate::config::{DEVIATIONS_PER_EVENT, MAX_DEVIATIONS};
 use crate::events::{Event, SwingEvents};
 use crate::joint::Joint;
@@ -108,6 +111,12 @@ pub struct Deviation {
     pub direction: Direction,
 }
 
+/// How far past the larger of [`SPATIAL_THRESHOLD_M`] and [`NOISE_FACTOR`] times its
+/// uncertainty an offset of `distance` metres is, as a multiple of that.
+pub(super) fn severity(distance: f32, uncertainty: f32) -> f32 {
+    distance / SPATIAL_THRESHOLD_M.max(NOISE_FACTOR * uncertainty)
+}
+
 /// What the spatial stage finds.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct Spatial {
@@ -120,25 +129,30 @@ pub(super) struct Spatial {
 }
 
 /// The deviations of `pair`'s student (its events `events`) from its coach (at `coach_hz`),
-/// with the noise and timing the earlier stages found.
+/// with the noise and timing the earlier stages found; an offset a cause explains is folded
+/// under it ([`super::cause`]).
 pub(super) fn spatial(
     skeleton: &Skeleton,
     pair: &Pair<'_>,
     (events, coach_hz): (&SwingEvents, f32),
-    noise: &Noise,
-    timing: &Timing,
+    (noise, timing): (&Noise, &Timing),
+    causes: &mut [Cause],
 ) -> Spatial {
     let mut out = Spatial {
         deviations: HVec::new(),
         excess: 0.0,
     };
+    let body = Body::new(skeleton, events.lead).ok();
     for event in Event::ALL {
         let Some(x) = events.time(event) else {
             continue;
         };
         // The coach frames the event's timing uncertainty spans.
         let h = (timing.event[event as usize] * coach_hz).max(0.5);
-        let (worst, excess) = at_event(skeleton, pair, (event, x, h), noise);
+        let model = body
+            .as_ref()
+            .and_then(|b| Model::at((pair, b), noise, causes, (event, x)));
+        let (worst, excess) = at_event(skeleton, pair, (event, x, h), noise, (model, causes));
         for d in one_fact_once(skeleton, worst) {
             let _ = out.deviations.push(d);
         }
@@ -148,12 +162,14 @@ pub(super) fn spatial(
 }
 
 /// The worst joints at `event` (the student's frame `x`; the coach's timing uncertainty `h`
-/// frames), and the worst one's excess over its threshold.
+/// frames) that no cause explains (by `model`, where a cause reaches the event), and the worst
+/// one's excess over its threshold.
 fn at_event(
     skeleton: &Skeleton,
     pair: &Pair<'_>,
     (event, x, h): (Event, f32, f32),
     noise: &Noise,
+    (model, causes): (Option<Model>, &mut [Cause]),
 ) -> (HVec<Deviation, DEVIATIONS_PER_EVENT>, f32) {
     let mut worst: HVec<Deviation, DEVIATIONS_PER_EVENT> = HVec::new();
     let mut event_excess = 0.0f32;
@@ -193,7 +209,14 @@ fn at_event(
             offset_m: [o.x, o.y, o.z],
             direction: Direction::of(o),
         };
-        insert_sorted(&mut worst, deviation, Advice::severity_of);
+        let coach = || pair.stance_c.local(pair.coach_at(k, c, half_c));
+        match model
+            .as_ref()
+            .and_then(|m| m.explains(joint, (o, coach()), threshold))
+        {
+            Some(i) => causes[i].explains.add(&deviation),
+            None => insert_sorted(&mut worst, deviation, Advice::severity_of),
+        }
     }
     (worst, event_excess)
 }
