@@ -20,6 +20,10 @@
 //!   **false body**: given a body item;
 //! - **body named**: of the swings whose flaw moves a body check past its tolerance (see
 //!   [`flaws::Truth::Body`]), the share whose advice, at any rank, has a body item stating one;
+//! - **cause named first**: of the body-flaw swings whose flaw moves a body check or a gap of
+//!   the sequence past its tolerance, per kind of flaw, the share whose first item is a body or
+//!   sequence item stating one; a joint item first (a consequence, such as the hands a short
+//!   turn moved) is a miss;
 //! - **score** of unflawed swings, and its fall for a flaw of a given size;
 //! - **body metrics**: each of [`KEY_METRICS`] and [`MORE_METRICS`] at every P-position of the swing the device scored,
 //!   against the same metric of the planted swing before filming (on the same body, at its own
@@ -159,6 +163,9 @@ struct Outcome1 {
     shown_m: f32,
     first: Option<String>,
     right_first: bool,
+    /// The first item is a body or sequence item stating a planted body-level truth (a
+    /// consequence named first is a miss).
+    cause_first: bool,
     /// Without a `CoachSelect`, the device chose the coach of the swing's own club.
     right_coach: bool,
     any_advice: bool,
@@ -541,12 +548,12 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
         report
             .advice
             .iter()
-            .filter(|a| matches!(a, Advice::Body(_) | Advice::Sequence(_)))
+            .filter(|a| matches!(a, Advice::Body(..) | Advice::Sequence(..)))
     };
     outcome.sequence_advice = report
         .advice
         .iter()
-        .any(|a| matches!(a, Advice::Sequence(_)));
+        .any(|a| matches!(a, Advice::Sequence(..)));
     outcome.gaps = report.gaps.to_vec();
     outcome.body_advice = body_items().next().is_some();
     outcome.body = report.body.to_vec();
@@ -555,6 +562,8 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     if let Some(first) = report.advice.first() {
         outcome.first = Some(first.to_string());
         outcome.right_first = states(first, &planted);
+        outcome.cause_first =
+            matches!(first, Advice::Body(..) | Advice::Sequence(..)) && states(first, &planted);
     }
     Ok(outcome)
 }
@@ -731,10 +740,10 @@ fn states(advice: &Advice, planted: &Planted) -> bool {
             },
             Advice::Spatial(d),
         ) => d.event == *event && d.joint == *joint && d.direction == *direction,
-        (Truth::Body { check, more }, Advice::Body(b)) => {
+        (Truth::Body { check, more }, Advice::Body(b, _)) => {
             b.check == *check && (b.student > b.coach) == *more
         }
-        (Truth::Sequence { first, then, more }, Advice::Sequence(g)) => {
+        (Truth::Sequence { first, then, more }, Advice::Sequence(g, _)) => {
             g.first == *first && g.then == *then && (g.student_s > g.coach_s) == *more
         }
         _ => false,
@@ -853,6 +862,15 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
                 named(&|c: &Case| matches!(c.flaws[..], [Flaw::Body { body, .. }] if body == b)),
             )).collect::<serde_json::Map<_, _>>(),
         },
+        // Of the body-flaw cases whose flaw moves a check or a gap past its tolerance, the share
+        // whose first item is that body-level item: the cause named before its symptoms.
+        "cause_first": Body::ALL.iter().map(|&b| (
+            serde_json::to_value(b).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default(),
+            {
+                let of: Vec<_> = found.iter().filter(|(c, o)| o.body_truth && matches!(c.flaws[..], [Flaw::Body { body, .. }] if body == b)).collect();
+                share(of.iter().filter(|(_, o)| o.cause_first).count(), of.len())
+            },
+        )).collect::<serde_json::Map<_, _>>(),
         "recall_at_1": {
             "tempo": recall(&|c, _| family(&c.flaws) == "tempo"),
             "offset": recall(&|c, _| family(&c.flaws) == "offset"),
@@ -884,7 +902,7 @@ fn case_json(clean: &Clean, case: &Case, o: &Outcome1) -> Value {
             Input::Imu { .. } => json!(null),
         },
         "shown_cm": o.shown_m * 100.0, "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
-        "tempo_error": o.tempo_error, "backswing_z": o.backswing_z, "score": o.score, "first": o.first, "right_first": o.right_first, "right_coach": o.right_coach,
+        "tempo_error": o.tempo_error, "backswing_z": o.backswing_z, "score": o.score, "first": o.first, "right_first": o.right_first, "cause_first": o.cause_first, "right_coach": o.right_coach,
         "any_advice": o.any_advice, "body_truth": o.body_truth, "body_named": o.body_named, "truths": o.truths, "body": o.body, "gaps": o.gaps, "error": o.error,
     })
 }
@@ -935,6 +953,35 @@ fn table(doc: &Value) -> String {
             sc(&l["score"]["unflawed"]),
             sc(&l["score"]["offset_10_15cm"]),
             sc(&l["score"]["tempo_30_50pc"]),
+        );
+    }
+    let _ = writeln!(
+        out,
+        "cause named first, of the body flaws that move a check or a gap past its tolerance: {}",
+        Body::ALL
+            .iter()
+            .map(|b| serde_json::to_value(b)
+                .ok()
+                .and_then(|v| v.as_str().map(String::from))
+                .unwrap_or_default())
+            .collect::<Vec<_>>()
+            .join(" / ")
+    );
+    for l in doc["levels"].as_array().into_iter().flatten() {
+        let cells: Vec<String> = l["cause_first"]
+            .as_object()
+            .into_iter()
+            .flatten()
+            .map(|(_, v)| match (v["hits"].as_u64(), v["of"].as_u64()) {
+                (Some(h), Some(n)) => format!("{h}/{n}"),
+                _ => "-".into(),
+            })
+            .collect();
+        let _ = writeln!(
+            out,
+            "{:>8} | {}",
+            l["input"].as_str().unwrap_or("-"),
+            cells.join(" / ")
         );
     }
     let _ = writeln!(
