@@ -8,11 +8,11 @@
 use super::spatial::{Deviation, Direction, NOISE_FACTOR, SPATIAL_THRESHOLD_M};
 use super::tempo::{Phase, PhaseTempo, Verdict, TEMPO_CONFIDENCE, TEMPO_TOLERANCE};
 use crate::body::Measure;
-use crate::checks::{BodyDeviation, CHECKS};
-use crate::config::MAX_DEVIATIONS;
+use crate::checks::BodyDeviation;
+use crate::config::{MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS};
 use crate::events::{Event, Side};
 use crate::joint::Joint;
-use crate::sequence::{Gap, GAPS, GAP_TOLERANCE_S};
+use crate::sequence::{Gap, GAP_TOLERANCE_S};
 use heapless::Vec as HVec;
 
 /// Most advice items a report holds.
@@ -120,8 +120,8 @@ impl core::fmt::Display for Advice {
 /// The advice of one swing whose lead side is `lead`, from its stages' findings.
 pub(super) fn advise(
     tempo: &[PhaseTempo; 3],
-    gaps: &HVec<Gap, { GAPS.len() }>,
-    body: &HVec<BodyDeviation, { CHECKS.len() }>,
+    gaps: &HVec<Gap, MAX_GAPS>,
+    body: &HVec<BodyDeviation, MAX_CHECKS>,
     spatial: &HVec<Deviation, MAX_DEVIATIONS>,
     lead: Side,
 ) -> HVec<Advice, MAX_ADVICE> {
