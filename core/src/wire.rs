@@ -30,8 +30,8 @@
 //! assert_eq!(decoder.counters().frames_ok, 1);
 //! ```
 
+use crate::band::Band;
 use crate::config::{MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS};
-use crate::dtw::Band;
 use crate::format::Format;
 use crate::joint::Joint;
 use heapless::Vec as HVec;

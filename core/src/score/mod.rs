@@ -49,10 +49,11 @@ pub use tempo::{
 pub use timing::{EVENT_TIMING_S, MAX_EVENT_TIMING_S};
 pub use unsure::Unsure;
 
+use crate::band::Band;
 use crate::body::Stance;
 use crate::checks::BodyDeviation;
 use crate::config::{MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS, MAX_SWING_FRAMES};
-use crate::dtw::{self, Band, DtwError};
+use crate::dtw::{self, DtwError};
 use crate::events::{self, EventError, SwingEvents};
 use crate::frames::Frames;
 use crate::sequence::Gap;
