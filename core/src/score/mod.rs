@@ -23,7 +23,7 @@
 //!   strictly as a deviation or a tempo change grows, by nearly nothing while it is within its
 //!   noise; on a clean input a 10 cm offset at one event costs 10 points, a phase 30 % slower
 //!   11.
-//! - **Stance frame** ([`Stance`](crate::body::Stance)): each swing in its own, so a pelvis
+//! - **Stance frame** ([`Stance`]): each swing in its own, so a pelvis
 //!   that moves toward the ball is reported as the pelvis moving.
 
 mod advice;
@@ -102,8 +102,8 @@ pub struct Report {
     pub student_tempo_ratio: f32,
     /// Backswing over downswing duration, coach.
     pub coach_tempo_ratio: f32,
-    /// At each event, up to [`DEVIATIONS_PER_EVENT`] joints beyond [`SPATIAL_THRESHOLD_M`],
-    /// largest first.
+    /// At each event, up to [`DEVIATIONS_PER_EVENT`](crate::config::DEVIATIONS_PER_EVENT)
+    /// joints beyond [`SPATIAL_THRESHOLD_M`], largest first.
     pub spatial: HVec<Deviation, MAX_DEVIATIONS>,
     /// The body checks ([`CHECKS`](crate::checks::CHECKS)) both swings could be measured at,
     /// in that order.
