@@ -4,7 +4,8 @@
 #   - core imports no other posecoach crate;
 #   - adapters imports only core; io imports only core;
 #   - core::wire imports nothing from core::score (the wire is the ground floor; a report
-#     turns itself into its wire form);
+#     turns itself into its wire form), and outside its tests names from the core only config,
+#     joint, format and band;
 #   - teachfile (the float weights files' layout, which inspect reads without learn) imports no
 #     posecoach crate and no burn;
 #   - no import circle among a crate's modules (tests, at the bottom of each file, left out);
@@ -25,6 +26,14 @@ forbid adapters/src 'posecoach_(io|cli|train|tests)\b' "adapters imports more th
 forbid io/src 'posecoach_(adapters|cli|train|tests)\b' "io imports more than core"
 forbid teachfile/src '\b(posecoach_[a-z]+|burn)::' "teachfile imports another posecoach crate or burn"
 forbid core/src/wire.rs '(crate|super)::score\b' "core::wire imports core::score"
+# What core::wire names from the core outside comments and its tests module: config, joint,
+# format and band only (a grouped `crate::{...}` counts as another, so each module is written
+# out).
+wire_imports=$(sed '/^mod tests {/,$d; s|^ *//.*||' core/src/wire.rs |
+    grep -noE '\b(crate|super)::(\{|[A-Za-z_0-9]+)' |
+    grep -vE ':(crate|super)::(config|joint|format|band)$' | sed 's|^|core/src/wire.rs:|' || true)
+[ -z "$wire_imports" ] ||
+    fail "core::wire imports from the core more than config, joint, format and band:"$'\n'"$wire_imports"
 
 grep -nE '^(burn|posecoach-)' teachfile/Cargo.toml && fail "teachfile/Cargo.toml depends on burn or a posecoach crate"
 for manifest in core/Cargo.toml adapters/Cargo.toml io/Cargo.toml; do

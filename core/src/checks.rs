@@ -21,6 +21,7 @@
 //! timing uncertainty.
 
 use crate::body::{Measure, Metrics};
+use crate::config::MAX_CHECKS;
 use crate::events::Position;
 
 /// Most a turn may differ from the coach's before it is advice, degrees.
@@ -84,7 +85,7 @@ pub struct Check {
 
 /// Every check, in the order reports list them: at the top (P4) the turns, the hips' sway, the
 /// head and the lead arm; at impact (P7) the hips' thrust, sway and turn and the head.
-pub const CHECKS: [Check; 9] = {
+pub const CHECKS: [Check; MAX_CHECKS] = {
     use Measure::*;
     use Position::*;
     const fn at(position: Position, measure: Measure) -> Check {

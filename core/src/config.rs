@@ -17,3 +17,11 @@ pub const DEVIATIONS_PER_EVENT: usize = 3;
 /// Most deviations a report holds, and a `SwingReport` carries (every one of the 8 events,
 /// `events::Event::COUNT`, which checks it).
 pub const MAX_DEVIATIONS: usize = 8 * DEVIATIONS_PER_EVENT;
+
+/// Most body checks a report holds, and a `SwingReport` carries (one of each of
+/// `checks::CHECKS`, whose array type is this long).
+pub const MAX_CHECKS: usize = 9;
+
+/// Most gaps of the kinematic sequence a report holds, and a `SwingReport` carries (one of
+/// each of `sequence::GAPS`, whose array type is this long).
+pub const MAX_GAPS: usize = 2;

@@ -18,7 +18,8 @@
 //! matrix the result equals full DTW exactly.
 //!
 //! ```
-//! use posecoach_core::dtw::{align, scratch_len, Band, Sequence, Window};
+//! use posecoach_core::band::Band;
+//! use posecoach_core::dtw::{align, scratch_len, Sequence, Window};
 //!
 //! // One joint moving along x (channels x, y, z); `b` lingers on its second frame.
 //! let a = [0.0, 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
@@ -33,6 +34,7 @@
 //! assert_eq!(&path[..result.path_len], &[(0, 0), (1, 1), (1, 2), (2, 3)]);
 //! ```
 
+use crate::band::Band;
 use crate::config::MAX_JOINTS;
 use crate::frames::{from_mm, Frames, Stored};
 use crate::math::{rooted_distances, sqrt};
@@ -198,34 +200,6 @@ fn check_shape(len: usize, per_frame: usize, joints: usize) -> Result<(), DtwErr
         return Err(DtwError::SequenceShape);
     }
     Ok(())
-}
-
-/// The DTW band: `radius` columns either side of a guide line that runs through the matched
-/// swing events, one diagonal per phase (`anchored`), or along the whole diagonal. One setting
-/// from `posecoach score --band R [--global-band]` and the wire's `Config` to [`Window::new`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Band {
-    /// Columns (frames of the second sequence) either side of the guide.
-    pub radius: u16,
-    /// The guide runs through anchors (swing events) rather than along the diagonal.
-    pub anchored: bool,
-}
-
-impl Band {
-    /// The default: 10 frames either side of the event-anchored guide (±0.17 s at 60 Hz).
-    pub const DEFAULT: Band = Band {
-        radius: 10,
-        anchored: true,
-    };
-
-    /// A band of `radius` columns around the diagonal.
-    pub const fn global(radius: u16) -> Band {
-        Band {
-            radius,
-            anchored: false,
-        }
-    }
 }
 
 /// A [`Band`] laid over one pair of sequences: a Sakoe-Chiba window around the guide through

@@ -30,6 +30,7 @@
 //! - [`body`]: the angles and shifts coaches read a swing by (turn, bend, sway, X-factor).
 //! - [`checks`]: the body metrics advice speaks of, at the positions it speaks of them.
 //! - [`sequence`]: the kinematic sequence, and its gaps against the coach's.
+//! - [`band`]: the DTW's band, a radius around the diagonal or the matched swing events.
 //! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
 //! - [`score`]: the score, tempo, spatial deviations and advice of one swing.
 //! - [`setup`]: a swing's set-up, and the coach whose set-up (so club) it is nearest.
@@ -47,6 +48,7 @@
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod band;
 pub mod blob;
 pub mod body;
 pub mod checks;

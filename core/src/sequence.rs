@@ -18,6 +18,7 @@
 //! links' peaks in a tour player's downswing (about 20 to 50 ms).
 
 use crate::body::{Body, BodyError, Link};
+use crate::config::MAX_GAPS;
 use crate::events::{Position, SwingEvents, SwingKind};
 use crate::frames::Frames;
 use crate::math::{median, MAD_SIGMA};
@@ -299,7 +300,8 @@ fn vertex(a: f32, b: f32, c: f32) -> (f32, f32) {
 pub const GAP_TOLERANCE_S: f32 = 0.03;
 
 /// The gaps advice compares, each a link and the link that should peak after it.
-pub const GAPS: [(Link, Link); 2] = [(Link::Pelvis, Link::Thorax), (Link::Thorax, Link::LeadArm)];
+pub const GAPS: [(Link, Link); MAX_GAPS] =
+    [(Link::Pelvis, Link::Thorax), (Link::Thorax, Link::LeadArm)];
 
 /// One gap of the sequence, the student's against the coach's: how long after `first`'s peak
 /// `then`'s comes, seconds (negative when it comes before: out of order).
@@ -414,7 +416,7 @@ pub fn gaps(
     student: &Downswing<'_>,
     coach: &Downswing<'_>,
     unsure: &dyn Fn(usize, usize, usize) -> bool,
-) -> HVec<Gap, { GAPS.len() }> {
+) -> HVec<Gap, MAX_GAPS> {
     let mut out = HVec::new();
     // Each link's peak time in the student's swing with its uncertainty, and in the coach's,
     // seconds; measured once for the gaps that share it.

@@ -30,12 +30,10 @@
 //! assert_eq!(decoder.counters().frames_ok, 1);
 //! ```
 
-use crate::checks::CHECKS;
-use crate::config::MAX_DEVIATIONS;
-use crate::dtw::Band;
+use crate::band::Band;
+use crate::config::{MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS};
 use crate::format::Format;
 use crate::joint::Joint;
-use crate::sequence::GAPS;
 use heapless::Vec as HVec;
 use serde::{Deserialize, Serialize};
 
@@ -213,9 +211,9 @@ pub struct SwingReport {
     /// The deviations, largest per event first.
     pub deviations: HVec<WireDeviation, MAX_DEVIATIONS>,
     /// The body checks both swings could be measured at, in `CHECKS` order.
-    pub checks: HVec<WireCheck, { CHECKS.len() }>,
+    pub checks: HVec<WireCheck, MAX_CHECKS>,
     /// The sequence's gaps both swings could be measured at, in `GAPS` order.
-    pub gaps: HVec<WireGap, { GAPS.len() }>,
+    pub gaps: HVec<WireGap, MAX_GAPS>,
 }
 
 /// Why a message was refused.
@@ -561,11 +559,11 @@ mod tests {
                 (any::<[[u16; 2]; 3]>(), any::<[u8; 3]>()),
                 prop::collection::vec(
                     (any::<u8>(), any::<i16>(), any::<i16>(), any::<u16>()),
-                    0..=CHECKS.len()
+                    0..=MAX_CHECKS
                 ),
                 prop::collection::vec(
                     (any::<u8>(), any::<i16>(), any::<i16>(), any::<u16>()),
-                    0..=GAPS.len()
+                    0..=MAX_GAPS
                 ),
                 prop::collection::vec(
                     (
@@ -799,7 +797,7 @@ mod tests {
                         coach: i16::MIN,
                         uncertainty: u16::MAX,
                     },
-                    CHECKS.len(),
+                    MAX_CHECKS,
                 )
                 .collect(),
                 gaps: core::iter::repeat_n(
@@ -809,7 +807,7 @@ mod tests {
                         coach_ms: i16::MIN,
                         uncertainty_ms: u16::MAX,
                     },
-                    GAPS.len(),
+                    MAX_GAPS,
                 )
                 .collect(),
                 deviations: core::iter::repeat_n(

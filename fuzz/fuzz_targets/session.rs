@@ -10,7 +10,7 @@ use libfuzzer_sys::fuzz_target;
 use posecoach_adapters::session::{
     BufferLens, Coach, Outcome, OwnedBuffers, Session, MAX_FRAMES_PER_MESSAGE,
 };
-use posecoach_core::dtw::Band;
+use posecoach_core::band::Band;
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;

@@ -2,7 +2,8 @@
 
 use crate::score::score_swings;
 use anyhow::{anyhow, bail, Result};
-use posecoach_core::dtw::{align, scratch_len, Band, Sequence, Window};
+use posecoach_core::band::Band;
+use posecoach_core::dtw::{align, scratch_len, Sequence, Window};
 use posecoach_core::format::Format;
 use posecoach_io::Motion;
 use serde_json::{json, Value};

@@ -3,9 +3,9 @@
 use crate::failure::{NothingFound, Usage};
 use crate::{html, input, teacher};
 use anyhow::{anyhow, bail, Context, Result};
+use posecoach_core::band::Band;
 use posecoach_core::body::{Angles, Link, Metrics, Shift};
 use posecoach_core::checks::BodyDeviation;
-use posecoach_core::dtw::Band;
 use posecoach_core::events::{Event, EventError, SwingEvents};
 use posecoach_core::score::{self, Advice, Report, ScoreError};
 use posecoach_core::sequence::GAP_TOLERANCE_S;

@@ -8,7 +8,7 @@
 //! message within its instruction budget (docs/DEVICE.md).
 
 use posecoach_adapters::log::{header, HEADER_LEN};
-use posecoach_core::dtw::Band;
+use posecoach_core::band::Band;
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;

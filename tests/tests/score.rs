@@ -4,7 +4,7 @@
 //! tour swing at 60 Hz) by a transformation in this file: a phase time-warped 20-40 %, or one
 //! joint moved 8-15 cm around one event along an axis of the golfer's stance frame.
 
-use posecoach_core::dtw::Band;
+use posecoach_core::band::Band;
 use posecoach_core::events::Event;
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{score, scratch_len, Advice, Direction, Phase, Report, Verdict};

@@ -4,7 +4,7 @@
 use posecoach_adapters::session::{
     BufferLens, Buffers, Coach, Outcome, OwnedBuffers, Refusal, Session, MAX_FRAMES_PER_MESSAGE,
 };
-use posecoach_core::dtw::Band;
+use posecoach_core::band::Band;
 use posecoach_core::format::Format;
 use posecoach_core::plausible::Implausible;
 use posecoach_core::skeleton::Skeleton;

@@ -1,7 +1,7 @@
 //! The wire protocol's bytes are pinned: one frame of every message kind, compared with a
 //! committed stream (`fixtures/wire_messages.bin`, which also seeds the decoder's fuzz target).
 
-use posecoach_core::dtw::Band;
+use posecoach_core::band::Band;
 use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::wire::{

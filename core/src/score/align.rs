@@ -9,8 +9,9 @@
 //!   Every later stage reads the swings through it.
 
 use super::{Detected, ScoreError, Unsure, MAX_PATH};
+use crate::band::Band;
 use crate::body::Stance;
-use crate::dtw::{self, Band, Sequence, Window};
+use crate::dtw::{self, Sequence, Window};
 use crate::events::{Event, Side, SwingEvents};
 use crate::frames::Frames;
 use crate::math::norm;

@@ -13,9 +13,9 @@ use super::noise::Noise;
 use super::timing::Timing;
 use crate::body::{Body, Measure};
 use crate::checks::{BodyDeviation, CHECKS};
-use crate::config::MAX_JOINTS;
+use crate::config::{MAX_CHECKS, MAX_GAPS, MAX_JOINTS};
 use crate::events::{Event, Position, SwingEvents};
-use crate::sequence::{self, Downswing, Gap, GAPS};
+use crate::sequence::{self, Downswing, Gap};
 use crate::skeleton::Skeleton;
 use crate::Vec3;
 use heapless::Vec as HVec;
@@ -46,7 +46,7 @@ pub(super) fn checks(
     (events, coach_hz): ((&SwingEvents, &SwingEvents), f32),
     noise: &Noise,
     timing: &Timing,
-) -> HVec<BodyDeviation, { CHECKS.len() }> {
+) -> HVec<BodyDeviation, MAX_CHECKS> {
     let mut out = HVec::new();
     let joints = skeleton.len();
     let (events_s, events_c) = events;
@@ -144,7 +144,7 @@ pub(super) fn gaps(
     pair: &Pair<'_>,
     events: (&SwingEvents, &SwingEvents),
     hz: (f32, f32),
-) -> HVec<Gap, { GAPS.len() }> {
+) -> HVec<Gap, MAX_GAPS> {
     let (Ok(body_s), Ok(body_c)) = (
         Body::new(skeleton, events.0.lead),
         Body::new(skeleton, events.1.lead),

@@ -31,16 +31,16 @@ use super::align::Pair;
 use super::noise::Noise;
 use super::spatial::{severity, Deviation, Direction};
 use crate::body::{Body, Link, Measure};
-use crate::checks::{BodyDeviation, CHECKS};
-use crate::config::MAX_JOINTS;
+use crate::checks::BodyDeviation;
+use crate::config::{MAX_CHECKS, MAX_GAPS, MAX_JOINTS};
 use crate::events::{Event, Position};
 use crate::joint::Joint;
-use crate::sequence::{Gap, GAPS};
+use crate::sequence::Gap;
 use crate::Vec3;
 use heapless::Vec as HVec;
 
 /// Most causes one swing can have: every check and every gap.
-pub const MAX_CAUSES: usize = CHECKS.len() + GAPS.len();
+pub const MAX_CAUSES: usize = MAX_CHECKS + MAX_GAPS;
 
 /// A segment whose difference a cause is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

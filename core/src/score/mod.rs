@@ -52,13 +52,14 @@ pub use tempo::{
 pub use timing::{EVENT_TIMING_S, MAX_EVENT_TIMING_S};
 pub use unsure::Unsure;
 
+use crate::band::Band;
 use crate::body::Stance;
-use crate::checks::{BodyDeviation, CHECKS};
-use crate::config::{MAX_DEVIATIONS, MAX_SWING_FRAMES};
-use crate::dtw::{self, Band, DtwError};
+use crate::checks::BodyDeviation;
+use crate::config::{MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS, MAX_SWING_FRAMES};
+use crate::dtw::{self, DtwError};
 use crate::events::{self, EventError, SwingEvents};
 use crate::frames::Frames;
-use crate::sequence::{Gap, GAPS};
+use crate::sequence::Gap;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
 use heapless::Vec as HVec;
@@ -108,10 +109,12 @@ pub struct Report {
     /// body check or gap explains (those are folded under it in the advice: [`Explains`]),
     /// the most severe first.
     pub spatial: HVec<Deviation, MAX_DEVIATIONS>,
-    /// The body checks ([`CHECKS`]) both swings could be measured at, in that order.
-    pub body: HVec<BodyDeviation, { CHECKS.len() }>,
-    /// The sequence's gaps ([`GAPS`]) both swings could be measured at, in that order.
-    pub gaps: HVec<Gap, { GAPS.len() }>,
+    /// The body checks ([`CHECKS`](crate::checks::CHECKS)) both swings could be measured at,
+    /// in that order.
+    pub body: HVec<BodyDeviation, MAX_CHECKS>,
+    /// The sequence's gaps ([`GAPS`](crate::sequence::GAPS)) both swings could be measured
+    /// at, in that order.
+    pub gaps: HVec<Gap, MAX_GAPS>,
     /// The most important advice first.
     pub advice: HVec<Advice, MAX_ADVICE>,
     /// The input held the student's root still ([`HELD_ROOT_M`]): the coach was compared with

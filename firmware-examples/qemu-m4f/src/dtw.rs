@@ -1,8 +1,9 @@
 //! Instructions per cell of the banded DTW, on a real swing.
 
 use crate::count;
+use posecoach_core::band::Band;
 use posecoach_core::blob::Aligned;
-use posecoach_core::dtw::{self, Band, Sequence, Window};
+use posecoach_core::dtw::{self, Sequence, Window};
 use posecoach_core::frames::{to_mm, Frames};
 use posecoach_core::math;
 use posecoach_core::reference::Reference;

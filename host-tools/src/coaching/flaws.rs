@@ -867,7 +867,7 @@ mod tests {
     /// check its truth names, in a coach's words; the clean swing itself gets no advice.
     #[test]
     fn a_scored_body_flaw_is_named_first_in_a_coachs_words() {
-        use posecoach_core::dtw::Band;
+        use posecoach_core::band::Band;
         use posecoach_core::score::Advice;
         let (swing, t, lead) = clean();
         let at_60 = |m: &Motion| m.resampled(60.0).unwrap();
@@ -909,7 +909,7 @@ mod tests {
     /// coach's words, and a smaller one within the tolerance is neither.
     #[test]
     fn the_upper_body_first_is_a_gap_out_of_order() {
-        use posecoach_core::dtw::Band;
+        use posecoach_core::band::Band;
         use posecoach_core::score::Advice;
         let (swing, t, lead) = clean();
         let at_60 = |m: &Motion| m.resampled(60.0).unwrap();
