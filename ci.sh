@@ -89,9 +89,10 @@ rustup toolchain install nightly --profile minimal
 command -v cargo-fuzz >/dev/null 2>&1 || cargo install cargo-fuzz --locked
 fuzz/run.sh 30
 
-step "Miri: the core's unit tests (no asm! on this host; one case per property test, the network's whole windows left out)"
+step "Miri: the core's unit tests (no asm! on this host; one case per property test, the heaviest on smaller inputs, the network's whole windows and the sequence's noisy swings left out)"
 # libm's x86 square root is an asm! block, which Miri cannot run: its software one rounds the
-# same. Isolation off: proptest looks up the working directory for its failure file.
+# same. Isolation off: proptest looks up the working directory for its failure file. Under
+# cfg(miri) the heaviest tests take fewer frames, swings or rows (docs/HOSTILE.md, Miri).
 rustup component add --toolchain nightly miri rust-src
 MIRIFLAGS="-Zmiri-disable-isolation" PROPTEST_CASES=1 \
     cargo +nightly miri test -p posecoach-core --lib --features libm/force-soft-floats

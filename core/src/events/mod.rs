@@ -684,17 +684,23 @@ mod tests {
         assert_eq!(events.positions().count(), 4);
     }
 
+    /// The rate of [`arbitrary_motion_never_panics`]'s motion and its frames: one to two
+    /// seconds at 60 Hz, under Miri (which interprets each frame in seconds) one second at
+    /// 30 Hz, a phone's rate (the shortest motion [`detect`] reads).
+    const ARBITRARY_HZ: f32 = if cfg!(miri) { 30.0 } else { RATE_HZ };
+    const ARBITRARY_FRAMES: core::ops::Range<usize> = if cfg!(miri) { 30..31 } else { 60..120 };
+
     proptest::proptest! {
         // One case under Miri, which interprets each in minutes.
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(if cfg!(miri) { 1 } else { 64 }))]
         #[test]
         fn arbitrary_motion_never_panics(
-            values in proptest::collection::vec(-3.0f32..3.0, 17 * 3 * 60..17 * 3 * 120),
+            values in proptest::collection::vec(-3.0f32..3.0, 17 * 3 * ARBITRARY_FRAMES.start..17 * 3 * ARBITRARY_FRAMES.end),
         ) {
             let h36m = Skeleton::standard(Format::H36m17).unwrap();
             let frames = values.len() / (17 * 3);
             let positions: Vec<Vec3> = values[..frames * 17 * 3].chunks_exact(3).map(Vec3::from_column_slice).collect();
-            if let Ok(events) = detect(&h36m, &positions, RATE_HZ) {
+            if let Ok(events) = detect(&h36m, &positions, ARBITRARY_HZ) {
                 let f: Vec<usize> = events.iter().map(|(_, f)| f).collect();
                 proptest::prop_assert!(f.windows(2).all(|w| w[0] < w[1]) && events.finish() < frames);
             }
@@ -704,7 +710,8 @@ mod tests {
     #[test]
     fn bad_input_is_an_error_not_a_panic() {
         let h36m = Skeleton::standard(Format::H36m17).unwrap();
-        let still = standing(&h36m, 90);
+        // Under Miri, which takes seconds over each frame, the second that detect needs at least.
+        let still = standing(&h36m, if cfg!(miri) { 60 } else { 90 });
         assert_eq!(detect(&h36m, &still, 0.0), Err(EventError::Rate));
         assert_eq!(detect(&h36m, &still, f32::NAN), Err(EventError::Rate));
         assert_eq!(
