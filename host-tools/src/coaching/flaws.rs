@@ -218,7 +218,7 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
         .map(|&(event, joint, d)| Truth::Spatial {
             event,
             joint,
-            direction: direction(d),
+            direction: Direction::of(d),
         })
         .collect();
     for flaw in flaws {
@@ -316,19 +316,6 @@ fn sequence_truths(flawed: &Motion, clean: &Motion, times: &Times, lead: Side) -
             })
         })
         .collect()
-}
-
-/// The stance direction of `d`'s largest component, as the report names it.
-pub fn direction(d: Vec3) -> Direction {
-    let axis = d.iamax();
-    match (axis, d[axis] > 0.0) {
-        (0, true) => Direction::TowardTarget,
-        (0, false) => Direction::AwayFromTarget,
-        (1, true) => Direction::TowardBall,
-        (1, false) => Direction::AwayFromBall,
-        (_, true) => Direction::Up,
-        (_, false) => Direction::Down,
-    }
 }
 
 /// The unit vector of `direction` in the stance frame.
