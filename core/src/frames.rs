@@ -161,6 +161,15 @@ impl<'a> Frames<'a> {
         })
     }
 
+    /// The positions as stored, whole frames or not, when they are stored in metres: for a
+    /// reader that takes a slice of metres (`None` for millimetres).
+    pub fn as_metres(&self) -> Option<&'a [Vec3]> {
+        match self.stored {
+            Stored::Metres(p) => Some(p),
+            Stored::Millimetres(_) => None,
+        }
+    }
+
     /// How the positions are stored, for readers with a loop for each.
     pub(crate) fn stored(&self) -> Stored<'a> {
         self.stored
@@ -201,6 +210,8 @@ mod tests {
             assert_eq!((cut.len(), cut.at(0, 0)), (1, metres[3]));
             assert!(frames.get(1..3).is_none());
         }
+        assert_eq!(Frames::metres(&metres, 3).as_metres(), Some(&metres[..]));
+        assert!(Frames::millimetres(&mm, 3).as_metres().is_none());
         assert!(Frames::metres(&metres[..6], 3).is_whole());
         assert!(!Frames::metres(&metres, 0).is_whole());
         assert_eq!(Frames::metres(&metres, 0).len(), 0);

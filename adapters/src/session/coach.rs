@@ -36,7 +36,7 @@ impl<'c> From<&'c Reference<'c>> for Coach<'c> {
     fn from(reference: &'c Reference<'c>) -> Coach<'c> {
         Coach {
             skeleton: reference.skeleton(),
-            positions: Frames::metres(reference.positions(), reference.skeleton().len()),
+            positions: reference.positions(),
             rate_hz: reference.rate_hz(),
         }
     }
