@@ -92,6 +92,24 @@ pub fn joint_at(frames: &Frames<'_>, i: usize, fraction: f32, joint: usize) -> O
     }
 }
 
+/// Frame `i` of `frames` blended a `fraction` of the way to frame `i + 1` as [`joint_at`]
+/// blends each joint, into `out` (its first joints; at most a frame's); `None` past the frames.
+pub fn frame_at(frames: &Frames<'_>, i: usize, fraction: f32, out: &mut [Vec3]) -> Option<()> {
+    let (len, joints) = (frames.len(), frames.joints());
+    if i >= len || out.len() > joints {
+        return None;
+    }
+    let blend = fraction > 0.0 && i + 1 < len;
+    for (j, o) in out.iter_mut().enumerate() {
+        let p = frames.at(i, j);
+        *o = match blend {
+            true => p + (frames.at(i + 1, j) - p) * fraction,
+            false => p,
+        };
+    }
+    Some(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -152,7 +170,7 @@ mod tests {
     }
 
     #[test]
-    fn joint_at_blends_as_lerp_does_in_either_storage() {
+    fn joint_at_and_frame_at_blend_as_lerp_does_in_either_storage() {
         let metres = [
             Vec3::new(0.0, 1.0, 0.0),
             Vec3::new(0.5, 1.0, -0.25),
@@ -169,6 +187,15 @@ mod tests {
             assert_eq!(joint_at(&frames, 1, 0.5, 1), Some(metres[3]));
             assert_eq!(joint_at(&frames, 2, 0.0, 0), None);
             assert_eq!(joint_at(&frames, 0, 0.0, 2), None);
+            let mut whole = [Vec3::zeros(); 2];
+            for (i, fraction) in [(0, 0.25), (0, 0.0), (1, 0.5)] {
+                assert_eq!(frame_at(&frames, i, fraction, &mut whole), Some(()));
+                for (j, w) in whole.iter().enumerate() {
+                    assert_eq!(Some(*w), joint_at(&frames, i, fraction, j));
+                }
+            }
+            assert_eq!(frame_at(&frames, 2, 0.0, &mut whole), None);
+            assert_eq!(frame_at(&frames, 0, 0.0, &mut [Vec3::zeros(); 3]), None);
         }
     }
 }

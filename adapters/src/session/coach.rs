@@ -86,9 +86,7 @@ impl Coach<'_> {
     ) -> Option<&'a [Vec3]> {
         let (i, fraction) = self.source(k, rate_hz)?;
         let out = out.get_mut(..self.skeleton.len())?;
-        for (j, o) in out.iter_mut().enumerate() {
-            *o = resample::joint_at(&self.positions, i, fraction, j)?;
-        }
+        resample::frame_at(&self.positions, i, fraction, out)?;
         Some(out)
     }
 
