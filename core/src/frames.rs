@@ -1,7 +1,8 @@
 //! A swing as it is stored, frame after frame of joint positions, and how it is read.
 //!
 //! Positions are kept either as `f32` metres (a motion read from a file, a virtual coach) or as
-//! 16-bit millimetres ([`Mm`]: a device's ring of live frames, in half the RAM); every reader
+//! 16-bit millimetres ([`Mm`]: a device's ring of live frames, in half the RAM, and the coach
+//! references in flash, [`crate::reference`], in half the flash); every reader
 //! of a swing (events, body metrics, the sequence, the alignment, the score) takes [`Frames`]
 //! and sees metres either way. A millimetre position is the metre one rounded to the nearest
 //! millimetre, so it is off by at most 0.5 mm an axis (0.87 mm in all); [`to_mm`] refuses what

@@ -142,7 +142,7 @@ mod tests {
             let file = root.join(format!("tests/fixtures/golf_{name}_60hz.csv"));
             let motion = io::load(&file).unwrap();
             assert_eq!(
-                motion.to_reference(name, Units::Metres).unwrap(),
+                motion.to_reference(name, Units::Millimetres).unwrap(),
                 &blob.0,
                 "{name}"
             );
