@@ -1,7 +1,8 @@
 //! A swing as it is stored, frame after frame of joint positions, and how it is read.
 //!
 //! Positions are kept either as `f32` metres (a motion read from a file, a virtual coach) or as
-//! 16-bit millimetres ([`Mm`]: a device's ring of live frames, in half the RAM); every reader
+//! 16-bit millimetres ([`Mm`]: a device's ring of live frames, in half the RAM, and the coach
+//! references in flash, [`crate::reference`], in half the flash); every reader
 //! of a swing (events, body metrics, the sequence, the alignment, the score) takes [`Frames`]
 //! and sees metres either way. A millimetre position is the metre one rounded to the nearest
 //! millimetre, so it is off by at most 0.5 mm an axis (0.87 mm in all); [`to_mm`] refuses what
@@ -161,6 +162,15 @@ impl<'a> Frames<'a> {
         })
     }
 
+    /// The positions as stored, whole frames or not, when they are stored in metres: for a
+    /// reader that takes a slice of metres (`None` for millimetres).
+    pub fn as_metres(&self) -> Option<&'a [Vec3]> {
+        match self.stored {
+            Stored::Metres(p) => Some(p),
+            Stored::Millimetres(_) => None,
+        }
+    }
+
     /// How the positions are stored, for readers with a loop for each.
     pub(crate) fn stored(&self) -> Stored<'a> {
         self.stored
@@ -201,6 +211,8 @@ mod tests {
             assert_eq!((cut.len(), cut.at(0, 0)), (1, metres[3]));
             assert!(frames.get(1..3).is_none());
         }
+        assert_eq!(Frames::metres(&metres, 3).as_metres(), Some(&metres[..]));
+        assert!(Frames::millimetres(&mm, 3).as_metres().is_none());
         assert!(Frames::metres(&metres[..6], 3).is_whole());
         assert!(!Frames::metres(&metres, 0).is_whole());
         assert_eq!(Frames::metres(&metres, 0).len(), 0);

@@ -22,6 +22,7 @@
 //! assert_eq!(source(1, 60.0, 40.0, 5), (1, 0.5));
 //! ```
 
+use crate::frames::Frames;
 use crate::Vec3;
 
 /// Relative difference under which two frame rates are one.
@@ -72,6 +73,41 @@ pub fn lerp(a: &[Vec3], b: &[Vec3], fraction: f32, out: &mut [Vec3]) {
     for ((o, p), q) in out.iter_mut().zip(a).zip(b) {
         *o = p + (q - p) * fraction;
     }
+}
+
+/// Joint `joint` of `frames` at input frame `i` and `fraction` ([`source`]): blended a
+/// `fraction` of the way to frame `i + 1` as [`lerp`] blends, or frame `i`'s own where the
+/// fraction is 0 or `i` is the last frame; `None` past the frames or a frame's joints. Reads
+/// either storage, so a swing kept in millimetres is resampled without a copy in metres.
+pub fn joint_at(frames: &Frames<'_>, i: usize, fraction: f32, joint: usize) -> Option<Vec3> {
+    if i >= frames.len() || joint >= frames.joints() {
+        return None;
+    }
+    let p = frames.at(i, joint);
+    if fraction > 0.0 && i + 1 < frames.len() {
+        let q = frames.at(i + 1, joint);
+        Some(p + (q - p) * fraction)
+    } else {
+        Some(p)
+    }
+}
+
+/// Frame `i` of `frames` blended a `fraction` of the way to frame `i + 1` as [`joint_at`]
+/// blends each joint, into `out` (its first joints; at most a frame's); `None` past the frames.
+pub fn frame_at(frames: &Frames<'_>, i: usize, fraction: f32, out: &mut [Vec3]) -> Option<()> {
+    let (len, joints) = (frames.len(), frames.joints());
+    if i >= len || out.len() > joints {
+        return None;
+    }
+    let blend = fraction > 0.0 && i + 1 < len;
+    for (j, o) in out.iter_mut().enumerate() {
+        let p = frames.at(i, j);
+        *o = match blend {
+            true => p + (frames.at(i + 1, j) - p) * fraction,
+            false => p,
+        };
+    }
+    Some(())
 }
 
 #[cfg(test)]
@@ -135,5 +171,35 @@ mod tests {
         let mut out = [Vec3::zeros(); 2];
         lerp(&a, &b, 0.25, &mut out);
         assert_eq!(out, [Vec3::new(0.25, 0.5, -1.0); 2]);
+    }
+
+    #[test]
+    fn joint_at_and_frame_at_blend_as_lerp_does_in_either_storage() {
+        let metres = [
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.5, 1.0, -0.25),
+            Vec3::new(1.0, 2.0, -4.0),
+            Vec3::new(0.5, 3.0, -0.75),
+        ];
+        let mm = metres.map(|p| crate::frames::to_mm(&p).unwrap());
+        for frames in [Frames::metres(&metres, 2), Frames::millimetres(&mm, 2)] {
+            let mut out = [Vec3::zeros(); 2];
+            lerp(&metres[..2], &metres[2..], 0.25, &mut out);
+            assert_eq!(joint_at(&frames, 0, 0.25, 1), Some(out[1]));
+            assert_eq!(joint_at(&frames, 1, 0.0, 0), Some(metres[2]));
+            // The last frame has nothing to blend towards.
+            assert_eq!(joint_at(&frames, 1, 0.5, 1), Some(metres[3]));
+            assert_eq!(joint_at(&frames, 2, 0.0, 0), None);
+            assert_eq!(joint_at(&frames, 0, 0.0, 2), None);
+            let mut whole = [Vec3::zeros(); 2];
+            for (i, fraction) in [(0, 0.25), (0, 0.0), (1, 0.5)] {
+                assert_eq!(frame_at(&frames, i, fraction, &mut whole), Some(()));
+                for (j, w) in whole.iter().enumerate() {
+                    assert_eq!(Some(*w), joint_at(&frames, i, fraction, j));
+                }
+            }
+            assert_eq!(frame_at(&frames, 2, 0.0, &mut whole), None);
+            assert_eq!(frame_at(&frames, 0, 0.0, &mut [Vec3::zeros(); 3]), None);
+        }
     }
 }

@@ -9,6 +9,7 @@ use posecoach_io::{csv, Motion};
 use posecoach_adapters::log::{header, LogReader, HEADER_LEN};
 use posecoach_adapters::session::{BufferLens, Coach, OwnedBuffers, Session};
 use posecoach_core::config::MAX_JOINTS;
+use posecoach_core::frames::Frames;
 use std::sync::OnceLock;
 
 fn coach() -> &'static Motion {
@@ -62,7 +63,7 @@ fn replay(log: &[u8]) {
     let coach = coach();
     let coaches = [Coach {
         skeleton: &coach.skeleton,
-        positions: &coach.positions,
+        positions: Frames::metres(&coach.positions, coach.skeleton.len()),
         rate_hz: coach.rate_hz,
     }];
     let mut buffers = OwnedBuffers::new(BufferLens::new(MAX_JOINTS, coach.frames(), 120));

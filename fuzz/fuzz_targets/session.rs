@@ -12,6 +12,7 @@ use posecoach_adapters::session::{
 };
 use posecoach_core::band::Band;
 use posecoach_core::format::Format;
+use posecoach_core::frames::Frames;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{
@@ -76,7 +77,7 @@ fuzz_target!(|data: &[u8]| {
     let coach = coach();
     let coaches = [Coach {
         skeleton: &coach.skeleton,
-        positions: &coach.positions,
+        positions: Frames::metres(&coach.positions, coach.skeleton.len()),
         rate_hz: coach.rate_hz,
     }];
     let mut buffers = OwnedBuffers::new(BufferLens::new(17, coach.frames(), 120));

@@ -129,6 +129,7 @@ pub fn session<R>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use posecoach_core::reference::Units;
     use posecoach_io as io;
     use std::path::Path;
 
@@ -140,7 +141,11 @@ mod tests {
         for (blob, name) in BUNDLED.iter().zip(["driver", "iron"]) {
             let file = root.join(format!("tests/fixtures/golf_{name}_60hz.csv"));
             let motion = io::load(&file).unwrap();
-            assert_eq!(motion.to_reference(name).unwrap(), &blob.0, "{name}");
+            assert_eq!(
+                motion.to_reference(name, Units::Millimetres).unwrap(),
+                &blob.0,
+                "{name}"
+            );
         }
     }
 }

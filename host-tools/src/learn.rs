@@ -617,7 +617,8 @@ pub struct ExportArgs {
     #[arg(long)]
     out: PathBuf,
     /// Also write golden vectors: this coach swing at the network's rate (OUT with
-    /// `.golden-in.pcr`) and the int8 network's retargeting of it (`.golden-out.pcr`).
+    /// `.golden-in.pcr`) and the int8 network's retargeting of it (`.golden-out.pcr`), both
+    /// in `f32` metres.
     #[arg(long)]
     golden: Option<PathBuf>,
     /// The golden retargeting's student (a T-pose file); H36M-17 at 1.70 m by default.
@@ -745,8 +746,11 @@ fn write_golden(
     };
     let path = |suffix: &str| out.with_extension(suffix);
     let (input, output) = (path("golden-in.pcr"), path("golden-out.pcr"));
-    std::fs::write(&input, source.to_reference("golden-in")?)?;
-    std::fs::write(&output, result.to_reference("golden-out")?)?;
+    // In metres: the exact floats the network takes and gives, which the tests and the
+    // firmware compare to the bit.
+    let metres = posecoach_core::reference::Units::Metres;
+    std::fs::write(&input, source.to_reference("golden-in", metres)?)?;
+    std::fs::write(&output, result.to_reference("golden-out", metres)?)?;
     Ok((input, output))
 }
 

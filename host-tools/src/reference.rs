@@ -1,7 +1,9 @@
-//! `posecoach reference`: a coach's swing stored as the device stores it (a `.pcr` blob).
+//! `posecoach reference`: a coach's swing stored as the device stores it (a `.pcr` blob, its
+//! positions in 16-bit millimetres).
 
 use crate::input;
 use anyhow::{bail, Context, Result};
+use posecoach_core::reference::Units;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -39,7 +41,7 @@ pub fn run(args: &Args) -> Result<String> {
             .unwrap_or_default(),
     };
     let bytes = motion
-        .to_reference(&name)
+        .to_reference(&name, Units::Millimetres)
         .with_context(|| format!("storing {}", args.coach.display()))?;
     std::fs::write(&args.out, &bytes).with_context(|| format!("writing {}", args.out.display()))?;
     let (joints, frames) = (motion.skeleton.len(), motion.frames());

@@ -311,7 +311,13 @@ mod tests {
         swing.rate_hz = 0.001;
         let path =
             std::env::temp_dir().join(format!("posecoach-io-slow-{}.pcr", std::process::id()));
-        std::fs::write(&path, swing.to_reference("slow").unwrap()).unwrap();
+        std::fs::write(
+            &path,
+            swing
+                .to_reference("slow", posecoach_core::reference::Units::Millimetres)
+                .unwrap(),
+        )
+        .unwrap();
         let e = load(&path).unwrap_err();
         std::fs::remove_file(&path).unwrap();
         assert!(

@@ -298,7 +298,8 @@ impl Motion {
         })
     }
 
-    /// A coach reference blob (`.pcr`) as a motion: joints named canonically, nothing missing.
+    /// A coach reference blob (`.pcr`) as a motion: joints named canonically, nothing missing,
+    /// positions in metres (millimetres read as [`posecoach_core::frames::from_mm`] reads them).
     ///
     /// # Errors
     /// Any [`ReferenceError`] of [`Reference::from_bytes`].
@@ -316,27 +317,35 @@ impl Motion {
                     .map_or(format!("joint_{k}"), |j| j.name().to_string())
             })
             .collect();
+        let positions: Vec<Vec3> = reference.positions().iter().collect();
         Ok(Motion {
             names,
             rate_hz: reference.rate_hz(),
-            positions: reference.positions().to_vec(),
-            missing: vec![false; reference.positions().len()],
+            missing: vec![false; positions.len()],
+            positions,
             skeleton,
         })
     }
 
-    /// The motion as a coach reference blob named `name`.
+    /// The motion as a coach reference blob named `name`, its positions stored in `units`
+    /// (millimetres as the device's coaches are; metres for the exact floats).
     ///
     /// # Errors
     /// As [`reference::write`]: a T-pose (rate 0), a name over
-    /// [`reference::MAX_NAME`] bytes or a non-finite position.
-    pub fn to_reference(&self, name: &str) -> Result<Vec<u8>, ReferenceError> {
+    /// [`reference::MAX_NAME`] bytes, a non-finite position, or in millimetres one beyond
+    /// ±32.767 m.
+    pub fn to_reference(
+        &self,
+        name: &str,
+        units: reference::Units,
+    ) -> Result<Vec<u8>, ReferenceError> {
         let mut out = vec![0; reference::max_len(self.skeleton.len(), self.frames())];
         let n = reference::write(
             name,
             &self.skeleton,
             self.rate_hz,
-            &self.positions,
+            Frames::metres(&self.positions, self.skeleton.len()),
+            units,
             &mut out,
         )?;
         out.truncate(n);

@@ -6,6 +6,7 @@ use posecoach_adapters::session::{
 };
 use posecoach_core::band::Band;
 use posecoach_core::format::Format;
+use posecoach_core::frames::Frames;
 use posecoach_core::plausible::Implausible;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{Config, ImuSample, Message, NackReason, PoseFrame, StudentProfile};
@@ -46,7 +47,7 @@ fn bad_messages_are_refused_and_change_nothing() {
     let coach = io::load(&fixture("golf_driver_60hz.csv")).unwrap();
     let coaches = [Coach {
         skeleton: &coach.skeleton,
-        positions: &coach.positions,
+        positions: Frames::metres(&coach.positions, coach.skeleton.len()),
         rate_hz: coach.rate_hz,
     }];
     let mut buffers = OwnedBuffers::new(BufferLens::new(17, coach.frames(), 60));
@@ -169,7 +170,7 @@ fn pose_frames(motion: &io::Motion, format: Format) -> Vec<Message> {
 fn scores(coach: &io::Motion, messages: &[Message]) -> (Vec<(f32, Vec<usize>)>, Vec<Refusal>) {
     let coaches = [Coach {
         skeleton: &coach.skeleton,
-        positions: &coach.positions,
+        positions: Frames::metres(&coach.positions, coach.skeleton.len()),
         rate_hz: coach.rate_hz,
     }];
     let mut buffers = OwnedBuffers::new(BufferLens::new(31, coach.frames(), 60));
@@ -326,7 +327,7 @@ fn a_network_borrows_the_ring_at_its_rate() {
     let coach = io::load(&fixture("golf_driver_60hz.csv")).unwrap();
     let coaches = [Coach {
         skeleton: &coach.skeleton,
-        positions: &coach.positions,
+        positions: Frames::metres(&coach.positions, coach.skeleton.len()),
         rate_hz: coach.rate_hz,
     }];
     let (n, frames) = (coach.skeleton.len(), coaches[0].frames_at(30));
@@ -613,7 +614,7 @@ proptest! {
         let coach = io::load(&fixture("golf_driver_60hz.csv")).unwrap();
         let coaches = [Coach {
             skeleton: &coach.skeleton,
-            positions: &coach.positions,
+            positions: Frames::metres(&coach.positions, coach.skeleton.len()),
             rate_hz: coach.rate_hz,
         }];
         let mut buffers = OwnedBuffers::new(BufferLens::new(17, coach.frames(), 60));

@@ -24,8 +24,9 @@ use posecoach_core::Vec3;
 pub struct Coach<'c> {
     /// The coach's skeleton.
     pub skeleton: &'c Skeleton,
-    /// Frames × joints of `skeleton`.
-    pub positions: &'c [Vec3],
+    /// Its frames, `skeleton`'s joints to a frame, in metres or millimetres (a reference's
+    /// are read in place; frames of another joint count are no frames).
+    pub positions: Frames<'c>,
     /// Frame rate, Hz.
     pub rate_hz: f32,
 }
@@ -43,7 +44,10 @@ impl<'c> From<&'c Reference<'c>> for Coach<'c> {
 
 impl Coach<'_> {
     fn frames(&self) -> usize {
-        self.positions.len() / self.skeleton.len().max(1)
+        match self.positions.joints() == self.skeleton.len() {
+            true => self.positions.len(),
+            false => 0,
+        }
     }
 
     /// Its frames at the model rate `rate_hz`, as the session keeps the virtual coach: the
@@ -64,41 +68,34 @@ impl Coach<'_> {
         }
     }
 
-    /// Frame `k` at `rate_hz`, interpolated into `between` when it falls between two of the
-    /// coach's own frames.
-    fn frame_at<'a>(
-        &'a self,
-        k: usize,
-        rate_hz: u16,
-        between: &'a mut [Vec3; MAX_JOINTS],
-    ) -> Option<&'a [Vec3]> {
-        let n = self.skeleton.len();
-        let (i, fraction) = resample::source(k, self.rate_hz, f32::from(rate_hz), self.frames());
-        let frame = |i: usize| self.positions.get(i * n..(i + 1) * n);
-        match (frame(i), frame(i + 1)) {
-            (Some(a), Some(b)) if fraction > 0.0 => {
-                resample::lerp(a, b, fraction, &mut between[..n]);
-                Some(&between[..n])
-            }
-            (Some(a), _) => Some(a),
-            (None, _) => None,
-        }
+    /// Where frame `k` at `rate_hz` falls among the coach's own frames ([`resample::source`]);
+    /// `None` without frames.
+    fn source(&self, k: usize, rate_hz: u16) -> Option<(usize, f32)> {
+        let frames = self.frames();
+        let (i, fraction) = resample::source(k, self.rate_hz, f32::from(rate_hz), frames);
+        (i < frames).then_some((i, fraction))
     }
 
-    /// Joint `k` of frame `f` at `rate_hz`, interpolated as [`Coach::frame_at`] interpolates
-    /// frames (zero outside them).
-    fn joint_at(&self, f: usize, k: usize, rate_hz: u16) -> Vec3 {
-        let n = self.skeleton.len();
-        let (i, fraction) = resample::source(f, self.rate_hz, f32::from(rate_hz), self.frames());
-        let at = |i: usize| match k < n {
-            true => self.positions.get(i * n + k).copied(),
-            false => None,
-        };
-        match (at(i), at(i + 1)) {
-            (Some(p), Some(q)) if fraction > 0.0 => p + (q - p) * fraction,
-            (Some(p), _) => p,
-            (None, _) => Vec3::zeros(),
-        }
+    /// Frame `k` at `rate_hz` in metres, in `out` (interpolated when it falls between two of
+    /// the coach's own frames); `None` without frames.
+    fn frame_at<'a>(
+        &self,
+        k: usize,
+        rate_hz: u16,
+        out: &'a mut [Vec3; MAX_JOINTS],
+    ) -> Option<&'a [Vec3]> {
+        let (i, fraction) = self.source(k, rate_hz)?;
+        let out = out.get_mut(..self.skeleton.len())?;
+        resample::frame_at(&self.positions, i, fraction, out)?;
+        Some(out)
+    }
+
+    /// Joint `j` of frame `k` at `rate_hz`, metres, interpolated as [`Coach::frame_at`]
+    /// interpolates frames (zero outside them).
+    fn joint_at(&self, k: usize, j: usize, rate_hz: u16) -> Vec3 {
+        self.source(k, rate_hz)
+            .and_then(|(i, fraction)| resample::joint_at(&self.positions, i, fraction, j))
+            .unwrap_or_else(Vec3::zeros)
     }
 
     /// `out`, the coach at `rate_hz` retargeted onto `student`, moved onto the coach's golf
@@ -133,10 +130,10 @@ impl Coach<'_> {
         out: &mut [Vec3],
     ) -> Result<(), Refusal> {
         let retarget = Analytic::new(self.skeleton, student).map_err(|_| Refusal::Retarget)?;
-        let mut between = [Vec3::zeros(); MAX_JOINTS];
+        let mut resampled = [Vec3::zeros(); MAX_JOINTS];
         for (k, pose) in out.chunks_exact_mut(student.len()).enumerate() {
             let source = self
-                .frame_at(k, rate_hz, &mut between)
+                .frame_at(k, rate_hz, &mut resampled)
                 .ok_or(Refusal::Retarget)?;
             retarget
                 .frame(source, pose)
@@ -163,10 +160,10 @@ impl Coach<'_> {
         let (source, rest) = room
             .split_at_mut_checked(frames * n)
             .ok_or(Refusal::Buffers)?;
-        let mut between = [Vec3::zeros(); MAX_JOINTS];
+        let mut resampled = [Vec3::zeros(); MAX_JOINTS];
         for (k, pose) in source.chunks_exact_mut(n).enumerate() {
             let frame = self
-                .frame_at(k, rate_hz, &mut between)
+                .frame_at(k, rate_hz, &mut resampled)
                 .ok_or(Refusal::Retarget)?;
             pose.copy_from_slice(frame);
         }

@@ -28,17 +28,18 @@ const SWING_POSITIONS: usize = 64 * 17;
 #[inline(never)]
 pub fn per_cell_centi() -> Result<(u64, usize), &'static str> {
     let swing = Reference::from_bytes(&SWING.0).map_err(|_| "the DTW's swing is damaged")?;
-    let (frames, joints) = (swing.frames(), swing.skeleton().len());
+    let positions = swing.positions();
+    let (frames, joints) = (positions.len(), positions.joints());
     let mut mm = [[0i16; 3]; SWING_POSITIONS];
     let mm = mm
-        .get_mut(..swing.positions().len())
+        .get_mut(..frames * joints)
         .ok_or("the DTW benchmark's swing is too long")?;
-    for (m, p) in mm.iter_mut().zip(swing.positions()) {
-        *m = to_mm(p).ok_or("the DTW's swing is out of range")?;
+    for (m, p) in mm.iter_mut().zip(positions.iter()) {
+        *m = to_mm(&p).ok_or("the DTW's swing is out of range")?;
     }
     let shape = |_| "the DTW's swing's shape";
     let a = Sequence::rooted(Frames::millimetres(mm, joints)).map_err(shape)?;
-    let b = Sequence::rooted(Frames::metres(swing.positions(), joints)).map_err(shape)?;
+    let b = Sequence::rooted(positions).map_err(shape)?;
     let window = Window::new(Band::global(DTW_RADIUS), &[]).map_err(|_| "band")?;
     let len = dtw::scratch_len(frames, frames, &window).map_err(|_| "band")?;
     let mut cost = [0.0f32; 128];
@@ -79,23 +80,20 @@ const KERNEL_FRAMES: usize = 8;
 #[inline(never)]
 pub fn check_rooted_distances() -> Result<usize, &'static str> {
     let swing = Reference::from_bytes(&SWING.0).map_err(|_| "the DTW's swing is damaged")?;
-    let joints = swing.skeleton().len();
     let (positions, scale) = (swing.positions(), 1.0 / 3.0);
+    let short = "the DTW's swing is too short for the kernel check";
     let mut compared = 0;
     for n in KERNEL_JOINTS {
-        let frame = |f: usize| positions.get(f * joints..f * joints + n);
-        let first = frame(0).ok_or("the DTW's swing is too short for the kernel check")?;
         let mut here = [Vec3::zeros(); KERNEL_MOST_JOINTS];
         let here = here.get_mut(..n).ok_or("too many joints for the kernel check")?;
         // Not root-relative, so that every joint's distance counts, the first's too.
-        here.copy_from_slice(first);
+        first_joints(&positions, 0, here).ok_or(short)?;
         let mut frames = [Vec3::zeros(); KERNEL_FRAMES * KERNEL_MOST_JOINTS];
         let mut expected = [0.0f32; KERNEL_FRAMES];
-        for (f, (chunk, e)) in frames.chunks_exact_mut(n).zip(&mut expected).enumerate() {
-            let other = frame(f + 1).ok_or("the DTW's swing is too short for the kernel check")?;
-            chunk.copy_from_slice(other);
+        for (f, (other, e)) in frames.chunks_exact_mut(n).zip(&mut expected).enumerate() {
+            first_joints(&positions, f + 1, other).ok_or(short)?;
             let mut sum = 0.0f32;
-            for (h, p) in here.iter().zip(other) {
+            for (h, p) in here.iter().zip(&*other) {
                 let d = h - (p - other[0]);
                 sum += math::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
             }
@@ -109,4 +107,16 @@ pub fn check_rooted_distances() -> Result<usize, &'static str> {
         compared += KERNEL_FRAMES;
     }
     Ok(compared)
+}
+
+/// The first `out.len()` joints of frame `f` of `swing`, metres, into `out`; `None` past its
+/// frames or a frame's joints.
+fn first_joints(swing: &Frames<'_>, f: usize, out: &mut [Vec3]) -> Option<()> {
+    if f >= swing.len() || out.len() > swing.joints() {
+        return None;
+    }
+    for (j, o) in out.iter_mut().enumerate() {
+        *o = swing.at(f, j);
+    }
+    Some(())
 }
