@@ -1,6 +1,8 @@
 //! Synthetic motions for the stages' tests: points eased from key to key at 30 Hz (the
 //! device's model rate; few frames keep the tests short under Miri).
 
+#![cfg(test)]
+
 use crate::Vec3;
 use std::vec::Vec;
 
