@@ -181,6 +181,74 @@ pub struct Metrics {
     pub wrist_hinge: Option<f32>,
 }
 
+/// How many values a [`Metrics`] holds ([`Metrics::values`]).
+const VALUES: usize = 21;
+
+impl Metrics {
+    /// Every value, in the order the struct declares them (each [`Angles`] and [`Shift`] in
+    /// its own; NaN for one the skeleton cannot give), for arithmetic on all of them at once.
+    fn values(&self) -> [f32; VALUES] {
+        let (a, b) = (self.pelvis, self.thorax);
+        let [p, t] = [self.pelvis_shift, self.thorax_shift];
+        let h = self.head_shift.unwrap_or(Shift {
+            sway: f32::NAN,
+            thrust: f32::NAN,
+            lift: f32::NAN,
+        });
+        [
+            a.turn,
+            a.bend,
+            a.side_bend,
+            b.turn,
+            b.bend,
+            b.side_bend,
+            self.x_factor,
+            self.spine,
+            p.sway,
+            p.thrust,
+            p.lift,
+            t.sway,
+            t.thrust,
+            t.lift,
+            h.sway,
+            h.thrust,
+            h.lift,
+            self.lead_arm,
+            self.lead_elbow,
+            self.shaft_lean.unwrap_or(f32::NAN),
+            self.wrist_hinge.unwrap_or(f32::NAN),
+        ]
+    }
+
+    /// These metrics with every value replaced by `values` (as [`Metrics::values`] orders
+    /// them), those absent here left absent.
+    fn with_values(&self, v: [f32; VALUES]) -> Metrics {
+        let angles = |k: usize| Angles {
+            turn: v[k],
+            bend: v[k + 1],
+            side_bend: v[k + 2],
+        };
+        let shift = |k: usize| Shift {
+            sway: v[k],
+            thrust: v[k + 1],
+            lift: v[k + 2],
+        };
+        Metrics {
+            pelvis: angles(0),
+            thorax: angles(3),
+            x_factor: v[6],
+            spine: v[7],
+            pelvis_shift: shift(8),
+            thorax_shift: shift(11),
+            head_shift: self.head_shift.map(|_| shift(14)),
+            lead_arm: v[17],
+            lead_elbow: v[18],
+            shaft_lean: self.shaft_lean.map(|_| v[19]),
+            wrist_hinge: self.wrist_hinge.map(|_| v[20]),
+        }
+    }
+}
+
 /// One of the body metrics that can be measured alone ([`Body::value`]): the few advice
 /// speaks of (see [`crate::checks`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -432,7 +500,7 @@ impl Body {
     /// and the thorax, the lead shoulder and wrist for the arm, grip and head for the club.
     pub fn joints_of_link(&self, link: Link) -> heapless::Vec<usize, 5> {
         match link {
-            Link::Pelvis => self.hips.into_iter().collect(),
+            Link::Pelvis => self.joints_of(Measure::PelvisTurn),
             Link::Thorax => self.joints_of(Measure::ThoraxTurn),
             Link::LeadArm => [self.shoulders[0], self.lead_arm[1]].into_iter().collect(),
             Link::Club => self.club.into_iter().flatten().collect(),
@@ -515,29 +583,26 @@ impl Body {
         2 * (libm::roundf(0.5 * SMOOTHING_S * hz) as usize).max(1)
     }
 
-    /// How far `link` turns from frame `a` to frame `b` (both long enough), degrees: the
-    /// angle of the rotation between the thorax's [`axes`] in the two, the angle between the
-    /// hip lines, the lead arm's (shoulder to wrist) or the shaft's (grip to head) directions;
-    /// `None` for a club that is not tracked.
+    /// How far `link` turns from frame `a` to frame `b` (both long enough), degrees: the pelvis
+    /// and the thorax about their own long axes (the turn of the lateral axis about the mean of
+    /// the two frames' long axes, as a sensor on the segment reads its axial rotation), the
+    /// lead arm (shoulder to wrist) and the shaft (grip to head) as directions (joint centres do
+    /// not show a limb's twist about itself); `None` for a club that is not tracked.
     fn turned(&self, link: Link, a: &[Vec3], b: &[Vec3]) -> Option<f32> {
-        let rotation = |[la, ua, fa]: [Vec3; 3], [lb, ub, fb]: [Vec3; 3]| {
-            // The rotation taking one orthonormal frame to the other: its sine from the
-            // cross products, its cosine from the trace, so small angles stay exact.
-            let sin = (la.cross(&lb) + ua.cross(&ub) + fa.cross(&fb)).norm() * 0.5;
-            let cos = (la.dot(&lb) + ua.dot(&ub) + fa.dot(&fb) - 1.0) * 0.5;
-            degrees(libm::atan2f(sin, cos))
+        let about_long_axis = |[la, ua, _]: [Vec3; 3], [lb, ub, _]: [Vec3; 3]| {
+            let u = (ua + ub).try_normalize(1e-9).unwrap_or(ua);
+            between(la - u * la.dot(&u), lb - u * lb.dot(&u))
         };
+        // In the world's own coordinates: only the change between the two matters.
+        let same = |d: Vec3| d;
         match link {
-            // The hip line alone: the pelvis's long axis is the trunk's (see the module
-            // documentation), which would carry the thorax's motion into the pelvis's.
-            Link::Pelvis => {
-                let hips = |f: &[Vec3]| f[self.hips[0]] - f[self.hips[1]];
-                Some(between(hips(a), hips(b)))
-            }
-            // In the world's own coordinates: only the change between the two matters.
-            Link::Thorax => Some(rotation(
-                self.thorax_axes(a, |d| d),
-                self.thorax_axes(b, |d| d),
+            Link::Pelvis => Some(about_long_axis(
+                self.pelvis_axes(a, same),
+                self.pelvis_axes(b, same),
+            )),
+            Link::Thorax => Some(about_long_axis(
+                self.thorax_axes(a, same),
+                self.thorax_axes(b, same),
             )),
             Link::LeadArm => {
                 let arm = |f: &[Vec3]| f[self.lead_arm[1]] - f[self.shoulders[0]];
@@ -588,39 +653,185 @@ pub fn at_positions(
     swing: Frames<'_>,
     events: &SwingEvents,
 ) -> Result<[Option<Metrics>; Position::ALL.len()], BodyError> {
-    let body = Body::new(skeleton, events.lead)?;
-    let joints = skeleton.len().min(MAX_JOINTS);
-    // The pose at `time` (frames), linear between the frames around it.
-    let pose = |time: f32, out: &mut [Vec3; MAX_JOINTS]| -> Option<()> {
-        let last = swing.len().checked_sub(1)?;
-        if swing.joints() != joints {
-            return None;
-        }
-        let time = time.clamp(0.0, last as f32);
-        let (f, w) = (time as usize, time - libm::floorf(time));
-        let g = (f + 1).min(last);
-        for (k, o) in out.iter_mut().enumerate().take(joints) {
-            *o = swing.at(f, k) * (1.0 - w) + swing.at(g, k) * w;
-        }
-        Some(())
-    };
     let mut table = [None; Position::ALL.len()];
+    each_position(skeleton, swing, events, &mut |position, at| {
+        table[position as usize] = at.metrics();
+    })?;
+    Ok(table)
+}
+
+/// How a swing's input may err: its noise per stance axis (toward the target, toward the
+/// ball, up; metres, one standard deviation) and how early or late each P-position may have
+/// been found (frames, one standard deviation, [`Position::ALL`] order).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InputError {
+    /// Metres per stance axis.
+    pub noise_m: [f32; 3],
+    /// Frames per P-position.
+    pub timing: [f32; Position::ALL.len()],
+}
+
+/// The uncertainty of each of [`at_positions`]'s metrics (one standard deviation, in the
+/// metrics' own units; `None` where the swing has no such position), for input that errs by
+/// `error`: each joint moved by the noise along each stance axis, at the position and at
+/// address (at P1 the same pose, moved as one), and the position found early or late by its
+/// timing's uncertainty.
+///
+/// # Errors
+/// [`BodyError::MissingJoint`] as [`Body::new`].
+pub fn spread_at_positions(
+    skeleton: &Skeleton,
+    swing: Frames<'_>,
+    events: &SwingEvents,
+    error: &InputError,
+) -> Result<[Option<Metrics>; Position::ALL.len()], BodyError> {
+    let mut table = [None; Position::ALL.len()];
+    each_position(skeleton, swing, events, &mut |position, at| {
+        table[position as usize] = at.spread(error, position);
+    })?;
+    Ok(table)
+}
+
+/// One P-position of a swing as [`each_position`] hands it over.
+struct AtPosition<'a> {
+    body: &'a Body,
+    stance: &'a Stance,
+    swing: Frames<'a>,
+    /// Its time, frames.
+    time: f32,
+    address: [Vec3; MAX_JOINTS],
+    at: [Vec3; MAX_JOINTS],
+}
+
+impl AtPosition<'_> {
+    /// The metrics here.
+    fn metrics(&self) -> Option<Metrics> {
+        let n = self.body.joints;
+        self.body
+            .measure(self.stance, &self.address[..n], &self.at[..n])
+    }
+
+    /// The uncertainty of [`AtPosition::metrics`] for input that errs by `error` (see
+    /// [`spread_at_positions`]); this position is `position`.
+    fn spread(&mut self, error: &InputError, position: Position) -> Option<Metrics> {
+        let here = self.metrics()?;
+        let base = here.values();
+        let mut variance = [0.0f32; VALUES];
+        let mut add = |a: Option<Metrics>, b: [f32; VALUES], scale: f32| {
+            if let Some(a) = a {
+                for (v, (a, b)) in variance.iter_mut().zip(a.values().into_iter().zip(b)) {
+                    *v += (scale * (a - b)) * (scale * (a - b));
+                }
+            }
+        };
+        let axes = [
+            self.stance.toward_target(),
+            self.stance.toward_ball(),
+            Vec3::y(),
+        ];
+        // At P1 the two poses are one: they move together.
+        let moved: &[&[bool]] = match position {
+            Position::P1 => &[&[false, true]],
+            _ => &[&[false], &[true]],
+        };
+        for k in 0..self.body.joints {
+            for (direction, noise) in axes.iter().zip(error.noise_m) {
+                let step = direction * noise;
+                for poses in moved {
+                    poses.iter().for_each(|&a| self.pose(a)[k] += step);
+                    add(self.metrics(), base, 1.0);
+                    poses.iter().for_each(|&a| self.pose(a)[k] -= step);
+                }
+            }
+        }
+        let h = error.timing[position as usize];
+        if h > 0.0 {
+            let (kept, time) = ((self.at, self.address), self.time);
+            let tied = position == Position::P1;
+            let mut at = |t: f32| {
+                pose_at(self.swing, self.body.joints, t, &mut self.at)?;
+                if tied {
+                    self.address = self.at;
+                }
+                self.metrics()
+            };
+            let (later, earlier) = (at(time + h), at(time - h));
+            (self.at, self.address) = kept;
+            if let Some(earlier) = earlier {
+                add(later, earlier.values(), 0.5);
+            }
+        }
+        Some(here.with_values(variance.map(libm::sqrtf)))
+    }
+
+    /// The pose at address or at the position.
+    fn pose(&mut self, address: bool) -> &mut [Vec3; MAX_JOINTS] {
+        match address {
+            true => &mut self.address,
+            false => &mut self.at,
+        }
+    }
+}
+
+/// `visit` each P-position `swing` (frames × `skeleton` joints) has by its `events`, in
+/// [`Position::ALL`] order, with its poses and stance.
+///
+/// # Errors
+/// [`BodyError::MissingJoint`] as [`Body::new`].
+fn each_position(
+    skeleton: &Skeleton,
+    swing: Frames<'_>,
+    events: &SwingEvents,
+    visit: &mut dyn FnMut(Position, &mut AtPosition<'_>),
+) -> Result<(), BodyError> {
+    let body = Body::new(skeleton, events.lead)?;
+    let joints = body.joints.min(MAX_JOINTS);
     let mut address = [Vec3::zeros(); MAX_JOINTS];
     let Some(()) = events
         .time(Position::P1)
-        .and_then(|t| pose(t, &mut address))
+        .and_then(|t| pose_at(swing, joints, t, &mut address))
     else {
-        return Ok(table);
+        return Ok(());
     };
-    let address = &address[..joints];
-    let stance = Stance::new(skeleton, address, events.lead);
-    let mut at = [Vec3::zeros(); MAX_JOINTS];
+    let stance = Stance::new(skeleton, &address[..joints], events.lead);
     for position in Position::ALL {
-        if let Some(()) = events.time(position).and_then(|t| pose(t, &mut at)) {
-            table[position as usize] = body.measure(&stance, address, &at[..joints]);
+        let mut at = AtPosition {
+            body: &body,
+            stance: &stance,
+            swing,
+            time: 0.0,
+            address,
+            at: [Vec3::zeros(); MAX_JOINTS],
+        };
+        if let Some(time) = events.time(position) {
+            if pose_at(swing, joints, time, &mut at.at).is_some() {
+                at.time = time;
+                visit(position, &mut at);
+            }
         }
     }
-    Ok(table)
+    Ok(())
+}
+
+/// The pose of `swing` (frames × `joints`) at `time` (frames, clamped to the swing), linear
+/// between the frames around it; `None` for an empty swing or one of other joints.
+fn pose_at(
+    swing: Frames<'_>,
+    joints: usize,
+    time: f32,
+    out: &mut [Vec3; MAX_JOINTS],
+) -> Option<()> {
+    let last = swing.len().checked_sub(1)?;
+    if swing.joints() != joints || joints > MAX_JOINTS {
+        return None;
+    }
+    let time = time.clamp(0.0, last as f32);
+    let (f, w) = (time as usize, time - libm::floorf(time));
+    let g = (f + 1).min(last);
+    for (k, o) in out.iter_mut().enumerate().take(joints) {
+        *o = swing.at(f, k) * (1.0 - w) + swing.at(g, k) * w;
+    }
+    Some(())
 }
 
 /// A segment's axes in stance coordinates (toward the target, toward the ball, up): the unit
@@ -1042,5 +1253,71 @@ pub(crate) mod tests {
         let refused = Err(BodyError::MissingJoint(Joint::RightHip));
         assert_eq!(Body::new(&skeleton, Side::Left), refused);
         assert_eq!(Body::new(&skeleton, Side::Right), refused);
+    }
+
+    #[test]
+    fn the_spread_of_a_shift_is_the_noise_and_of_a_turn_its_rate_times_the_timing() {
+        let skeleton = Skeleton::standard(Format::H36m17).unwrap();
+        // The pelvis turns half a degree a frame, all else held at address; seen 30° off.
+        let mut frames = std::vec::Vec::new();
+        for f in 0..100 {
+            let mut posed = ADDRESS;
+            posed.pelvis.turn += 0.5 * f as f32;
+            let pose = pose(&skeleton, Side::Left, &posed);
+            frames.extend(
+                pose[..17]
+                    .iter()
+                    .map(|&p| world(p, 30.0, false, Vec3::zeros())),
+            );
+        }
+        let swing = Frames::metres(&frames, 17);
+        let mut times = [None; 10];
+        for (e, f) in crate::events::Event::ALL
+            .into_iter()
+            .zip([10, 20, 30, 40, 50, 60, 70, 90])
+        {
+            times[Position::from(e) as usize] = Some(f as f32);
+        }
+        let events = SwingEvents::at_times(Side::Left, times);
+        let spread = |noise_m, timing| {
+            let error = InputError { noise_m, timing };
+            spread_at_positions(&skeleton, swing, &events, &error).unwrap()[Position::P4 as usize]
+                .unwrap()
+        };
+        // Each hip moved by the noise at the top and at address: the point between them by
+        // the noise.
+        let noisy = spread([0.01, 0.02, 0.005], [0.0; 10]);
+        let s = noisy.pelvis_shift;
+        assert!(
+            close(s.sway, 0.01, 1e-4) && close(s.thrust, 0.02, 1e-4),
+            "{s:?}"
+        );
+        assert!(close(s.lift, 0.005, 1e-4), "{s:?}");
+        // The head, one joint: √2 the noise.
+        let lift = noisy.head_shift.unwrap().lift;
+        assert!(
+            close(lift, 0.005 * core::f32::consts::SQRT_2, 1e-4),
+            "{lift}"
+        );
+        // Found two frames early or late: the turn by a degree, the hips where they were.
+        let late = spread([0.0; 3], [2.0; 10]);
+        assert!(close(late.pelvis.turn, 1.0, 0.02), "{:?}", late.pelvis);
+        assert!(late.pelvis_shift.sway < 1e-5, "{:?}", late.pelvis_shift);
+        // Without noise or timing, no spread; at every position the swing has.
+        let none = spread_at_positions(
+            &skeleton,
+            swing,
+            &events,
+            &InputError {
+                noise_m: [0.0; 3],
+                timing: [0.0; 10],
+            },
+        )
+        .unwrap();
+        let exact = at_positions(&skeleton, swing, &events).unwrap();
+        for (s, m) in none.iter().zip(exact) {
+            assert_eq!(s.is_some(), m.is_some());
+            assert!(s.is_none_or(|s| s.values().iter().all(|v| v.is_nan() || *v == 0.0)));
+        }
     }
 }

@@ -9,10 +9,10 @@
 //! `sequence-chart-N`, `tempo-N`, `dtw-N`, `deviation-N` for swing `N` from 1) let tests and
 //! scripts find each part.
 
-use crate::score::{whole, KEY_METRICS};
+use crate::score::{peak_text, whole, with_spread, KEY_METRICS};
 use base64::Engine;
 use posecoach_adapters::session::Compared;
-use posecoach_core::body::{self, Link, Metrics, Stance};
+use posecoach_core::body::{self, InputError, Link, Metrics, Stance};
 use posecoach_core::events::{Event, Position, SwingEvents};
 use posecoach_core::frames::Frames;
 use posecoach_core::joint::Joint;
@@ -38,6 +38,38 @@ const PALETTE: [&str; DEVIATION_JOINTS] = ["#7b3294", "#e66101", "#0571b0", "#4d
 
 /// Points of a pose on the screen.
 type Points = Vec<(f32, f32)>;
+
+/// One P-position of the body table: both swings' metrics there (`None` where a swing has no
+/// such position) and the uncertainty of the student's (one standard deviation each).
+#[derive(Clone, Copy, Debug)]
+pub struct BodyRow {
+    /// Which.
+    pub position: Position,
+    /// The student's metrics.
+    pub student: Option<Metrics>,
+    /// Their uncertainties.
+    pub spread: Option<Metrics>,
+    /// The coach's.
+    pub coach: Option<Metrics>,
+}
+
+/// How the input of the swing `report` scored (at `hz`) may err, as its noise and timing stages
+/// found: its noise per stance axis, and how early or late each P-position may have been
+/// found: its event's uncertainty, and for P6 and P9, which are no events, the larger of the
+/// two events' around them.
+pub fn input_error(report: &Report, hz: f32) -> InputError {
+    let timing = report.input.timing_s();
+    let of = |p: Position| p.event().map_or(0.0, |e| timing[e as usize]);
+    let seconds = |position| match position {
+        Position::P6 => of(Position::P5).max(of(Position::P7)),
+        Position::P9 => of(Position::P8).max(of(Position::P10)),
+        p => of(p),
+    };
+    InputError {
+        noise_m: report.input.noise_m(),
+        timing: Position::ALL.map(|p| seconds(p) * hz),
+    }
+}
 
 /// A swing's kinematic sequence with the time of its top (frames) and its rate, if it has one.
 pub type Sequenced = Option<(KinematicSequence, f32, f32)>;
@@ -77,22 +109,34 @@ impl Scored {
         Frames::metres(swing, self.skeleton.len())
     }
 
-    /// Both swings' body metrics at each P-position either has: (position, student's,
-    /// coach's).
-    pub fn body_table(&self) -> Vec<(Position, Option<Metrics>, Option<Metrics>)> {
+    /// Both swings' body metrics at each P-position either has, the student's with their
+    /// uncertainties.
+    pub fn body_table(&self) -> Vec<BodyRow> {
+        let r = &self.report;
         let table = |swing: &[Vec3], events: &SwingEvents| {
             body::at_positions(&self.skeleton, self.as_frames(swing), events)
                 .unwrap_or([None; Position::ALL.len()])
         };
         let (student, coach) = (
-            table(&self.student, &self.report.student_events),
-            table(&self.coach, &self.report.coach_events),
+            table(&self.student, &r.student_events),
+            table(&self.coach, &r.coach_events),
         );
+        let spread = body::spread_at_positions(
+            &self.skeleton,
+            self.as_frames(&self.student),
+            &r.student_events,
+            &input_error(r, self.student_hz),
+        )
+        .unwrap_or([None; Position::ALL.len()]);
         Position::ALL
             .into_iter()
-            .zip(student.into_iter().zip(coach))
-            .filter(|(_, (a, b))| a.is_some() || b.is_some())
-            .map(|(p, (a, b))| (p, a, b))
+            .filter(|&p| student[p as usize].is_some() || coach[p as usize].is_some())
+            .map(|p| BodyRow {
+                position: p,
+                student: student[p as usize],
+                spread: spread[p as usize],
+                coach: coach[p as usize],
+            })
             .collect()
     }
 
@@ -204,7 +248,15 @@ h2{border-bottom:1px solid #ccc}.note{color:#555;margin:2px 0}.score{font-size:4
 svg{background:#fafafa;border:1px solid #ddd}.error{color:#b00}li{margin:4px 0}\
 text{font-family:sans-serif}.wide{overflow-x:auto}table{border-collapse:collapse;font-size:13px}\
 td,th{border-bottom:1px solid #ddd;padding:3px 6px;text-align:right;white-space:nowrap}\
-svg.key{border:none;background:none}tbody th{white-space:normal;text-align:left;min-width:9em}";
+svg.key{border:none;background:none}tbody th{white-space:normal;text-align:left;min-width:9em}\
+.swamped{color:#999}";
+
+/// What a report says of its "±" and of the values the noise swamps (marked "?" in text, grey
+/// in HTML): see [`crate::score::swamped`].
+pub const PLUS_MINUS: &str = "± is one standard deviation: how far the input's noise and how \
+     early or late each position was found may have moved your value (the coach's is exact). \
+     Marked ? (grey on the page): ± 1.65 of them is wider than the least difference the advice \
+     acts on (10°, 15° at the elbow, 5 cm; 30 ms for a peak's time), so the input cannot tell it.";
 
 /// What a report says of a swing whose input held the root still
 /// ([`posecoach_core::score::Report::root_held`]).
@@ -253,28 +305,30 @@ fn body_table(out: &mut String, n: usize, s: &Scored) {
          <span style=\"color:{COACH}\">the coach's in brackets</span>.</p>\
          <div class=\"wide\"><table id=\"body-{n}\"><thead><tr><th>position</th>"
     );
-    for (name, unit, _) in &KEY_METRICS {
+    for (name, unit, _, _) in &KEY_METRICS {
         let _ = write!(out, "<th>{} ({unit})</th>", name.replace('_', " "));
     }
     out.push_str("</tr></thead><tbody>\n");
-    for (position, you, coach) in s.body_table() {
+    for row in s.body_table() {
         let _ = write!(
             out,
             "<tr><th>{} <small>{}</small></th>",
-            position.name(),
-            escape(position.moment())
+            row.position.name(),
+            escape(row.position.moment())
         );
-        for &(_, _, value) in &KEY_METRICS {
+        for metric in &KEY_METRICS {
+            let (you, swamped) = with_spread(&row, metric);
             let _ = write!(
                 out,
-                "<td>{} <span style=\"color:{COACH}\">({})</span></td>",
-                whole(you, value),
-                whole(coach, value)
+                "<td{}>{you} <span style=\"color:{COACH}\">({})</span></td>",
+                if swamped { " class=\"swamped\"" } else { "" },
+                whole(row.coach, metric.3)
             );
         }
         out.push_str("</tr>\n");
     }
     out.push_str("</tbody></table></div>\n");
+    let _ = write!(out, "<p class=\"note\">{}</p>", escape(PLUS_MINUS));
     let sequences = s.sequences();
     let _ = write!(out, "<h3>Kinematic sequence</h3><ul id=\"sequence-{n}\">");
     for (who, sequence) in ["You", "Coach"].into_iter().zip(sequences) {
@@ -285,12 +339,12 @@ fn body_table(out: &mut String, n: usize, s: &Scored) {
             .iter()
             .filter_map(|&l| {
                 k.peak(l).map(|p| {
-                    let ms = (p.time - top) / hz * 1000.0;
-                    format!(
-                        "{} {:.0}&#176;/s at {ms:.0} ms",
-                        l.name().replace('_', " "),
-                        p.speed
-                    )
+                    let (text, swamped) = peak_text(&p, top, hz, who == "Coach");
+                    let name = l.name().replace('_', " ");
+                    match swamped {
+                        true => format!("<span class=\"swamped\">{name} {text}</span>"),
+                        false => format!("{name} {text}"),
+                    }
                 })
             })
             .collect();
@@ -301,7 +355,7 @@ fn body_table(out: &mut String, n: usize, s: &Scored) {
             .collect();
         let _ = write!(
             out,
-            "<li>{who}: {} after the top; peaking {}</li>",
+            "<li>{who}: {} (&#176;/s at ms after the top); peaking {}</li>",
             peaks.join(", "),
             order.join(", ")
         );

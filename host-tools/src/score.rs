@@ -1,14 +1,17 @@
 //! `posecoach score`: a student's swing against the coach's, retargeted onto the student.
 
 use crate::failure::{NothingFound, Usage};
+use crate::html::BodyRow;
 use crate::{html, input, teacher};
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_core::band::Band;
 use posecoach_core::body::{Angles, Link, Metrics, Shift};
-use posecoach_core::checks::BodyDeviation;
+use posecoach_core::checks::{
+    BodyDeviation, ELBOW_TOLERANCE_DEG, SHIFT_TOLERANCE_M, TURN_TOLERANCE_DEG,
+};
 use posecoach_core::events::{Event, EventError, SwingEvents};
-use posecoach_core::score::{self, Advice, Report, ScoreError};
-use posecoach_core::sequence::GAP_TOLERANCE_S;
+use posecoach_core::score::{self, Advice, Report, ScoreError, TEMPO_CONFIDENCE};
+use posecoach_core::sequence::{Peak, GAP_TOLERANCE_S};
 use posecoach_io::Motion;
 use serde_json::{json, Map, Value};
 use std::fmt::Write;
@@ -249,22 +252,28 @@ pub fn decimal(value: f32, places: i32) -> f64 {
     (f64::from(value) * scale).round() / scale
 }
 
-/// A body metric the reports and the coaching benchmark single out: its name, its unit and its
-/// value (shifts in cm).
-pub type KeyMetric = (&'static str, &'static str, fn(&Metrics) -> f32);
+/// A body metric the reports and the coaching benchmark single out: its name, its unit, the
+/// least difference advice acts on in that unit (a turn's tolerance for an angle, the
+/// elbow's its own, a shift's for a shift) and its value (shifts in cm).
+pub type KeyMetric = (&'static str, &'static str, f32, fn(&Metrics) -> f32);
+
+/// An angle's tolerance in a [`KeyMetric`], degrees.
+pub const DEG: f32 = TURN_TOLERANCE_DEG;
+/// A shift's tolerance in a [`KeyMetric`], cm.
+pub const CM: f32 = SHIFT_TOLERANCE_M * 100.0;
 
 /// The body metrics the text report's table shows and the coaching benchmark measures.
 pub const KEY_METRICS: [KeyMetric; 10] = [
-    ("pelvis_turn", "deg", |m| m.pelvis.turn),
-    ("thorax_turn", "deg", |m| m.thorax.turn),
-    ("x_factor", "deg", |m| m.x_factor),
-    ("thorax_bend", "deg", |m| m.thorax.bend),
-    ("thorax_side_bend", "deg", |m| m.thorax.side_bend),
-    ("spine", "deg", |m| m.spine),
-    ("pelvis_sway", "cm", |m| m.pelvis_shift.sway * 100.0),
-    ("pelvis_thrust", "cm", |m| m.pelvis_shift.thrust * 100.0),
-    ("pelvis_lift", "cm", |m| m.pelvis_shift.lift * 100.0),
-    ("lead_elbow", "deg", |m| m.lead_elbow),
+    ("pelvis_turn", "deg", DEG, |m| m.pelvis.turn),
+    ("thorax_turn", "deg", DEG, |m| m.thorax.turn),
+    ("x_factor", "deg", DEG, |m| m.x_factor),
+    ("thorax_bend", "deg", DEG, |m| m.thorax.bend),
+    ("thorax_side_bend", "deg", DEG, |m| m.thorax.side_bend),
+    ("spine", "deg", DEG, |m| m.spine),
+    ("pelvis_sway", "cm", CM, |m| m.pelvis_shift.sway * 100.0),
+    ("pelvis_thrust", "cm", CM, |m| m.pelvis_shift.thrust * 100.0),
+    ("pelvis_lift", "cm", CM, |m| m.pelvis_shift.lift * 100.0),
+    ("lead_elbow", "deg", ELBOW_TOLERANCE_DEG, |m| m.lead_elbow),
 ];
 
 /// `value` of a swing's metrics at a position, to the whole degree or centimetre; "-" where
@@ -275,19 +284,74 @@ pub fn whole(metrics: Option<Metrics>, value: fn(&Metrics) -> f32) -> String {
     })
 }
 
+/// Whether the noise swamps a value of `metric` whose uncertainty is `spread` (one standard
+/// deviation, in the metric's unit): its interval, ± [`TEMPO_CONFIDENCE`] uncertainties, is
+/// wider than the least difference advice acts on, so the input cannot tell that difference.
+pub fn swamped(metric: &KeyMetric, spread: f32) -> bool {
+    spread.is_nan() || TEMPO_CONFIDENCE * spread > metric.2
+}
+
+/// The student's `metric` at a position of the body table with its uncertainty, to the whole
+/// degree or centimetre ("-" where the swing has no such position), and whether the noise
+/// swamps it ([`swamped`]).
+pub fn with_spread(row: &BodyRow, metric: &KeyMetric) -> (String, bool) {
+    let value = metric.3;
+    match (row.student, row.spread) {
+        (Some(m), Some(s)) => (
+            format!("{:.0} ± {:.0}", value(&m).round() + 0.0, value(&s)),
+            swamped(metric, value(&s)),
+        ),
+        (m, _) => (whole(m, value), false),
+    }
+}
+
+/// A peak of a kinematic sequence as the reports print it: its speed (degrees per second) and
+/// its time after the swing's `top` (ms; frames at `hz`), each with its uncertainty unless
+/// `exact` (the coach's), and whether the noise swamps it: its time's interval, ±
+/// [`TEMPO_CONFIDENCE`] uncertainties, is wider than the gaps' tolerance, or it has none.
+pub fn peak_text(p: &Peak, top: f32, hz: f32, exact: bool) -> (String, bool) {
+    let ms = |frames: f32| frames / hz * 1000.0;
+    match (exact, p.uncertainty) {
+        (true, _) => (format!("{:.0} at {:.0}", p.speed, ms(p.time - top)), false),
+        (false, Some(u)) => (
+            format!(
+                "{:.0} ± {:.0} at {:.0} ± {:.0}",
+                p.speed,
+                u.speed,
+                ms(p.time - top),
+                ms(u.time)
+            ),
+            u.time.is_nan() || TEMPO_CONFIDENCE * ms(u.time) > GAP_TOLERANCE_S * 1000.0,
+        ),
+        (false, None) => (
+            format!("{:.0} at {:.0} (±?)", p.speed, ms(p.time - top)),
+            true,
+        ),
+    }
+}
+
 /// One swing's kinematic sequence: each link's peak speed (degrees per second) and its time
-/// after the top (ms), the order they peak in and whether it is pelvis, thorax, arm, club.
-fn sequence_json(sequence: &html::Sequenced) -> Value {
+/// after the top (ms), each with its uncertainty and whether the noise swamps it ([`peak_text`];
+/// none for the coach's, taken as exact), and the order they peak in.
+fn sequence_json(sequence: &html::Sequenced, exact: bool) -> Value {
     let Some((k, top, hz)) = sequence else {
         return Value::Null;
     };
     let round = |v: f32| f64::from(v).round();
+    let ms = |frames: f32| frames / hz * 1000.0;
     json!({
-        "peaks": Link::ALL.iter().filter_map(|&l| k.peak(l).map(|p| json!({
-            "link": l.name(), "speed_deg_s": round(p.speed),
-            "ms_after_top": round((p.time - top) / hz * 1000.0)}))).collect::<Vec<_>>(),
+        "peaks": Link::ALL.iter().filter_map(|&l| k.peak(l).map(|p| {
+            let mut peak = json!({"link": l.name(), "speed_deg_s": round(p.speed),
+                                  "ms_after_top": round(ms(p.time - top))});
+            if !exact {
+                let u = p.uncertainty;
+                peak["speed_uncertainty_deg_s"] = json!(u.map(|u| round(u.speed)));
+                peak["ms_uncertainty"] = json!(u.map(|u| round(ms(u.time))));
+                peak["swamped"] = json!(peak_text(&p, *top, *hz, false).1);
+            }
+            peak
+        })).collect::<Vec<_>>(),
         "order": k.order().iter().map(|l| l.name()).collect::<Vec<_>>(),
-        "in_order": k.in_order(),
     })
 }
 
@@ -345,7 +409,7 @@ pub fn to_json(s: &html::Scored) -> Value {
         }).collect::<Vec<_>>(),
         "advice": r.advice.iter().map(Advice::to_string).collect::<Vec<_>>(),
         "root_held": r.root_held,
-        "kinematic_sequence": {"student": sequence_json(&student), "coach": sequence_json(&coach),
+        "kinematic_sequence": {"student": sequence_json(&student, false), "coach": sequence_json(&coach, true),
             "gaps": r.gaps.iter().map(|g| {
                 let ms = |v: f32| (f64::from(v) * 1000.0).round();
                 json!({
@@ -355,10 +419,17 @@ pub fn to_json(s: &html::Scored) -> Value {
                     "advice": Advice::is_clear(g),
                 })
             }).collect::<Vec<_>>()},
-        "positions": s.body_table().iter().map(|(p, a, b)| json!({
-            "position": p.name(), "moment": p.moment(),
-            "student_frame": r.student_events.frame(*p), "coach_frame": r.coach_events.frame(*p),
-            "student": a.as_ref().map(metrics_json), "coach": b.as_ref().map(metrics_json)})).collect::<Vec<_>>(),
+        "input_noise_mm": r.input.noise_m().map(|m| decimal(m * 1000.0, 1)),
+        "positions": s.body_table().iter().map(|row| {
+            let p = row.position;
+            json!({
+                "position": p.name(), "moment": p.moment(),
+                "student_frame": r.student_events.frame(p), "coach_frame": r.coach_events.frame(p),
+                "student": row.student.as_ref().map(metrics_json),
+                "student_uncertainty": row.spread.as_ref().map(metrics_json),
+                "swamped": KEY_METRICS.iter().filter(|m| with_spread(row, m).1).map(|m| m.0).collect::<Vec<_>>(),
+                "coach": row.coach.as_ref().map(metrics_json)})
+        }).collect::<Vec<_>>(),
     })
 }
 
@@ -421,21 +492,21 @@ pub fn to_text(s: &html::Scored) -> String {
         "body at each position, you (coach): degrees; shifts since address in cm"
     );
     let _ = write!(out, "  {:<4}", "");
-    for (name, _, _) in &KEY_METRICS {
-        let _ = write!(out, " {:>16}", name.replace('_', " "));
+    for (name, _, _, _) in &KEY_METRICS {
+        let _ = write!(out, " {:>18}", name.replace('_', " "));
     }
     out.push('\n');
-    for (p, a, b) in s.body_table() {
-        let _ = write!(out, "  {:<4}", p.name());
-        for &(_, _, value) in &KEY_METRICS {
-            let _ = write!(
-                out,
-                " {:>16}",
-                format!("{} ({})", whole(a, value), whole(b, value))
-            );
+    for row in s.body_table() {
+        let _ = write!(out, "  {:<4}", row.position.name());
+        for metric in &KEY_METRICS {
+            let (you, swamped) = with_spread(&row, metric);
+            let mark = if swamped { "?" } else { "" };
+            let coach = whole(row.coach, metric.3);
+            let _ = write!(out, " {:>18}", format!("{you}{mark} ({coach})"));
         }
         out.push('\n');
     }
+    let _ = writeln!(out, "  {}", html::PLUS_MINUS);
     let [you, coach] = s.sequences();
     if you.is_some() || coach.is_some() {
         let _ = writeln!(
@@ -449,8 +520,9 @@ pub fn to_text(s: &html::Scored) -> String {
             let _ = write!(out, "  {who:<6}");
             for l in Link::ALL {
                 if let Some(p) = k.peak(l) {
-                    let ms = (p.time - top) / hz * 1000.0;
-                    let _ = write!(out, " {} {:.0} at {ms:.0},", l.name(), p.speed);
+                    let (text, swamped) = peak_text(&p, top, hz, who == "coach");
+                    let mark = if swamped { "?" } else { "" };
+                    let _ = write!(out, " {} {text}{mark},", l.name());
                 }
             }
             let order: Vec<_> = k.order().iter().map(|l| l.name()).collect();
@@ -506,4 +578,58 @@ pub fn to_text(s: &html::Scored) -> String {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use posecoach_core::events::Position;
+    use posecoach_core::sequence::Spread;
+
+    #[test]
+    fn a_value_is_swamped_where_its_interval_is_wider_than_the_tolerance() {
+        let turn = &KEY_METRICS[0];
+        assert_eq!(turn.2, 10.0);
+        // 1.65 × 6 = 9.9 is within 10°, 1.65 × 6.1 is not; no uncertainty is no evidence.
+        assert!(!swamped(turn, 6.0));
+        assert!(swamped(turn, 6.1));
+        assert!(swamped(turn, f32::NAN));
+        let mut metrics = Metrics::default();
+        metrics.pelvis.turn = -10.4;
+        let mut spread = Metrics::default();
+        spread.pelvis.turn = 26.0;
+        let row = BodyRow {
+            position: Position::P1,
+            student: Some(metrics),
+            spread: Some(spread),
+            coach: None,
+        };
+        assert_eq!(with_spread(&row, turn), ("-10 ± 26".to_string(), true));
+        let row = BodyRow {
+            spread: None,
+            ..row
+        };
+        assert_eq!(with_spread(&row, turn), ("-10".to_string(), false));
+    }
+
+    #[test]
+    fn a_peak_is_swamped_where_its_time_cannot_tell_the_gaps_tolerance() {
+        // At 60 Hz a frame is 16.7 ms: 1.65 × 1 frame = 27.5 ms is within 30 ms.
+        let peak = |time: Option<f32>| Peak {
+            speed: 500.0,
+            time: 30.0,
+            uncertainty: time.map(|time| Spread { speed: 40.0, time }),
+        };
+        assert_eq!(
+            peak_text(&peak(Some(1.0)), 20.0, 60.0, false),
+            ("500 ± 40 at 167 ± 17".to_string(), false)
+        );
+        assert!(peak_text(&peak(Some(1.2)), 20.0, 60.0, false).1);
+        assert!(peak_text(&peak(None), 20.0, 60.0, false).1);
+        // The coach's is exact.
+        assert_eq!(
+            peak_text(&peak(None), 20.0, 60.0, true),
+            ("500 at 167".to_string(), false)
+        );
+    }
 }

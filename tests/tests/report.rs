@@ -59,6 +59,10 @@ fn check_parts(page: &str, n: usize, events: usize) {
         rows >= events && rows <= events + 2,
         "{rows} rows for {events} events"
     );
+    // The student's values carry their uncertainty, and the page says what "±" means.
+    let table = &body[..body.find("</table>").unwrap()];
+    assert!(table.matches(" &#177; ").count() + table.matches(" ± ").count() >= rows);
+    assert!(section.contains("± is one standard deviation"));
     let sequence = &section[section.find("id=\"sequence-").unwrap()..];
     let sequence = &sequence[..sequence.find("</ul>").unwrap()];
     assert_eq!(

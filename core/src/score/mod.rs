@@ -57,7 +57,7 @@ use crate::body::Stance;
 use crate::checks::BodyDeviation;
 use crate::config::{MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS, MAX_SWING_FRAMES};
 use crate::dtw::{self, DtwError};
-use crate::events::{self, EventError, SwingEvents};
+use crate::events::{self, Event, EventError, SwingEvents};
 use crate::frames::Frames;
 use crate::sequence::Gap;
 use crate::skeleton::Skeleton;
@@ -121,6 +121,41 @@ pub struct Report {
     /// its root held where it was at address too, and the pelvis's sway and thrust were not
     /// judged.
     pub root_held: bool,
+    /// How the student's input may err, as the noise and timing stages found.
+    pub input: InputSpread,
+}
+
+/// How a student's input may err (one standard deviation), kept compact: every byte of a
+/// [`Report`] costs the device's stack more than once.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct InputSpread {
+    /// The input's noise per stance axis (toward the target, toward the ball, up), tenths of a
+    /// millimetre.
+    noise: [u16; 3],
+    /// How early or late each of the student's events may have been found, milliseconds
+    /// (rounded up), [`Event::ALL`] order.
+    timing: [u8; Event::COUNT],
+}
+
+impl InputSpread {
+    /// The spread of input whose noise per stance axis is `noise` (metres) and whose events
+    /// may be early or late by `timing` (seconds), each saturating at what its unit holds.
+    pub fn new(noise: crate::Vec3, timing: &[f32; Event::COUNT]) -> InputSpread {
+        InputSpread {
+            noise: <[f32; 3]>::from(noise).map(|m| libm::roundf(m * 1e4) as u16),
+            timing: timing.map(|s| libm::ceilf(s * 1e3) as u8),
+        }
+    }
+
+    /// The input's noise per stance axis, metres.
+    pub fn noise_m(&self) -> [f32; 3] {
+        self.noise.map(|t| f32::from(t) * 1e-4)
+    }
+
+    /// How early or late each event may have been found, seconds, [`Event::ALL`] order.
+    pub fn timing_s(&self) -> [f32; Event::COUNT] {
+        self.timing.map(|ms| f32::from(ms) * 1e-3)
+    }
 }
 
 /// Why a swing could not be scored.
@@ -409,5 +444,30 @@ pub fn compare(
         gaps,
         advice,
         root_held: pair.root_held,
+        input: InputSpread::new(noise.input, &timing.event),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::InputSpread;
+    use crate::events::Event;
+    use crate::Vec3;
+
+    #[test]
+    fn an_input_spread_keeps_a_tenth_of_a_millimetre_and_rounds_timing_up_to_the_ms() {
+        let mut timing = [0.0051f32; Event::COUNT];
+        timing[1] = 1.0;
+        let spread = InputSpread::new(Vec3::new(0.01234, 0.00004, 10.0), &timing);
+        let noise = spread.noise_m();
+        assert!((noise[0] - 0.0123).abs() < 1e-6, "{noise:?}");
+        assert_eq!(noise[1], 0.0);
+        // Past what the unit holds, it saturates.
+        assert!((noise[2] - 6.5535).abs() < 1e-4, "{noise:?}");
+        let back = spread.timing_s();
+        assert!(
+            (back[0] - 0.006).abs() < 1e-6 && (back[1] - 0.255).abs() < 1e-6,
+            "{back:?}"
+        );
+    }
 }

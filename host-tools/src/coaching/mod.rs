@@ -33,12 +33,12 @@
 pub mod bodies;
 pub mod flaws;
 
-use crate::coaches;
 use crate::phone::{self, Camera, PhoneNoise};
 use crate::progress::Progress;
-use crate::score::{KeyMetric, KEY_METRICS};
+use crate::score::{KeyMetric, CM, DEG, KEY_METRICS};
 use crate::synth::{self, lay_out, Placed, Timeline};
 use crate::synth_imu::{self, ImuNoise};
+use crate::{coaches, html};
 use anyhow::{bail, Context, Result};
 use flaws::{Body, Flaw, Planted, Times, Truth};
 use posecoach_adapters::session::Outcome;
@@ -185,9 +185,9 @@ struct Outcome1 {
     /// The planted truths.
     truths: Vec<Truth>,
     score: Option<f32>,
-    /// Per P-position both tables have, each of [`measured_metrics`] measured less true (NaN
-    /// where a skeleton has no head).
-    body_errors: Vec<Vec<f32>>,
+    /// Per P-position both tables have, each of [`measured_metrics`] measured less true and
+    /// that error over the report's uncertainty of it (NaN where a skeleton has no head).
+    body_errors: Vec<Vec<(f32, f32)>>,
     error: Option<String>,
 }
 
@@ -495,7 +495,7 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
         }
         return Ok(outcome);
     };
-    let (report, table) = match result {
+    let (report, table, spread) = match result {
         Ok(r) => r,
         Err(e) => {
             outcome.error = Some(e);
@@ -511,11 +511,15 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
         .unwrap_or([None; Position::ALL.len()]);
     outcome.body_errors = table
         .iter()
+        .zip(&spread)
         .zip(&truth_table)
-        .filter_map(|(m, t)| Some((m.as_ref()?, t.as_ref()?)))
-        .map(|(m, t)| {
+        .filter_map(|((m, s), t)| Some((m.as_ref()?, s.as_ref()?, t.as_ref()?)))
+        .map(|(m, s, t)| {
             measured_metrics()
-                .map(|(_, _, value)| value(m) - value(t))
+                .map(|(_, _, _, value)| {
+                    let error = value(m) - value(t);
+                    (error, error / value(s))
+                })
                 .collect()
         })
         .collect();
@@ -690,7 +694,7 @@ type Scored = (
     f64,
     usize,
     u16,
-    std::result::Result<(Report, Table), String>,
+    std::result::Result<(Report, Table, Table), String>,
 );
 
 /// What the device's session makes of `messages`: the swings it found, and its refusals.
@@ -706,13 +710,15 @@ fn run_session(messages: &[Message]) -> Result<(Vec<Scored>, Vec<String>)> {
                     compared,
                 } => {
                     let at = swing.start_us as f64 * 1e-6;
-                    let table = body::at_positions(
-                        compared.skeleton,
-                        compared.student,
-                        &report.student_events,
-                    )
-                    .unwrap_or([None; Position::ALL.len()]);
-                    scored.push((at, swing.frames, swing.coach, Ok((report.clone(), table))));
+                    let (skeleton, student) = (compared.skeleton, compared.student);
+                    let events = &report.student_events;
+                    let table = body::at_positions(skeleton, student, events)
+                        .unwrap_or([None; Position::ALL.len()]);
+                    let error = html::input_error(report, compared.student_hz);
+                    let spread = body::spread_at_positions(skeleton, student, events, &error)
+                        .unwrap_or([None; Position::ALL.len()]);
+                    let scored_swing = Ok((report.clone(), table, spread));
+                    scored.push((at, swing.frames, swing.coach, scored_swing));
                 }
                 Outcome::Unscored { swing, error } => {
                     let at = swing.start_us as f64 * 1e-6;
@@ -878,9 +884,13 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
             "body": recall(&|c, _| family(&c.flaws) == "body"),
             "combined": recall(&|c, _| family(&c.flaws) == "combined"),
         },
-        "body_error": measured_metrics().enumerate().map(|(i, (name, unit, _))| {
-            let errors: Vec<f32> = found.iter().flat_map(|(_, o)| o.body_errors.iter().map(move |e| e[i])).filter(|e| e.is_finite()).collect();
-            ((*name).to_string(), json!({"unit": unit, "error": quantiles(&errors)}))
+        "body_error": measured_metrics().enumerate().map(|(i, (name, unit, _, _))| {
+            let both: Vec<(f32, f32)> = found.iter().flat_map(|(_, o)| o.body_errors.iter().map(move |e| e[i])).filter(|(e, _)| e.is_finite()).collect();
+            let errors: Vec<f32> = both.iter().map(|&(e, _)| e).collect();
+            // The share of errors within the report's interval (± TEMPO_CONFIDENCE of its
+            // uncertainties; a normal error falls within it 90 % of the time).
+            let covered = both.iter().filter(|&&(_, z)| z.abs() <= TEMPO_CONFIDENCE).count();
+            ((*name).to_string(), json!({"unit": unit, "error": quantiles(&errors), "coverage": share(covered, both.len())}))
         }).collect::<serde_json::Map<_, _>>(),
         "score": {
             "unflawed": mean_score(&|c, _| c.flaws.is_empty()),
@@ -1013,20 +1023,23 @@ fn table(doc: &Value) -> String {
     for metrics in [&KEY_METRICS[..], &MORE_METRICS[..]] {
         let _ = writeln!(
             out,
-            "body metric error at P1-P10, median / p95 ({}):",
+            "body metric error at P1-P10, median / p95, and the share within the report's ± 1.65 \
+             uncertainties ({}):",
             metrics
                 .iter()
-                .map(|(name, unit, _)| format!("{name} {unit}"))
+                .map(|(name, unit, _, _)| format!("{name} {unit}"))
                 .collect::<Vec<_>>()
                 .join(", ")
         );
         for l in doc["levels"].as_array().into_iter().flatten() {
             let cells: Vec<String> = metrics
                 .iter()
-                .map(|(name, _, _)| {
+                .map(|(name, _, _, _)| {
                     let e = &l["body_error"][name]["error"];
+                    let covered = pct(&l["body_error"][name]["coverage"]);
                     e["median"].as_f64().map_or("-".into(), |m| {
-                        format!("{m:.1} / {:.1}", e["p95"].as_f64().unwrap_or(f64::NAN))
+                        let p95 = e["p95"].as_f64().unwrap_or(f64::NAN);
+                        format!("{m:.1} / {p95:.1} / {covered}")
                     })
                 })
                 .collect();
@@ -1045,21 +1058,21 @@ fn table(doc: &Value) -> String {
 /// can measure (it tracks no club, so no shaft lean or wrist hinge). A head's shifts are NaN
 /// where the skeleton has no head.
 pub const MORE_METRICS: [KeyMetric; 9] = [
-    ("pelvis_bend", "deg", |m| m.pelvis.bend),
-    ("pelvis_side_bend", "deg", |m| m.pelvis.side_bend),
-    ("thorax_sway", "cm", |m| m.thorax_shift.sway * 100.0),
-    ("thorax_thrust", "cm", |m| m.thorax_shift.thrust * 100.0),
-    ("thorax_lift", "cm", |m| m.thorax_shift.lift * 100.0),
-    ("head_sway", "cm", |m| {
+    ("pelvis_bend", "deg", DEG, |m| m.pelvis.bend),
+    ("pelvis_side_bend", "deg", DEG, |m| m.pelvis.side_bend),
+    ("thorax_sway", "cm", CM, |m| m.thorax_shift.sway * 100.0),
+    ("thorax_thrust", "cm", CM, |m| m.thorax_shift.thrust * 100.0),
+    ("thorax_lift", "cm", CM, |m| m.thorax_shift.lift * 100.0),
+    ("head_sway", "cm", CM, |m| {
         m.head_shift.map_or(f32::NAN, |s| s.sway * 100.0)
     }),
-    ("head_thrust", "cm", |m| {
+    ("head_thrust", "cm", CM, |m| {
         m.head_shift.map_or(f32::NAN, |s| s.thrust * 100.0)
     }),
-    ("head_lift", "cm", |m| {
+    ("head_lift", "cm", CM, |m| {
         m.head_shift.map_or(f32::NAN, |s| s.lift * 100.0)
     }),
-    ("lead_arm", "deg", |m| m.lead_arm),
+    ("lead_arm", "deg", DEG, |m| m.lead_arm),
 ];
 
 /// Every body metric the benchmark measures the error of.
