@@ -9,10 +9,10 @@
 //! `sequence-chart-N`, `tempo-N`, `dtw-N`, `deviation-N` for swing `N` from 1) let tests and
 //! scripts find each part.
 
-use crate::score::{peak_text, whole, with_spread, KEY_METRICS};
+use crate::table::{input_error, peak_text, whole, with_spread, BodyRow, KEY_METRICS, PLUS_MINUS};
 use base64::Engine;
 use posecoach_adapters::session::Compared;
-use posecoach_core::body::{self, InputError, Link, Metrics, Stance};
+use posecoach_core::body::{self, Link, Stance};
 use posecoach_core::events::{Event, Position, SwingEvents};
 use posecoach_core::frames::Frames;
 use posecoach_core::joint::Joint;
@@ -38,38 +38,6 @@ const PALETTE: [&str; DEVIATION_JOINTS] = ["#7b3294", "#e66101", "#0571b0", "#4d
 
 /// Points of a pose on the screen.
 type Points = Vec<(f32, f32)>;
-
-/// One P-position of the body table: both swings' metrics there (`None` where a swing has no
-/// such position) and the uncertainty of the student's (one standard deviation each).
-#[derive(Clone, Copy, Debug)]
-pub struct BodyRow {
-    /// Which.
-    pub position: Position,
-    /// The student's metrics.
-    pub student: Option<Metrics>,
-    /// Their uncertainties.
-    pub spread: Option<Metrics>,
-    /// The coach's.
-    pub coach: Option<Metrics>,
-}
-
-/// How the input of the swing `report` scored (at `hz`) may err, as its noise and timing stages
-/// found: its noise per stance axis, and how early or late each P-position may have been
-/// found: its event's uncertainty, and for P6 and P9, which are no events, the larger of the
-/// two events' around them.
-pub fn input_error(report: &Report, hz: f32) -> InputError {
-    let timing = report.input.timing_s();
-    let of = |p: Position| p.event().map_or(0.0, |e| timing[e as usize]);
-    let seconds = |position| match position {
-        Position::P6 => of(Position::P5).max(of(Position::P7)),
-        Position::P9 => of(Position::P8).max(of(Position::P10)),
-        p => of(p),
-    };
-    InputError {
-        noise_m: report.input.noise_m(),
-        timing: Position::ALL.map(|p| seconds(p) * hz),
-    }
-}
 
 /// A swing's kinematic sequence with the time of its top (frames) and its rate, if it has one.
 pub type Sequenced = Option<(KinematicSequence, f32, f32)>;
@@ -250,13 +218,6 @@ text{font-family:sans-serif}.wide{overflow-x:auto}table{border-collapse:collapse
 td,th{border-bottom:1px solid #ddd;padding:3px 6px;text-align:right;white-space:nowrap}\
 svg.key{border:none;background:none}tbody th{white-space:normal;text-align:left;min-width:9em}\
 .swamped{color:#999}";
-
-/// What a report says of its "±" and of the values the noise swamps (marked "?" in text, grey
-/// in HTML): see [`crate::score::swamped`].
-pub const PLUS_MINUS: &str = "± is one standard deviation: how far the input's noise and how \
-     early or late each position was found may have moved your value (the coach's is exact). \
-     Marked ? (grey on the page): ± 1.65 of them is wider than the least difference the advice \
-     acts on (10°, 15° at the elbow, 5 cm; 30 ms for a peak's time), so the input cannot tell it.";
 
 /// What a report says of a swing whose input held the root still
 /// ([`posecoach_core::score::Report::root_held`]).

@@ -25,5 +25,6 @@ pub mod retarget;
 pub mod score;
 pub mod synth;
 pub mod synth_imu;
+pub mod table;
 pub mod teacher;
 pub mod tpose;

@@ -33,12 +33,12 @@
 pub mod bodies;
 pub mod flaws;
 
+use crate::coaches;
 use crate::phone::{self, Camera, PhoneNoise};
 use crate::progress::Progress;
-use crate::score::{KeyMetric, CM, DEG, KEY_METRICS};
 use crate::synth::{self, lay_out, Placed, Timeline};
 use crate::synth_imu::{self, ImuNoise};
-use crate::{coaches, html};
+use crate::table::{self, KeyMetric, CM, DEG, KEY_METRICS};
 use anyhow::{bail, Context, Result};
 use flaws::{Body, Flaw, Planted, Times, Truth};
 use posecoach_adapters::session::Outcome;
@@ -714,7 +714,7 @@ fn run_session(messages: &[Message]) -> Result<(Vec<Scored>, Vec<String>)> {
                     let events = &report.student_events;
                     let table = body::at_positions(skeleton, student, events)
                         .unwrap_or([None; Position::ALL.len()]);
-                    let error = html::input_error(report, compared.student_hz);
+                    let error = table::input_error(report, compared.student_hz);
                     let spread = body::spread_at_positions(skeleton, student, events, &error)
                         .unwrap_or([None; Position::ALL.len()]);
                     let scored_swing = Ok((report.clone(), table, spread));
