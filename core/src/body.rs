@@ -126,6 +126,11 @@ impl Stance {
     pub fn direction(&self, d: Vec3) -> Vec3 {
         Vec3::new(d.dot(&self.target), d.dot(&self.ball), d.y)
     }
+
+    /// The point whose [`Stance::local`] coordinates are `local`.
+    pub fn world(&self, local: Vec3) -> Vec3 {
+        self.origin + self.target * local.x + self.ball * local.y + Vec3::y() * local.z
+    }
 }
 
 /// A segment's orientation in the stance frame, degrees (see the [module
@@ -1256,6 +1261,7 @@ pub(crate) mod tests {
     }
 
     #[test]
+    #[cfg_attr(miri, ignore = "thousands of poses measured: minutes under Miri, no unsafe code")]
     fn the_spread_of_a_shift_is_the_noise_and_of_a_turn_its_rate_times_the_timing() {
         let skeleton = Skeleton::standard(Format::H36m17).unwrap();
         // The pelvis turns half a degree a frame, all else held at address; seen 30° off.

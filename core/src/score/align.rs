@@ -21,6 +21,10 @@ use heapless::Vec as HVec;
 
 /// Poses are compared averaged over ± this long, seconds (zero phase).
 pub const SPATIAL_SMOOTHING_S: f32 = 0.02;
+/// Farthest a joint the stream was unsure of is bridged from where it was sure, each way,
+/// seconds (by its offset from the coach, for the body checks): an occlusion run lasts a few
+/// tenths of a second.
+pub const BRIDGE_S: f32 = 0.5;
 /// A student's root (the skeleton's first joint, the pelvis) that stays within this many
 /// metres of where it was in the swing's first frame all through it is held by the input, not
 /// the golfer: landmarks centred on the hips (MediaPipe's world landmarks) or a root the IMU
@@ -252,6 +256,43 @@ impl<'a> Pair<'a> {
             - self.stance_c.local(self.coach_at(k, c, hc))
     }
 
+    /// The student's joint `k` at its frame `x` where the stream was unsure of it there, bridged
+    /// from where it was sure: the coach's joint at the matching frame, moved by the joint's
+    /// offset from the coach interpolated between the nearest frames either side, within
+    /// [`BRIDGE_S`], whose neighbourhood the stream was sure of (smoothed as [`Pair::offset`]
+    /// reads it), or held from the one side that has such a frame. With it, how far the
+    /// interpolation may be off per stance axis: half the offset's change across (`None` where
+    /// it was held: one side cannot tell). `None` where it was sure near `x` (read it as it
+    /// is), or where no such frame lies that near.
+    pub(super) fn bridged(&self, k: usize, x: f32, hz: f32) -> Option<(Vec3, Option<Vec3>)> {
+        let half = self.half.0;
+        if !self.unsure_near(k, x, half) {
+            return None;
+        }
+        let reach = libm::roundf(BRIDGE_S * hz) as usize;
+        let sure = |f: usize| !self.unsure_near(k, f as f32, half);
+        let at = x as usize;
+        let last = self.student.len().checked_sub(1)?;
+        let before = (at.saturating_sub(reach)..=at).rev().find(|&f| sure(f));
+        let after = (at + 1..=(at + reach).min(last)).find(|&f| sure(f));
+        let offset = |f: usize| self.offset(k, f as f32, self.half);
+        let (offset, spread) = match (before, after) {
+            (Some(a), Some(b)) => {
+                let w = ((x - a as f32) / (b - a) as f32).clamp(0.0, 1.0);
+                let (a, b) = (offset(a), offset(b));
+                (a * (1.0 - w) + b * w, Some((b - a).abs() * 0.5))
+            }
+            // Near either end of the swing (the address starts it), the one side's.
+            (Some(f), None) | (None, Some(f)) => (offset(f), None),
+            (None, None) => return None,
+        };
+        let coach = self.coach_at(k, self.time_map.at(x), self.half.1);
+        Some((
+            self.stance_s.world(self.stance_c.local(coach) + offset),
+            spread,
+        ))
+    }
+
     /// Whether joint `k` was unsure anywhere within `half` frames (and one more) of the
     /// student's frame `x`.
     pub(super) fn unsure_near(&self, k: usize, x: f32, half: usize) -> bool {
@@ -319,5 +360,72 @@ pub(super) mod tests {
         assert_eq!(smoothed(swing, 2.5, 0, 0).x, 2.5);
         // At the first frame the frame before reads as the first.
         assert!((smoothed(swing, 0.0, 0, 1).x - 1.0 / 3.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_joint_the_stream_was_unsure_of_is_bridged_by_its_offset_from_the_coach() {
+        use super::Pair;
+        use crate::format::Format;
+        use crate::score::{Detected, Unsure};
+        use crate::skeleton::Skeleton;
+        let skeleton = Skeleton::standard(Format::H36m17).unwrap();
+        let mut rest = [Vec3::zeros(); 17];
+        skeleton.rest_positions(&mut rest);
+        // The coach's wrist (joint 16) rises 1 cm a frame; the student's runs 5 cm ahead of
+        // it toward the target, but the stream was unsure of it at frames 45 to 55, where it
+        // sent nonsense.
+        let wrist = 16;
+        let swing = |student: bool| -> std::vec::Vec<Vec3> {
+            let mut out = std::vec::Vec::new();
+            for f in 0..100 {
+                for (k, &p) in rest.iter().enumerate() {
+                    let mut p = p;
+                    if k == wrist {
+                        p.y += 0.01 * f as f32;
+                        if student {
+                            p.x += 0.05;
+                            if (45..=55).contains(&f) {
+                                p.z += 0.7;
+                            }
+                        }
+                    }
+                    out.push(p);
+                }
+            }
+            out
+        };
+        let (student, coach) = (swing(true), swing(false));
+        let mut ring = [0u64; 128];
+        for mask in &mut ring[45..=55] {
+            *mask = 1 << wrist;
+        }
+        let frames = events([10, 20, 30, 40, 50, 60, 70, 90]);
+        let detected = |positions, unsure| Detected {
+            positions: Frames::metres(positions, 17),
+            hz: 60.0,
+            events: frames,
+            unsure,
+        };
+        let student = detected(&student, Unsure::new(&ring, 0, 100));
+        let coach = detected(&coach, Unsure::default());
+        let pair = Pair::new(&skeleton, (&student, &frames), &coach);
+        // Sure there: read as it is.
+        assert_eq!(pair.bridged(wrist, 20.0, 60.0), None);
+        let (at, across) = pair.bridged(wrist, 50.0, 60.0).unwrap();
+        let truth = rest[wrist] + Vec3::new(0.05, 0.5, 0.0);
+        let local = |p: Vec3| pair.stance_s.local(p);
+        assert!(
+            (local(at) - local(truth)).norm() < 1e-3,
+            "{at:?} against {truth:?}"
+        );
+        // The offset did not change across: the interpolation is exact.
+        assert!(across.unwrap().norm() < 1e-4, "{across:?}");
+        // Farther than half a second from any frame it was sure of: not bridged.
+        let mut lost = [1u64 << wrist; 128];
+        lost[99] = 0;
+        let again = swing(true);
+        let student = detected(&again, Unsure::new(&lost, 0, 100));
+        let pair = Pair::new(&skeleton, (&student, &frames), &coach);
+        assert!(pair.bridged(wrist, 20.0, 60.0).is_none());
     }
 }

@@ -4,9 +4,12 @@
 //! A check reads both swings' poses as the joint comparison does ([`Pair`]): the student's at
 //! the position, the coach's at its matching frame. Its uncertainty: each joint the check is
 //! measured from moved by the input's noise along each stance axis, at the position and at
-//! address (`√2`), and the coach's change within the event's timing uncertainty. A check is
-//! not made where a joint it is measured from was unsure, nor, where the input held the root
-//! still, the pelvis's sway and thrust.
+//! address (`√2`), and the coach's change within the event's timing uncertainty. A joint the
+//! stream was unsure of at the position or at address is bridged from where it was sure
+//! ([`Pair::bridged`]: the coach's joint moved by the offset from the coach interpolated
+//! across), and moves by half the offset's change across too (its wander, where it was held
+//! from one side); a check is not made where such a joint
+//! cannot be bridged, nor, where the input held the root still, the pelvis's sway and thrust.
 
 use super::align::Pair;
 use super::noise::Noise;
@@ -43,10 +46,11 @@ fn pose(pair: &Pair<'_>, student: bool, joints: usize, x: f32, out: &mut [Vec3; 
 pub(super) fn checks(
     skeleton: &Skeleton,
     pair: &Pair<'_>,
-    (events, coach_hz): ((&SwingEvents, &SwingEvents), f32),
+    (events, hz): ((&SwingEvents, &SwingEvents), (f32, f32)),
     noise: &Noise,
     timing: &Timing,
 ) -> HVec<BodyDeviation, MAX_CHECKS> {
+    let coach_hz = hz.1;
     let mut out = HVec::new();
     let joints = skeleton.len();
     let (events_s, events_c) = events;
@@ -61,14 +65,15 @@ pub(super) fn checks(
     else {
         return out;
     };
-    let [mut address_s, mut address_c, mut at_s, mut at_c, mut moved] =
-        [[Vec3::zeros(); MAX_JOINTS]; 5];
+    let [mut address_s, mut address_c, mut at_s, mut coach] = [[Vec3::zeros(); MAX_JOINTS]; 4];
     pose(pair, true, joints, from_s, &mut address_s);
+    let at_address = bridge(pair, joints, from_s, hz.0, &mut address_s);
     pose(pair, false, joints, from_c, &mut address_c);
     let (address_s, address_c) = (&address_s[..joints], &address_c[..joints]);
     let (stance_s, stance_c) = (&pair.stance_s, &pair.stance_c);
     let axes = [stance_s.toward_target(), stance_s.toward_ball(), Vec3::y()];
     let mut at: Option<Position> = None;
+    let mut at_position = Bridged::default();
     for check in CHECKS {
         let shift = matches!(check.measure, Measure::PelvisSway | Measure::PelvisThrust);
         let Some(event) = check
@@ -82,47 +87,60 @@ pub(super) fn checks(
             continue;
         };
         let c = pair.time_map.at(x);
-        // Each position's poses once: the student's and the coach's.
+        // Each position's student pose once; the coach's made again for each check, in one
+        // buffer (the stack is the device's scarcest memory).
         let h = (timing.event[event as usize] * coach_hz).max(0.5);
         if at != Some(check.position) {
             at = Some(check.position);
             pose(pair, true, joints, x, &mut at_s);
-            pose(pair, false, joints, c, &mut at_c);
+            at_position = bridge(pair, joints, x, hz.0, &mut at_s);
         }
         let measure = check.measure;
         let value_s = |pose: &[Vec3]| body_s.value(measure, stance_s, address_s, pose);
         let value_c = |pose: &[Vec3]| body_c.value(measure, stance_c, address_c, pose);
+        let mut coach_at = |x: f32| {
+            pose(pair, false, joints, x, &mut coach);
+            value_c(&coach[..joints])
+        };
         let (Some(zero_s), Some(here_s), Some(zero_c), Some(here_c)) = (
             value_s(address_s),
             value_s(&at_s[..joints]),
             value_c(address_c),
-            value_c(&at_c[..joints]),
+            coach_at(c),
         ) else {
             continue;
         };
         let moved_by = body_s.joints_of(measure);
-        let unsure = |k: usize, x: f32| pair.unsure_near(k, x, pair.half.0);
-        if moved_by.iter().any(|&k| unsure(k, x) || unsure(k, from_s)) {
+        let lost = at_position.lost | at_address.lost;
+        if moved_by.iter().any(|&k| lost & (1 << k) != 0) {
             continue;
         }
-        // Each joint it is measured from moved by the noise along each axis.
+        // Each joint it is measured from moved by the noise along each axis, at the position
+        // and at address; a bridged joint by its interpolation's error too.
         let mut variance = 0.0f32;
         for &k in &moved_by {
             for (axis, direction) in axes.iter().enumerate() {
+                let n = noise.input[axis].max(LEAST_NOISE_M);
+                // A bridged joint's interpolation error: half its offset's change across, or
+                // its wander where it was held from one side.
+                let spread = |b: &Bridged, x: f32| {
+                    let bridged = (b.joints & (1 << k) != 0)
+                        .then(|| pair.bridged(k, x, hz.0))
+                        .flatten()
+                        .map(|(_, across)| {
+                            across.map_or(noise.wander.get(k).map_or(0.0, |w| w[axis]), |a| a[axis])
+                        });
+                    n * n + bridged.map_or(0.0, |e| e * e)
+                };
                 let kept = at_s[k];
-                at_s[k] = kept + direction * noise.input[axis].max(LEAST_NOISE_M);
+                at_s[k] = kept + direction * n;
                 let moved = value_s(&at_s[..joints]);
                 at_s[k] = kept;
-                let d = moved.map_or(0.0, |m| m - here_s);
-                variance += d * d;
+                let d = moved.map_or(0.0, |m| m - here_s) / n;
+                variance += d * d * (spread(&at_position, x) + spread(&at_address, from_s));
             }
         }
-        // The coach's change within the event's timing uncertainty (its poses made again for
-        // each check, in one buffer: the stack is the device's scarcest memory).
-        let mut coach_at = |x: f32| {
-            pose(pair, false, joints, x, &mut moved);
-            value_c(&moved[..joints])
-        };
+        // The coach's change within the event's timing uncertainty.
         let along = match (coach_at(c + h), coach_at(c - h)) {
             (Some(l), Some(e)) => 0.5 * (l - e),
             _ => 0.0,
@@ -131,10 +149,44 @@ pub(super) fn checks(
             check,
             student: here_s - zero_s,
             coach: here_c - zero_c,
-            uncertainty: libm::sqrtf(2.0 * variance + along * along),
+            uncertainty: libm::sqrtf(variance + along * along),
         });
     }
     out
+}
+
+/// The joints of a student's pose the stream was unsure of (bits by joint index): those
+/// [`bridge`]d, and those it could not bridge.
+#[derive(Clone, Copy, Debug, Default)]
+struct Bridged {
+    joints: u64,
+    lost: u64,
+}
+
+/// Bridges each of the first `joints` joints of `out`, the student's pose at its frame `x` (at
+/// `hz`), that the stream was unsure of there ([`Pair::bridged`]).
+#[inline(never)]
+fn bridge(
+    pair: &Pair<'_>,
+    joints: usize,
+    x: f32,
+    hz: f32,
+    out: &mut [Vec3; MAX_JOINTS],
+) -> Bridged {
+    let mut found = Bridged::default();
+    for (k, p) in out.iter_mut().enumerate().take(joints.min(64)) {
+        if !pair.unsure_near(k, x, pair.half.0) {
+            continue;
+        }
+        match pair.bridged(k, x, hz) {
+            Some((bridged, _)) => {
+                *p = bridged;
+                found.joints |= 1 << k;
+            }
+            None => found.lost |= 1 << k,
+        }
+    }
+    found
 }
 
 /// The gaps of the kinematic sequence of `pair`'s student (events `events.0` at `hz.0`)
@@ -229,7 +281,7 @@ mod tests {
         let found = checks(
             &skeleton,
             &pair,
-            ((&frames, &frames), 30.0),
+            ((&frames, &frames), (30.0, 30.0)),
             &noise,
             &timing,
         );

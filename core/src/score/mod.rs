@@ -39,7 +39,7 @@ mod to_wire;
 mod unsure;
 
 pub use advice::{Advice, MAX_ADVICE};
-pub use align::{HELD_ROOT_M, SPATIAL_SMOOTHING_S};
+pub use align::{BRIDGE_S, HELD_ROOT_M, SPATIAL_SMOOTHING_S};
 pub use body::LEAST_NOISE_M;
 pub use cause::{Explains, MAX_CAUSES};
 pub use noise::WANDER_SAMPLES;
@@ -410,7 +410,7 @@ pub fn compare(
     let body = body::checks(
         skeleton,
         &pair,
-        ((&events_s, events_c), hz.1),
+        ((&events_s, events_c), hz),
         &noise,
         &timing,
     );
