@@ -1261,7 +1261,10 @@ pub(crate) mod tests {
     }
 
     #[test]
-    #[cfg_attr(miri, ignore = "thousands of poses measured: minutes under Miri, no unsafe code")]
+    #[cfg_attr(
+        miri,
+        ignore = "thousands of poses measured: minutes under Miri, no unsafe code"
+    )]
     fn the_spread_of_a_shift_is_the_noise_and_of_a_turn_its_rate_times_the_timing() {
         let skeleton = Skeleton::standard(Format::H36m17).unwrap();
         // The pelvis turns half a degree a frame, all else held at address; seen 30° off.
