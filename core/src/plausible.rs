@@ -46,8 +46,11 @@ pub const LIMBS: [(Joint, Joint, f32); 8] = [
 pub const LIMB_RANGE: (f32, f32) = (0.5, 1.6);
 /// Most a limb bone may differ from the other side's, as a share of the longer: the limbs'
 /// lengths differ by under 2 cm in most adults (under 5 % of a shank), the rest is room for
-/// the keypoints' noise in the T-pose.
-pub const SYMMETRY: f32 = 0.25;
+/// the keypoints' noise in the T-pose. A phone's T-pose at 50 mm of noise puts two 25 cm
+/// bones about 20 % apart at one standard deviation: a quarter cost the coaching benchmark 6 %
+/// of its swings at 30 mm and 21 % at 50 mm; 40 % is twice that spread and still eight times
+/// any adult's difference.
+pub const SYMMETRY: f32 = 0.4;
 /// The path from one wrist to the other along the bones (both arms and the shoulders between
 /// them: arm span less the hands, 0.77 to 0.91 of the stature on the formats' standard
 /// skeletons) must be from this share of the
