@@ -119,25 +119,26 @@ pub(super) fn checks(
         // and at address; a bridged joint by its interpolation's error too.
         let mut variance = 0.0f32;
         for &k in &moved_by {
+            // A bridged joint's interpolation error per axis, found once: half its offset's
+            // change across, or its wander where it was held from one side.
+            let error = |b: &Bridged, x: f32| {
+                (b.joints & (1 << k) != 0)
+                    .then(|| pair.bridged(k, x, hz.0))
+                    .flatten()
+                    .map_or(Vec3::zeros(), |(_, across)| {
+                        across.unwrap_or_else(|| noise.wander.get(k).copied().unwrap_or_default())
+                    })
+            };
+            let errors = [error(&at_position, x), error(&at_address, from_s)];
             for (axis, direction) in axes.iter().enumerate() {
                 let n = noise.input[axis].max(LEAST_NOISE_M);
-                // A bridged joint's interpolation error: half its offset's change across, or
-                // its wander where it was held from one side.
-                let spread = |b: &Bridged, x: f32| {
-                    let bridged = (b.joints & (1 << k) != 0)
-                        .then(|| pair.bridged(k, x, hz.0))
-                        .flatten()
-                        .map(|(_, across)| {
-                            across.map_or(noise.wander.get(k).map_or(0.0, |w| w[axis]), |a| a[axis])
-                        });
-                    n * n + bridged.map_or(0.0, |e| e * e)
-                };
+                let spread = |e: &Vec3| n * n + e[axis] * e[axis];
                 let kept = at_s[k];
                 at_s[k] = kept + direction * n;
                 let moved = value_s(&at_s[..joints]);
                 at_s[k] = kept;
                 let d = moved.map_or(0.0, |m| m - here_s) / n;
-                variance += d * d * (spread(&at_position, x) + spread(&at_address, from_s));
+                variance += d * d * (spread(&errors[0]) + spread(&errors[1]));
             }
         }
         // The coach's change within the event's timing uncertainty.
