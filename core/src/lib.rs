@@ -33,6 +33,9 @@
 //! - [`band`]: the DTW's band, a radius around the diagonal or the matched swing events.
 //! - [`dtw`]: banded dynamic time warping between a student's swing and the virtual swing.
 //! - [`score`]: the score, tempo, spatial deviations and advice of one swing.
+//! - [`tally`]: one quantity's running robust statistics over a session's swings.
+//! - [`session`]: what a range session's swings say together: estimates, set-aside swings,
+//!   tendencies.
 //! - [`setup`]: a swing's set-up, and the coach whose set-up (so club) it is nearest.
 //! - [`wire`]: the serial protocol: messages, COBS + CRC-32 framing, a streaming decoder.
 //! - [`int8`]: int8 arithmetic of the quantized retargeter (requantization, dot products, layers).
@@ -70,8 +73,10 @@ pub mod resample;
 pub mod retarget;
 pub mod score;
 pub mod sequence;
+pub mod session;
 pub mod setup;
 pub mod skeleton;
+pub mod tally;
 pub mod weights;
 pub mod wire;
 

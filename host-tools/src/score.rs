@@ -217,8 +217,8 @@ pub fn score_swings(student: &Motion, coach: &Motion, band: Band) -> Result<Repo
         &mut coach_positions,
         coach.rate_hz,
         band,
-        &mut floats,
-        &mut bytes,
+        (&mut floats, &mut bytes),
+        &mut (),
     )?)
 }
 

@@ -29,8 +29,8 @@ fn run(student: &Motion, coach: &Motion) -> Report {
         &mut coach.positions.clone(),
         coach.rate_hz,
         BAND,
-        &mut floats,
-        &mut bytes,
+        (&mut floats, &mut bytes),
+        &mut (),
     )
     .unwrap()
 }
@@ -299,8 +299,8 @@ fn a_joint_the_stream_was_unsure_of_is_not_judged_there() {
         &unsure,
         &detected(&coach),
         BAND,
-        &mut floats,
-        &mut bytes,
+        (&mut floats, &mut bytes),
+        &mut (),
     )
     .unwrap();
     assert!(
@@ -322,8 +322,8 @@ fn a_joint_the_stream_was_unsure_of_is_not_judged_there() {
             &unsure,
             &misread,
             BAND,
-            &mut floats,
-            &mut bytes
+            (&mut floats, &mut bytes),
+            &mut (),
         )
         .err(),
         Some(ScoreError::Events {
@@ -423,8 +423,8 @@ fn putts_are_scored_like_putts() {
         &mut golfer.positions.clone(),
         60.0,
         BAND,
-        &mut floats,
-        &mut bytes,
+        (&mut floats, &mut bytes),
+        &mut (),
     );
     assert_eq!(
         mismatch.unwrap_err(),

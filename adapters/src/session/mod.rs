@@ -674,7 +674,14 @@ impl<'b> Session<'b> {
                 events,
                 unsure: Unsure::new(unsure, window.start + span.start as u64, seen),
             };
-            let result = score::compare(skeleton, &student, &coach, config.band, floats, bytes);
+            let result = score::compare(
+                skeleton,
+                &student,
+                &coach,
+                config.band,
+                (floats, bytes),
+                &mut (),
+            );
             match result {
                 Ok(report) => {
                     let report = &*last_report.insert(report);

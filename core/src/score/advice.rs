@@ -80,7 +80,7 @@ impl Advice {
 }
 
 /// A cause's own severity `own`, or that of the largest offset it `explains` where higher.
-fn ranked(own: f32, explains: &Explains) -> f32 {
+pub(crate) fn ranked(own: f32, explains: &Explains) -> f32 {
     explains.worst.map_or(own, |w| own.max(w.severity()))
 }
 
@@ -129,8 +129,9 @@ fn explained(f: &mut core::fmt::Formatter<'_>, explains: &Explains) -> core::fmt
     }
 }
 
-impl core::fmt::Display for Advice {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+impl Advice {
+    /// Its sentence without the full stop, for a session's evidence to go on from.
+    pub fn sentence(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Advice::Tempo(t) => {
                 let percent = libm::roundf(libm::fabsf(t.ratio - 1.0) * 100.0) as u32;
@@ -144,23 +145,25 @@ impl core::fmt::Display for Advice {
                     Phase::Downswing => "downswing",
                     Phase::FollowThrough => "follow-through",
                 };
-                write!(f, "Your {phase} is {percent} ± {within}% {adjective} than the coach's ({:.2} s against {:.2} s): {hint}.", t.student_s, t.coach_s)
+                write!(f, "Your {phase} is {percent} ± {within}% {adjective} than the coach's ({:.2} s against {:.2} s): {hint}", t.student_s, t.coach_s)
             }
-            Advice::Spatial(d) => {
-                joint_clause(f, &Symptom::from(d), true)?;
-                f.write_str(".")
-            }
+            Advice::Spatial(d) => joint_clause(f, &Symptom::from(d), true),
             Advice::Body(b, explains) => {
                 b.sentence(f)?;
-                explained(f, explains)?;
-                f.write_str(".")
+                explained(f, explains)
             }
             Advice::Sequence(g, explains) => {
                 g.sentence(f)?;
-                explained(f, explains)?;
-                f.write_str(".")
+                explained(f, explains)
             }
         }
+    }
+}
+
+impl core::fmt::Display for Advice {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.sentence(f)?;
+        f.write_str(".")
     }
 }
 
@@ -199,7 +202,7 @@ pub(super) fn advise(
 
 /// Whether joint item `d` (of a golfer whose lead side is `lead`) states the fact a body item
 /// of `measure` states: then it is left out of the advice where the body item is in it.
-fn states(measure: Measure, d: &Deviation, lead: Side) -> bool {
+pub(super) fn states(measure: Measure, d: &Deviation, lead: Side) -> bool {
     use Direction::*;
     let hips = matches!(d.joint, Joint::Pelvis | Joint::LeftHip | Joint::RightHip);
     // A turn moves its joints about the vertical: across it, not up or down.
@@ -224,7 +227,7 @@ fn states(measure: Measure, d: &Deviation, lead: Side) -> bool {
 
 /// Inserts `item` into `list`, kept sorted by `key` descending; when full, the smallest goes.
 #[inline(never)]
-pub(super) fn insert_sorted<T: Copy, const N: usize>(
+pub(crate) fn insert_sorted<T: Copy, const N: usize>(
     list: &mut HVec<T, N>,
     item: T,
     key: impl Fn(&T) -> f32,

@@ -120,7 +120,7 @@ pub struct Explains {
 
 impl Explains {
     /// Adds `d`.
-    pub(super) fn add(&mut self, d: &Deviation) {
+    pub(crate) fn add(&mut self, d: &Deviation) {
         self.joints = self.joints.saturating_add(1);
         let d = Symptom::from(d);
         if self.worst.is_none_or(|w| d.severity() > w.severity()) {
@@ -131,7 +131,7 @@ impl Explains {
 
 /// A body-level item past its threshold.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Item {
+pub(crate) enum Item {
     /// A body check.
     Check(BodyDeviation),
     /// A gap of the sequence.
@@ -198,6 +198,30 @@ impl Cause {
             explains: Explains::default(),
         }
     }
+}
+
+/// Whether body-level `item` may explain joint offset `d` (of a golfer whose lead side is
+/// `lead`): it reaches `d`'s event and its segment carries the joint, or it states what the
+/// offset states ([`super::advice`]). The residual test needs the swing's poses; a session,
+/// which keeps no poses, folds by this alone.
+pub(crate) fn may_explain(item: &Item, d: &Deviation, lead: crate::events::Side) -> bool {
+    let cause = match item {
+        Item::Check(b) => Cause::check(*b, 0.0),
+        Item::Gap(g) => Cause::gap(*g, 0.0),
+    };
+    let reaches = cause.events & (1 << d.event as u8) != 0;
+    let carries = match (cause.segment, Segment::of(d.joint)) {
+        (Some(segment), Some(carried)) => segment.explains(carried),
+        _ => false,
+    };
+    let states = match item {
+        Item::Check(b) => {
+            b.check.position.event() == Some(d.event)
+                && super::advice::states(b.check.measure, d, lead)
+        }
+        Item::Gap(_) => false,
+    };
+    (reaches && carries) || states
 }
 
 /// The causes of a swing: its body checks past their thresholds and its sequence's gaps

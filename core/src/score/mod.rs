@@ -10,7 +10,7 @@
 //! | `noise` | each joint's usual offset from the coach and its wander; the input's noise per stance axis |
 //! | `timing` | how early or late each of the student's events may be found |
 //! | `tempo` | each phase's duration against the coach's, with its uncertainty and verdict |
-//! | `spatial` | the joints off the coach's position at each event, with their uncertainty |
+//! | `spatial` | the joints off the coach's position at each event, with their uncertainty; every judged joint's offset to a [`Sink`] that asks |
 //! | `body` | the body checks ([`crate::checks`]) and the kinematic sequence's gaps ([`crate::sequence`]) |
 //! | `cause` | the checks and gaps past their thresholds, and the joint offsets each explains: the body-level difference at each event applied to the coach's pose, a joint within its threshold of it folded under the cause |
 //! | `advice` | the items a golfer reads, most important first |
@@ -32,17 +32,21 @@ mod align;
 mod body;
 mod cause;
 mod noise;
+mod sink;
 mod spatial;
 mod tempo;
 mod timing;
 mod to_wire;
 mod unsure;
 
+pub(crate) use advice::{insert_sorted, ranked};
 pub use advice::{Advice, MAX_ADVICE};
 pub use align::{BRIDGE_S, HELD_ROOT_M, SPATIAL_SMOOTHING_S};
 pub use body::LEAST_NOISE_M;
+pub(crate) use cause::{may_explain, Item};
 pub use cause::{Explains, MAX_CAUSES};
 pub use noise::WANDER_SAMPLES;
+pub use sink::{BodyLevel, Sink};
 pub use spatial::{
     Deviation, Direction, NOISE_FACTOR, SPATIAL_POINTS_M, SPATIAL_SOFTNESS_M, SPATIAL_THRESHOLD_M,
 };
@@ -280,8 +284,8 @@ pub fn score(
     coach: &mut [Vec3],
     coach_hz: f32,
     band: Band,
-    floats: &mut [f32],
-    bytes: &mut [u8],
+    (floats, bytes): (&mut [f32], &mut [u8]),
+    sink: &mut dyn Sink,
 ) -> Result<Report, ScoreError> {
     let detect = |positions, hz, student| {
         Detected::new(skeleton, positions, hz)
@@ -309,7 +313,7 @@ pub fn score(
         events: coach_events,
         unsure: Unsure::default(),
     };
-    compare(skeleton, &student, &coach, band, floats, bytes)
+    compare(skeleton, &student, &coach, band, (floats, bytes), sink)
 }
 
 /// A swing with its events: frames × skeleton joints at `hz`.
@@ -342,7 +346,8 @@ impl<'a> Detected<'a> {
 }
 
 /// [`score`] of two swings whose events are known (a device detects its coach's once), the
-/// coach already turned to [`face`] the way the student does.
+/// coach already turned to [`face`] the way the student does. `sink` is told the swing's
+/// body-level results and, where it asks, every judged joint's offset at every event.
 ///
 /// # Errors
 /// [`ScoreError`] when a swing is too long, the swings are of different kinds or the
@@ -352,8 +357,8 @@ pub fn compare(
     student: &Detected<'_>,
     coach: &Detected<'_>,
     band: Band,
-    floats: &mut [f32],
-    bytes: &mut [u8],
+    (floats, bytes): (&mut [f32], &mut [u8]),
+    sink: &mut dyn Sink,
 ) -> Result<Report, ScoreError> {
     let joints = skeleton.len();
     for (frames, student) in [(student.positions, true), (coach.positions, false)] {
@@ -416,12 +421,19 @@ pub fn compare(
     );
     let gaps = body::gaps(skeleton, &pair, (&events_s, events_c), hz);
     let mut causes = cause::causes(&body, &gaps);
+    let offsets = sink.body(&BodyLevel {
+        lead: events_s.lead,
+        tempo: &tempo,
+        pause_s: (events_s.pause() / hz.0, events_c.pause() / hz.1),
+        body: &body,
+        gaps: &gaps,
+    });
     let spatial = spatial::spatial(
         skeleton,
         &pair,
         (&events_s, hz.1),
         (&noise, &timing),
-        &mut causes,
+        (&mut causes, offsets.then_some(sink)),
     );
     let advice = advice::advise(&tempo, &mut causes, &spatial.deviations, events_s.lead);
     let score = 100.0

@@ -12,6 +12,7 @@ use super::align::Pair;
 use super::cause::{Cause, Model};
 use super::excess;
 use super::noise::{judged, Noise};
+use super::sink::Sink;
 use super::timing::Timing;
 use crate::body::Body;
 use crate::config::{DEVIATIONS_PER_EVENT, MAX_DEVIATIONS};
@@ -130,13 +131,13 @@ pub(super) struct Spatial {
 
 /// The deviations of `pair`'s student (its events `events`) from its coach (at `coach_hz`),
 /// with the noise and timing the earlier stages found; an offset a cause explains is folded
-/// under it ([`super::cause`]).
+/// under it ([`super::cause`]). Every judged joint's offset goes to `sink` where there is one.
 pub(super) fn spatial(
     skeleton: &Skeleton,
     pair: &Pair<'_>,
     (events, coach_hz): (&SwingEvents, f32),
     (noise, timing): (&Noise, &Timing),
-    causes: &mut [Cause],
+    (causes, mut sink): (&mut [Cause], Option<&mut dyn Sink>),
 ) -> Spatial {
     let mut out = Spatial {
         deviations: HVec::new(),
@@ -152,7 +153,13 @@ pub(super) fn spatial(
         let model = body
             .as_ref()
             .and_then(|b| Model::at((pair, b), noise, causes, (event, x)));
-        let (worst, excess) = at_event(skeleton, pair, (event, x, h), noise, (model, causes));
+        let (worst, excess) = at_event(
+            skeleton,
+            pair,
+            (event, x, h),
+            noise,
+            (model, causes, reborrow(&mut sink)),
+        );
         for d in one_fact_once(skeleton, worst) {
             let _ = out.deviations.push(d);
         }
@@ -161,15 +168,23 @@ pub(super) fn spatial(
     out
 }
 
+/// `sink` lent for one call (the trait object's lifetime shortened to the loan's).
+fn reborrow<'a>(sink: &'a mut Option<&mut dyn Sink>) -> Option<&'a mut dyn Sink> {
+    match sink {
+        Some(s) => Some(&mut **s),
+        None => None,
+    }
+}
+
 /// The worst joints at `event` (the student's frame `x`; the coach's timing uncertainty `h`
 /// frames) that no cause explains (by `model`, where a cause reaches the event), and the worst
-/// one's excess over its threshold.
+/// one's excess over its threshold; each judged joint's offset to `sink`.
 fn at_event(
     skeleton: &Skeleton,
     pair: &Pair<'_>,
     (event, x, h): (Event, f32, f32),
     noise: &Noise,
-    (model, causes): (Option<Model>, &mut [Cause]),
+    (model, causes, mut sink): (Option<Model>, &mut [Cause], Option<&mut dyn Sink>),
 ) -> (HVec<Deviation, DEVIATIONS_PER_EVENT>, f32) {
     let mut worst: HVec<Deviation, DEVIATIONS_PER_EVENT> = HVec::new();
     let mut event_excess = 0.0f32;
@@ -192,6 +207,10 @@ fn at_event(
         let along = (pair.stance_c.local(pair.coach_at(k, c + h, half_c))
             - pair.stance_c.local(pair.coach_at(k, c - h, half_c)))
             * 0.5;
+        if let Some(sink) = sink.as_deref_mut() {
+            let per_axis = sigma.zip_map(&along, libm::hypotf);
+            sink.offset((event, k, joint), o, per_axis);
+        }
         let uncertainty_m = match o.try_normalize(f32::MIN_POSITIVE) {
             Some(u) => libm::hypotf(norm(&sigma.component_mul(&u)), along.dot(&u)),
             None => libm::hypotf(norm(sigma), norm(&along)) / libm::sqrtf(3.0),
