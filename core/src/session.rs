@@ -6,7 +6,8 @@
 //! statistics: each phase's tempo (`ln` of the ratio to the coach's) and the pause at the top,
 //! each body check and each sequence gap (the student's less the coach's), and each joint's
 //! offset at each event along each stance axis. Memory is fixed: ten bytes a quantity however
-//! many swings come (about 4.2 KiB for a 17-joint skeleton), rather than the last few swings'
+//! many swings come (the joints' in the caller's buffer, [`JointTallies`]: about 4.1 KiB for a
+//! 17-joint skeleton), rather than the last few swings'
 //! summaries, because a session's estimate should use every swing of it, and a window long
 //! enough for the 20 swings a noisy phone needs would not fit the device.
 //!
@@ -170,19 +171,34 @@ pub struct Open {
     pub more_swings: u32,
 }
 
-/// What a range session's swings say together: see the [module documentation](self). `J` is
-/// the most joints a student's skeleton may have.
-#[derive(Clone, Debug)]
-pub struct Tendencies<const J: usize> {
+/// One joint's tallies: its offset at each event along each stance axis. A session keeps one
+/// for each joint of the student's skeleton, in a buffer of its caller's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct JointTallies {
+    /// The joint, as the swings named it.
+    joint: Option<Joint>,
+    /// [`Event::ALL`] order; toward the target, toward the ball, up.
+    at: [[Tally; 3]; Event::COUNT],
+}
+
+impl JointTallies {
+    /// No swings.
+    pub const EMPTY: JointTallies = JointTallies {
+        joint: None,
+        at: [[Tally::EMPTY; 3]; Event::COUNT],
+    };
+}
+
+/// What a range session's swings say together: see the [module documentation](self).
+#[derive(Debug)]
+pub struct Tendencies<'a> {
     /// The body-level quantities' tallies, [`Quantity::BODY_LEVEL`] order.
     body: [Tally; BODY_LEVEL],
     /// The coach's value of each body-level quantity (a phase's duration and the pause in
     /// seconds, a check's change, a gap), as the last swing counted had it.
     coach: [f32; BODY_LEVEL],
-    /// Each joint's offset at each event along each stance axis.
-    offsets: [[[Tally; 3]; J]; Event::COUNT],
-    /// Each joint index's joint, as the swings named it.
-    joints: [Option<Joint>; J],
+    /// Each joint's tallies, the skeleton's order (joints past its length are not kept).
+    joints: &'a mut [JointTallies],
     /// The golfer's lead side, as the last swing counted had it.
     lead: Side,
     /// Swings heard.
@@ -193,12 +209,6 @@ pub struct Tendencies<const J: usize> {
     set_aside: HVec<SetAside, MAX_SET_ASIDE>,
     /// Whether the swing being heard is counted (its offsets too).
     counting: bool,
-}
-
-impl<const J: usize> Default for Tendencies<J> {
-    fn default() -> Self {
-        Tendencies::new()
-    }
 }
 
 /// A body-level quantity's value in a swing, its stated uncertainty and the coach's value,
@@ -225,14 +235,15 @@ fn body_level_values(swing: &BodyLevel<'_>) -> [Option<(f32, f32, f32)>; BODY_LE
     out
 }
 
-impl<const J: usize> Tendencies<J> {
-    /// An empty session.
-    pub const fn new() -> Self {
+impl<'a> Tendencies<'a> {
+    /// An empty session keeping its joints' tallies in `joints` (one for each joint of the
+    /// largest skeleton it will hear of; emptied).
+    pub fn new(joints: &'a mut [JointTallies]) -> Self {
+        joints.fill(JointTallies::EMPTY);
         Tendencies {
             body: [Tally::EMPTY; BODY_LEVEL],
             coach: [0.0; BODY_LEVEL],
-            offsets: [[[Tally::EMPTY; 3]; J]; Event::COUNT],
-            joints: [None; J],
+            joints,
             lead: Side::Left,
             swings: 0,
             used: 0,
@@ -256,11 +267,11 @@ impl<const J: usize> Tendencies<J> {
         &self.set_aside
     }
 
-    /// The session's estimate of `quantity`, in its own unit (`None` for a joint index past
-    /// `J`).
+    /// The session's estimate of `quantity`, in its own unit (`None` for a joint the session
+    /// keeps no tallies for).
     pub fn estimate(&self, quantity: Quantity) -> Option<Estimate> {
         let tally = match quantity {
-            Quantity::Offset(event, k, axis) => self.offsets[event as usize].get(k)?.get(axis)?,
+            Quantity::Offset(event, k, axis) => self.joints.get(k)?.at[event as usize].get(axis)?,
             q => &self.body[q.body_level()?],
         };
         Some(tally.estimate(quantity.unit()))
@@ -274,7 +285,7 @@ impl<const J: usize> Tendencies<J> {
 
     /// The joint at skeleton index `k`, as the swings named it.
     pub fn joint(&self, k: usize) -> Option<Joint> {
-        self.joints.get(k).copied().flatten()
+        self.joints.get(k)?.joint
     }
 
     /// Joint `k`'s offset at `event` as a joint item would give it: its length, its
@@ -384,7 +395,7 @@ impl<const J: usize> Tendencies<J> {
         // Joints: those whose interval along the offset clears the threshold, folded under a
         // cause that may explain them.
         for event in Event::ALL {
-            for k in 0..J {
+            for k in 0..self.joints.len() {
                 let Some((d, e, past)) = self.joint_offset(event, k) else {
                     continue;
                 };
@@ -455,7 +466,7 @@ impl<const J: usize> Tendencies<J> {
             }
         }
         for event in Event::ALL {
-            for k in 0..J {
+            for k in 0..self.joints.len() {
                 if let Some((d, e, _)) = self.joint_offset(event, k) {
                     let axis = Vec3::from(d.offset_m).iamax();
                     consider(Quantity::Offset(event, k, axis), e);
@@ -467,7 +478,8 @@ impl<const J: usize> Tendencies<J> {
 
     /// Starts the session afresh (a new coach or profile, or asked).
     pub fn reset(&mut self) {
-        *self = Tendencies::new();
+        let joints = core::mem::take(&mut self.joints);
+        *self = Tendencies::new(joints);
     }
 }
 
@@ -481,7 +493,7 @@ fn severity(t: &Tendency) -> f32 {
     }
 }
 
-impl<const J: usize> Sink for Tendencies<J> {
+impl Sink for Tendencies<'_> {
     fn body(&mut self, swing: &BodyLevel<'_>) -> bool {
         self.swings = self.swings.saturating_add(1);
         let values = body_level_values(swing);
@@ -530,24 +542,21 @@ impl<const J: usize> Sink for Tendencies<J> {
     }
 
     fn offset(&mut self, (event, k, joint): (Event, usize, Joint), offset: Vec3, u: Vec3) {
-        let Some(axes) = self.offsets[event as usize].get_mut(k) else {
+        let Some(tallies) = self.joints.get_mut(k).filter(|_| self.counting) else {
             return;
         };
-        if !self.counting {
-            return;
-        }
         let q = Quantity::Offset(event, k, 0);
         let (unit, tolerance) = (q.unit(), q.tolerance() / q.unit());
-        for (axis, tally) in axes.iter_mut().enumerate() {
+        for (axis, tally) in tallies.at[event as usize].iter_mut().enumerate() {
             tally.add(offset[axis] / unit, u[axis] / unit, tolerance);
         }
-        self.joints[k] = Some(joint);
+        tallies.joint = Some(joint);
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{Quantity, Tendencies, UNLIKE};
+    use super::{JointTallies, Quantity, Tendencies, UNLIKE};
     use crate::checks::{BodyDeviation, CHECKS};
     use crate::events::{Event, Side};
     use crate::joint::Joint;
@@ -563,7 +572,7 @@ mod tests {
     }
 
     impl Swing {
-        fn tell<const J: usize>(&self, session: &mut Tendencies<J>) -> bool {
+        fn tell(&self, session: &mut Tendencies<'_>) -> bool {
             let tempo = [Phase::Backswing, Phase::Downswing, Phase::FollowThrough].map(|phase| {
                 let ratio = self.ratios[phase as usize];
                 PhaseTempo {
@@ -622,7 +631,8 @@ mod tests {
 
     #[test]
     fn a_slow_backswing_in_every_swing_is_a_tendency_with_its_evidence() {
-        let mut session = Tendencies::<17>::new();
+        let mut joints = [JointTallies::EMPTY; 17];
+        let mut session = Tendencies::new(&mut joints);
         for (i, w) in WOBBLES.iter().enumerate() {
             swing(1.3 + 0.02 * w, (0, 0.0), *w).tell(&mut session);
             // One swing says nothing of the scatter: no tendency yet.
@@ -648,8 +658,8 @@ mod tests {
 
     #[test]
     fn a_half_swing_is_set_aside_with_why_and_moves_nothing() {
-        let mut clean = Tendencies::<17>::new();
-        let mut with = Tendencies::<17>::new();
+        let (mut a, mut b) = ([JointTallies::EMPTY; 17], [JointTallies::EMPTY; 17]);
+        let (mut clean, mut with) = (Tendencies::new(&mut a), Tendencies::new(&mut b));
         for (i, w) in WOBBLES.iter().enumerate() {
             let s = swing(1.0 + 0.02 * w, (0, 0.0), *w);
             s.tell(&mut clean);
@@ -678,7 +688,8 @@ mod tests {
 
     #[test]
     fn while_nothing_is_clear_the_nearest_question_is_named_with_the_swings_to_settle_it() {
-        let mut session = Tendencies::<17>::new();
+        let mut joints = [JointTallies::EMPTY; 17];
+        let mut session = Tendencies::new(&mut joints);
         // A shoulder turn 12° short with the scatter of a noisy phone: not clear in three.
         for by in [-4.0f32, -20.0, -12.0] {
             swing(1.0, (0, by), 0.0).tell(&mut session);
@@ -693,7 +704,8 @@ mod tests {
 
     #[test]
     fn a_joint_off_at_the_top_is_folded_under_the_short_turn_that_moves_it() {
-        let mut session = Tendencies::<17>::new();
+        let mut joints = [JointTallies::EMPTY; 17];
+        let mut session = Tendencies::new(&mut joints);
         let (wrist, k) = (Joint::LeftWrist, 13);
         for w in WOBBLES {
             swing(1.0, (0, -20.0 + w), w).tell(&mut session);
@@ -717,7 +729,8 @@ mod tests {
             (wrist, Event::Top, 1)
         );
         // Without the turn, the wrist is an item of its own.
-        let mut alone = Tendencies::<17>::new();
+        let mut joints = [JointTallies::EMPTY; 17];
+        let mut alone = Tendencies::new(&mut joints);
         for w in WOBBLES {
             swing(1.0, (0, 0.0), w).tell(&mut alone);
             let o = Vec3::new(0.12 + 0.01 * w, 0.0, 0.0);
