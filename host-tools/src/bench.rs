@@ -268,9 +268,9 @@ fn score(args: &ScoreArgs) -> Result<String> {
                     radius,
                     anchored: true,
                 };
-                let mut report = score_swings(&student, &coach, band)?;
+                let mut report = score_swings(&student, &coach, band, &mut ())?;
                 let (calls, per_swing) = timed(args.seconds, || {
-                    report = score_swings(&student, &coach, band)?;
+                    report = score_swings(&student, &coach, band, &mut ())?;
                     Ok(())
                 })?;
                 let (n, m) = report.path.last().map_or((0, 0), |&(i, j)| (i + 1, j + 1));

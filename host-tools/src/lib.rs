@@ -23,6 +23,7 @@ pub mod reference;
 pub mod replay;
 pub mod retarget;
 pub mod score;
+pub mod session;
 pub mod synth;
 pub mod synth_imu;
 pub mod table;

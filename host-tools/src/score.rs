@@ -2,7 +2,7 @@
 
 use crate::failure::{NothingFound, Usage};
 use crate::table::{peak_text, whole, with_spread, KEY_METRICS, PLUS_MINUS};
-use crate::{html, input, teacher};
+use crate::{html, input, session, teacher};
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_core::band::Band;
 use posecoach_core::body::{Angles, Link, Metrics, Shift};
@@ -10,6 +10,7 @@ use posecoach_core::checks::BodyDeviation;
 use posecoach_core::events::{Event, EventError, SwingEvents};
 use posecoach_core::score::{self, Advice, Report, ScoreError};
 use posecoach_core::sequence::GAP_TOLERANCE_S;
+use posecoach_core::session::{JointTallies, Tendencies};
 use posecoach_io::Motion;
 use serde_json::{json, Map, Value};
 use std::fmt::Write;
@@ -20,10 +21,12 @@ pub struct Args {
     /// The coach's swing (.bvh, .c3d, .csv or .json).
     #[arg(long)]
     coach: PathBuf,
-    /// The student's swing (.bvh, .c3d, .csv or .json).
-    #[arg(long)]
-    student: PathBuf,
-    /// The student's T-pose; without it the skeleton comes from the student's own frames.
+    /// The student's swing (.bvh, .c3d, .csv or .json); more than once for a session: each
+    /// swing is scored, then what they say together.
+    #[arg(long, required = true)]
+    student: Vec<PathBuf>,
+    /// The student's T-pose; without it the skeleton comes from the (first) student's own
+    /// frames.
     #[arg(long)]
     student_tpose: Option<PathBuf>,
     /// Retarget the coach with the analytic retargeter (bone-direction copy): the default
@@ -70,13 +73,14 @@ pub fn run(args: &Args) -> Result<String> {
         ReportFormat::of(path)?;
     }
     let coach = args.input.load(&args.coach)?;
-    let student = args.input.load(&args.student)?;
-    // The student's body: the T-pose if given, else the skeleton measured from the swing. Both
-    // swings are compared on it, as rigid bones: the coach's retargeted, the student's own
-    // re-expressed (bone-direction copy), so measurement wobble in bone lengths is no fault.
+    let first = args.input.load(&args.student[0])?;
+    // The student's body: the T-pose if given, else the skeleton measured from the (first)
+    // swing. Both swings are compared on it, as rigid bones: the coach's retargeted, the
+    // student's own re-expressed (bone-direction copy), so measurement wobble in bone lengths
+    // is no fault.
     let body = match &args.student_tpose {
         Some(path) => args.input.load(path)?,
-        None => student.clone(),
+        None => first.clone(),
     };
     // Each keeps its own golf contacts as the device's virtual coach does (planted feet, both
     // hands on one grip, the club at the ball), which rigid bones of other lengths would lose.
@@ -101,66 +105,135 @@ pub fn run(args: &Args) -> Result<String> {
         )?,
         None => on_body(&coach, "coach")?,
     };
-    let student = on_body(&student, "student")?;
-    let (student, virtual_coach) = (
-        student.resampled(args.score_rate)?,
-        virtual_coach.resampled(args.score_rate)?,
-    );
+    let virtual_coach = virtual_coach.resampled(args.score_rate)?;
     let band = Band {
         radius: args.band,
         anchored: !args.global_band,
     };
-    let report = score_swings(&student, &virtual_coach, band).map_err(|e| {
-        match e.downcast_ref::<ScoreError>() {
-            Some(ScoreError::Events {
-                student: true,
-                error: EventError::NoSwing,
-            }) => anyhow::Error::new(NothingFound {
-                message: format!("{}: {e}", args.student.display()),
-                output: String::new(),
-            }),
-            _ => e,
+    let mut joints = vec![JointTallies::EMPTY; body.skeleton.len()];
+    let mut session = Tendencies::new(&mut joints);
+    let mut swings = Vec::new();
+    for (i, path) in args.student.iter().enumerate() {
+        let motion = match i {
+            0 => first.clone(),
+            _ => args.input.load(path)?,
+        };
+        let scored = on_body(&motion, "student")
+            .and_then(|student| Ok(student.resampled(args.score_rate)?))
+            .and_then(|student| {
+                let report = score_swings(&student, &virtual_coach, band, &mut session)?;
+                Ok(html::Scored {
+                    report,
+                    skeleton: student.skeleton.clone(),
+                    student: student.positions.clone(),
+                    student_hz: student.rate_hz,
+                    coach: virtual_coach.positions.clone(),
+                    coach_hz: virtual_coach.rate_hz,
+                })
+            })
+            .map_err(|e| match e.downcast_ref::<ScoreError>() {
+                Some(ScoreError::Events {
+                    student: true,
+                    error: EventError::NoSwing,
+                }) => anyhow::Error::new(NothingFound {
+                    message: format!("{}: {e}", path.display()),
+                    output: String::new(),
+                }),
+                _ => e.context(path.display().to_string()),
+            });
+        swings.push((path, scored));
+    }
+    // One swing that cannot be scored is the command's error.
+    if let [(_, Err(_))] = swings.as_slice() {
+        if let Some((_, Err(e))) = swings.pop() {
+            return Err(e);
         }
-    })?;
-    let scored = html::Scored {
-        report,
-        skeleton: student.skeleton.clone(),
-        student: student.positions.clone(),
-        student_hz: student.rate_hz,
-        coach: virtual_coach.positions.clone(),
-        coach_hz: virtual_coach.rate_hz,
+    }
+    let files = |student: &Path| {
+        json!({
+            "coach": args.coach.display().to_string(),
+            "student": student.display().to_string(),
+            "student_tpose": args.student_tpose.as_ref().map(|p| p.display().to_string()),
+            "weights": args.weights.as_ref().map(|p| p.display().to_string()),
+        })
     };
-    let mut json = to_json(&scored);
-    // What was scored, and the rate every frame number counts at.
-    json["files"] = json!({
-        "coach": args.coach.display().to_string(),
-        "student": args.student.display().to_string(),
-        "student_tpose": args.student_tpose.as_ref().map(|p| p.display().to_string()),
-        "weights": args.weights.as_ref().map(|p| p.display().to_string()),
-    });
-    json["rate_hz"] = json!(decimal(scored.student_hz, 3));
+    let reports: Vec<Value> = swings
+        .iter()
+        .map(|(path, scored)| match scored {
+            Ok(scored) => {
+                let mut json = to_json(scored);
+                // What was scored, and the rate every frame number counts at.
+                json["files"] = files(path);
+                json["rate_hz"] = json!(decimal(scored.student_hz, 3));
+                json
+            }
+            Err(e) => json!({"files": files(path), "error": format!("{e:#}")}),
+        })
+        .collect();
+    let json = match reports.as_slice() {
+        [one] => one.clone(),
+        _ => json!({
+            "swings": swings.iter().zip(&reports).enumerate().map(|(i, ((path, _), report))| {
+                let mut entry = json!({"swing": i + 1, "file": path.display().to_string()});
+                match report.get("error") {
+                    Some(error) => entry["error"] = error.clone(),
+                    None => entry["report"] = report.clone(),
+                }
+                entry
+            }).collect::<Vec<_>>(),
+            "session": session::to_json(&session),
+        }),
+    };
     if let Some(path) = &args.report {
         let retargeter = match &args.weights {
             Some(w) => format!("learned retargeter {}", w.display()),
             None => "analytic retargeter".to_string(),
         };
-        let notes = [
-            format!("Coach: {}", args.coach.display()),
-            format!("Student: {}", args.student.display()),
-            format!("Coach retargeted onto the student by the {retargeter}"),
-        ];
-        let swing = html::Swing {
-            heading: format!("Swing of {}", args.student.display()),
-            outcome: Ok(scored.clone()),
-        };
+        let mut notes = vec![format!("Coach: {}", args.coach.display())];
+        notes.extend(
+            args.student
+                .iter()
+                .map(|s| format!("Student: {}", s.display())),
+        );
+        notes.push(format!(
+            "Coach retargeted onto the student by the {retargeter}"
+        ));
+        let pages: Vec<html::Swing> = swings
+            .iter()
+            .map(|(path, scored)| html::Swing {
+                heading: format!("Swing of {}", path.display()),
+                outcome: scored
+                    .as_ref()
+                    .map(Clone::clone)
+                    .map_err(|e| format!("{e:#}")),
+            })
+            .collect();
         write_report(path, &json, || {
-            html::page("posecoach swing report", &notes, &[swing])
+            html::page("posecoach swing report", &notes, &pages)
         })?;
     }
-    Ok(if args.json {
-        format!("{json}\n")
-    } else {
-        to_text(&scored)
+    if args.json {
+        return Ok(format!("{json}\n"));
+    }
+    Ok(match swings.as_slice() {
+        [(_, Ok(scored))] => to_text(scored),
+        _ => {
+            let mut text = String::new();
+            for (i, (path, scored)) in swings.iter().enumerate() {
+                let _ = write!(text, "swing {} ({}):", i + 1, path.display());
+                match scored {
+                    Ok(scored) => {
+                        text.push('\n');
+                        text.push_str(&to_text(scored));
+                    }
+                    Err(e) => {
+                        let _ = writeln!(text, " not scored: {e:#}");
+                    }
+                }
+            }
+            text.push_str(&session::to_text(&session));
+            text
+        }
     })
 }
 
@@ -205,8 +278,13 @@ pub fn write_report(path: &Path, json: &Value, html: impl FnOnce() -> String) ->
 }
 
 /// Scores `student` against `coach`, both on the student's skeleton (the coach turned to face
-/// the student's way).
-pub fn score_swings(student: &Motion, coach: &Motion, band: Band) -> Result<Report> {
+/// the student's way), telling `sink` of it.
+pub fn score_swings(
+    student: &Motion,
+    coach: &Motion,
+    band: Band,
+    sink: &mut dyn score::Sink,
+) -> Result<Report> {
     let mut coach_positions = coach.positions.clone();
     let len = score::scratch_len(student.frames(), coach.frames());
     let (mut floats, mut bytes) = (vec![0.0; len.floats], vec![0u8; len.bytes]);
@@ -218,7 +296,7 @@ pub fn score_swings(student: &Motion, coach: &Motion, band: Band) -> Result<Repo
         coach.rate_hz,
         band,
         (&mut floats, &mut bytes),
-        &mut (),
+        sink,
     )?)
 }
 

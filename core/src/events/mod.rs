@@ -144,6 +144,20 @@ impl Event {
         }
     }
 
+    /// When it is, in a golfer's words: "at the top", "halfway back".
+    pub const fn words(self) -> &'static str {
+        match self {
+            Event::Address => "at address",
+            Event::ToeUp => "at toe-up",
+            Event::MidBackswing => "halfway back",
+            Event::Top => "at the top",
+            Event::MidDownswing => "halfway down",
+            Event::Impact => "at impact",
+            Event::MidFollowThrough => "halfway through",
+            Event::Finish => "at the finish",
+        }
+    }
+
     /// The P-system position this event is.
     pub const fn position(self) -> Position {
         match self {

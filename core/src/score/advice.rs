@@ -11,7 +11,7 @@ use super::tempo::{Phase, PhaseTempo, Verdict, TEMPO_CONFIDENCE, TEMPO_TOLERANCE
 use crate::body::Measure;
 use crate::checks::BodyDeviation;
 use crate::config::MAX_DEVIATIONS;
-use crate::events::{Event, Side};
+use crate::events::Side;
 use crate::joint::Joint;
 use crate::sequence::{Gap, GAP_TOLERANCE_S};
 use heapless::Vec as HVec;
@@ -87,16 +87,7 @@ pub(crate) fn ranked(own: f32, explains: &Explains) -> f32 {
 /// Writes "{at event} your {joint} is {cm} ± {u} cm {which way} than the coach's", the
 /// event's words capitalized where `capital`.
 fn joint_clause(f: &mut core::fmt::Formatter<'_>, d: &Symptom, capital: bool) -> core::fmt::Result {
-    let event = match d.event {
-        Event::Address => "at address",
-        Event::ToeUp => "at toe-up",
-        Event::MidBackswing => "halfway back",
-        Event::Top => "at the top",
-        Event::MidDownswing => "halfway down",
-        Event::Impact => "at impact",
-        Event::MidFollowThrough => "halfway through",
-        Event::Finish => "at the finish",
-    };
+    let event = d.event.words();
     let mut chars = event.chars();
     match (capital, chars.next()) {
         (true, Some(first)) => write!(f, "{}{}", first.to_ascii_uppercase(), chars.as_str())?,

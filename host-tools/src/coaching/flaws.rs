@@ -862,7 +862,8 @@ mod tests {
         let scored = |flaws: &[Flaw]| {
             let planted = plant(&swing, &t, lead, flaws);
             let report =
-                crate::score::score_swings(&at_60(&planted.swing), &coach, Band::DEFAULT).unwrap();
+                crate::score::score_swings(&at_60(&planted.swing), &coach, Band::DEFAULT, &mut ())
+                    .unwrap();
             (planted, report)
         };
         let (_, report) = scored(&[]);
@@ -927,9 +928,13 @@ mod tests {
             m.positions = positions;
             m
         };
-        let report =
-            crate::score::score_swings(&still(&planted.swing), &still(&swing), Band::DEFAULT)
-                .unwrap();
+        let report = crate::score::score_swings(
+            &still(&planted.swing),
+            &still(&swing),
+            Band::DEFAULT,
+            &mut (),
+        )
+        .unwrap();
         let item = report
             .advice
             .iter()
