@@ -5,8 +5,8 @@
 //! [`Sink`]) and keeps, for every quantity a report carries, a [`Tally`] of running robust
 //! statistics: each phase's tempo (`ln` of the ratio to the coach's) and the pause at the top,
 //! each body check and each sequence gap (the student's less the coach's), and each joint's
-//! offset at each event along each stance axis. Memory is fixed: ten bytes a quantity however
-//! many swings come (the joints' in the caller's buffer, [`JointTallies`]: about 4.1 KiB for a
+//! offset at each event along each stance axis. Memory is fixed: eight bytes a quantity however
+//! many swings come (the joints' in the caller's buffer, [`JointTallies`]: 3.2 KiB for a
 //! 17-joint skeleton), rather than the last few swings'
 //! summaries, because a session's estimate should use every swing of it, and a window long
 //! enough for the 20 swings a noisy phone needs would not fit the device.
