@@ -8,6 +8,7 @@ use posecoach_core::band::Band;
 use posecoach_core::format::Format;
 use posecoach_core::frames::Frames;
 use posecoach_core::plausible::Implausible;
+use posecoach_core::session::JointTallies;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{Config, ImuSample, Message, NackReason, PoseFrame, StudentProfile};
 use posecoach_core::Vec3;
@@ -358,6 +359,7 @@ fn a_network_borrows_the_ring_at_its_rate() {
         let mut ring = vec![[0i16; 3]; lens.ring + 1];
         let (mut coach, mut floats) = (vec![Vec3::zeros(); lens.coach], vec![0.0; lens.floats]);
         let (mut bytes, mut unsure) = (vec![0u8; lens.bytes], vec![0u64; lens.unsure]);
+        let mut tallies = vec![JointTallies::EMPTY; lens.tallies];
         let ring = &mut ring[1..];
         assert_eq!(ring.as_ptr() as usize % 4, 2);
         let buffers = Buffers {
@@ -366,6 +368,7 @@ fn a_network_borrows_the_ring_at_its_rate() {
             floats: &mut floats,
             bytes: &mut bytes,
             unsure: &mut unsure,
+            tallies: &mut tallies,
         };
         let mut session = Session::with_config(&coaches, buffers, config)
             .unwrap()

@@ -6,6 +6,7 @@ use posecoach_core::config::MAX_SWING_FRAMES;
 use posecoach_core::frames::Mm;
 use posecoach_core::network;
 use posecoach_core::score;
+use posecoach_core::session::JointTallies;
 use posecoach_core::weights::Architecture;
 use posecoach_core::Vec3;
 
@@ -22,6 +23,8 @@ pub struct BufferLens {
     pub bytes: usize,
     /// Masks of the joints the pose stream was unsure of, one per frame of the ring.
     pub unsure: usize,
+    /// The range session's tallies of each joint ([`JointTallies`]).
+    pub tallies: usize,
 }
 
 impl BufferLens {
@@ -42,6 +45,7 @@ impl BufferLens {
             floats: scratch.floats,
             bytes: scratch.bytes,
             unsure: ring_frames,
+            tallies: joints,
         }
     }
 
@@ -82,6 +86,8 @@ pub struct Buffers<'b> {
     pub bytes: &'b mut [u8],
     /// Masks of the joints the pose stream was unsure of, one per frame.
     pub unsure: &'b mut [u64],
+    /// The range session's tallies, one per joint of the largest student.
+    pub tallies: &'b mut [JointTallies],
 }
 
 /// [`Buffers`] of the given lengths on the heap, for host tools and tests.
@@ -93,6 +99,7 @@ pub struct OwnedBuffers {
     floats: std::vec::Vec<f32>,
     bytes: std::vec::Vec<u8>,
     unsure: std::vec::Vec<u64>,
+    tallies: std::vec::Vec<JointTallies>,
 }
 
 #[cfg(feature = "std")]
@@ -105,6 +112,7 @@ impl OwnedBuffers {
             floats: std::vec![0.0; lens.floats],
             bytes: std::vec![0; lens.bytes],
             unsure: std::vec![0; lens.unsure],
+            tallies: std::vec![JointTallies::EMPTY; lens.tallies],
         }
     }
 
@@ -116,6 +124,7 @@ impl OwnedBuffers {
             floats: &mut self.floats,
             bytes: &mut self.bytes,
             unsure: &mut self.unsure,
+            tallies: &mut self.tallies,
         }
     }
 }

@@ -59,6 +59,7 @@ use posecoach_core::math::norm;
 use posecoach_core::plausible;
 use posecoach_core::retarget::Fit;
 use posecoach_core::score::{self, Detected, Report, ScoreError, Unsure};
+use posecoach_core::session::Tendencies;
 use posecoach_core::setup::{self, Setup};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::weights::Weights;
@@ -150,6 +151,10 @@ pub struct Session<'b> {
     unsure: &'b mut [u64],
     swings: u32,
     report: Option<Report>,
+    /// The range session: what the swings scored against one coach say together.
+    tendencies: Tendencies<'b>,
+    /// The coach the range session's swings were scored against.
+    tendencies_coach: Option<u16>,
     /// Counters of the pose streams before the current one.
     counted: StreamCounters,
     /// IMU samples not newer than their sensor's last one.
@@ -207,6 +212,8 @@ impl<'b> Session<'b> {
             unsure: buffers.unsure,
             swings: 0,
             report: None,
+            tendencies: Tendencies::new(buffers.tallies),
+            tendencies_coach: None,
             counted: StreamCounters::default(),
             stale: 0,
             frames: 0,
@@ -237,6 +244,12 @@ impl<'b> Session<'b> {
     /// [`MAX_FRAMES_PER_MESSAGE`] per message).
     pub fn frames(&self) -> u64 {
         self.frames
+    }
+
+    /// The range session: what the swings scored against one coach since the profile, the
+    /// coach or the settings last changed say together.
+    pub fn tendencies(&self) -> &Tendencies<'b> {
+        &self.tendencies
     }
 
     /// The student's skeleton, once a profile has been taken.
@@ -321,8 +334,11 @@ impl<'b> Session<'b> {
         })
     }
 
-    /// Rebuilds everything that follows the profile, coach and settings.
+    /// Rebuilds everything that follows the profile, coach and settings (a new range session
+    /// too).
     fn restart(&mut self) -> Result<(), Refusal> {
+        self.tendencies.reset();
+        self.tendencies_coach = None;
         let Some(skeleton) = self.student().cloned() else {
             return Ok(());
         };
@@ -588,6 +604,7 @@ impl<'b> Session<'b> {
             &mut *self.bytes,
         );
         let last_report = &mut self.report;
+        let (tendencies, tendencies_coach) = (&mut self.tendencies, &mut self.tendencies_coach);
         let (unsure, seen) = (&*self.unsure, detector.frames_seen());
         // The swing is scored where it lies in the detector's ring (a window that has left the
         // ring is skipped, as a copy of it would fail).
@@ -674,13 +691,17 @@ impl<'b> Session<'b> {
                 events,
                 unsure: Unsure::new(unsure, window.start + span.start as u64, seen),
             };
+            // A swing against another coach than the range session's starts a new one.
+            if tendencies_coach.replace(swing.coach) != Some(swing.coach) {
+                tendencies.reset();
+            }
             let result = score::compare(
                 skeleton,
                 &student,
                 &coach,
                 config.band,
                 (floats, bytes),
-                &mut (),
+                tendencies,
             );
             match result {
                 Ok(report) => {

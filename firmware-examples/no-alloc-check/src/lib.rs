@@ -8,6 +8,7 @@ use posecoach_adapters::log::LogReader;
 use posecoach_adapters::session::{Buffers, Session};
 use posecoach_core::format::Format;
 use posecoach_core::retarget::Analytic;
+use posecoach_core::session::JointTallies;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
 
@@ -43,6 +44,7 @@ pub extern "C" fn posecoach_no_alloc_replay(log: &[u8; 64]) -> i32 {
     };
     let (mut ring, mut coach) = ([[0i16; 3]; 8], [Vec3::zeros(); 8]);
     let (mut floats, mut bytes, mut unsure) = ([0.0; 8], [0u8; 8], [0u64; 8]);
+    let mut tallies = [JointTallies::EMPTY; 1];
     let mut session = Session::new(
         &[],
         Buffers {
@@ -51,6 +53,7 @@ pub extern "C" fn posecoach_no_alloc_replay(log: &[u8; 64]) -> i32 {
             floats: &mut floats,
             bytes: &mut bytes,
             unsure: &mut unsure,
+            tallies: &mut tallies,
         },
     );
     let mut read = 0;

@@ -27,6 +27,7 @@ use posecoach_core::blob::Aligned;
 use posecoach_core::frames::Mm;
 use posecoach_core::reference::Reference;
 use posecoach_core::resample;
+use posecoach_core::session::JointTallies;
 use posecoach_core::wire::{encode, Config, Decoder, Message, MAX_FRAME};
 use posecoach_core::Vec3;
 use static_cell::ConstStaticCell;
@@ -54,6 +55,8 @@ static VIRTUAL_COACH: ConstStaticCell<[Vec3; LENS.coach]> =
 static FLOATS: ConstStaticCell<[f32; LENS.floats]> = ConstStaticCell::new([0.0; LENS.floats]);
 static BYTES: ConstStaticCell<[u8; LENS.bytes]> = ConstStaticCell::new([0; LENS.bytes]);
 static UNSURE: ConstStaticCell<[u64; LENS.unsure]> = ConstStaticCell::new([0; LENS.unsure]);
+static TALLIES: ConstStaticCell<[JointTallies; LENS.tallies]> =
+    ConstStaticCell::new([JointTallies::EMPTY; LENS.tallies]);
 
 /// A microsecond clock from a free-running 32-bit timer, extended to 64 bits.
 struct Clock {
@@ -131,6 +134,7 @@ fn main() -> ! {
         floats: FLOATS.take(),
         bytes: BYTES.take(),
         unsure: UNSURE.take(),
+        tallies: TALLIES.take(),
     };
     let own = Config {
         model_rate_hz: MODEL_RATE_HZ,

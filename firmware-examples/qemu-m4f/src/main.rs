@@ -37,6 +37,7 @@ use posecoach_core::blob::Aligned;
 use posecoach_core::frames::Mm;
 use posecoach_core::reference::Reference;
 use posecoach_core::resample;
+use posecoach_core::session::JointTallies;
 use posecoach_core::weights::Weights;
 #[cfg(feature = "network")]
 use posecoach_core::weights::{Architecture, SEGMENTS, WINDOW};
@@ -104,6 +105,8 @@ static VIRTUAL_COACH: ConstStaticCell<[Vec3; LENS.coach]> =
 static FLOATS: ConstStaticCell<[f32; LENS.floats]> = ConstStaticCell::new([0.0; LENS.floats]);
 static BYTES: ConstStaticCell<[u8; LENS.bytes]> = ConstStaticCell::new([0; LENS.bytes]);
 static UNSURE: ConstStaticCell<[u64; LENS.unsure]> = ConstStaticCell::new([0; LENS.unsure]);
+static TALLIES: ConstStaticCell<[JointTallies; LENS.tallies]> =
+    ConstStaticCell::new([JointTallies::EMPTY; LENS.tallies]);
 
 /// Instructions per kind of work.
 #[derive(Default)]
@@ -178,6 +181,7 @@ fn run() -> Result<(), &'static str> {
     // reset; the replays measure each message's from a freshly painted stack.
     let checks_stack = stack::high_water();
     let (floats, bytes, unsure) = (FLOATS.take(), BYTES.take(), UNSURE.take());
+    let tallies = TALLIES.take();
     let clean = replay(
         &coaches,
         weights,
@@ -187,6 +191,7 @@ fn run() -> Result<(), &'static str> {
             floats: &mut *floats,
             bytes: &mut *bytes,
             unsure: &mut *unsure,
+            tallies: &mut *tallies,
         },
         &LOG.0,
         EXPECTED,
@@ -194,12 +199,13 @@ fn run() -> Result<(), &'static str> {
     print("STAGE", &clean.stages);
     let vec3 = core::mem::size_of::<Vec3>();
     defmt::println!(
-        "RAM ring {=usize} coach {=usize} floats {=usize} bytes {=usize} unsure {=usize} stack {=usize}",
+        "RAM ring {=usize} coach {=usize} floats {=usize} bytes {=usize} unsure {=usize} tallies {=usize} stack {=usize}",
         LENS.ring * core::mem::size_of::<Mm>(),
         LENS.coach * vec3,
         LENS.floats * core::mem::size_of::<f32>(),
         LENS.bytes,
         LENS.unsure * core::mem::size_of::<u64>(),
+        LENS.tallies * core::mem::size_of::<JointTallies>(),
         checks_stack.max(clean.stages.deepest())
     );
     let hostile = replay(
@@ -211,6 +217,7 @@ fn run() -> Result<(), &'static str> {
             floats,
             bytes,
             unsure,
+            tallies,
         },
         &HOSTILE.0,
         HOSTILE_EXPECTED,
@@ -262,7 +269,7 @@ struct Replayed {
 /// benchmarks and the golden check before it are kept out of line for the same reason: inlined
 /// into `run`, their arrays (12 KiB for the convolution's) stayed in its frame through both
 /// replays.
-#[inline(always)]
+#[inline(never)]
 #[cfg_attr(not(feature = "network"), allow(unused_variables))]
 fn replay(
     coaches: &[Coach<'_>],
