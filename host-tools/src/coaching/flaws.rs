@@ -165,6 +165,10 @@ pub struct Planted {
     /// The largest displacement the flaws leave at an event, metres (an offset on a body that
     /// keeps its bones' lengths shows less than was planted).
     pub shown_m: f32,
+    /// Each body check's change since address less the clean swing's ([`CHECKS`] order).
+    pub checks: [Option<f32>; CHECKS.len()],
+    /// Each gap of the sequence less the clean swing's, seconds ([`GAPS`] order).
+    pub gaps: [Option<f32>; GAPS.len()],
 }
 
 /// Plants `flaws` in `clean` (on its body, at its rate, from the takeaway) whose events are
@@ -232,8 +236,26 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
             verdict: if slow { Verdict::Slow } else { Verdict::Fast },
         });
     }
-    truths.extend(body_truths(&swing, &warped, &warped_times, lead));
-    truths.extend(sequence_truths(&swing, &warped, &warped_times, lead));
+    // The body checks and gaps the flaws move past their tolerances.
+    let checks = check_differences(&swing, &warped, &warped_times, lead);
+    let gaps = gap_differences(&swing, &warped, &warped_times, lead);
+    for (check, d) in CHECKS.iter().zip(&checks) {
+        if let Some(d) = d.filter(|d| d.abs() > check.measure.tolerance()) {
+            truths.push(Truth::Body {
+                check: *check,
+                more: d > 0.0,
+            });
+        }
+    }
+    for ((first, then), d) in GAPS.iter().zip(&gaps) {
+        if let Some(d) = d.filter(|d| d.abs() > GAP_TOLERANCE_S) {
+            truths.push(Truth::Sequence {
+                first: *first,
+                then: *then,
+                more: d > 0.0,
+            });
+        }
+    }
     let t = &warped_times;
     let (top, impact) = (Event::Top as usize, Event::Impact as usize);
     Planted {
@@ -242,15 +264,23 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
         times: warped_times,
         truths,
         shown_m: largest,
+        checks,
+        gaps,
     }
 }
 
-/// The body checks whose change since address `flawed` moves past its tolerance from `clean`'s
-/// (both at the same events, `times`), each in its own stance frame.
-fn body_truths(flawed: &Motion, clean: &Motion, times: &Times, lead: Side) -> Vec<Truth> {
+/// Each body check's change since address, `flawed`'s less `clean`'s (both at the same events,
+/// `times`, each in its own stance frame), [`CHECKS`] order; `None` where one cannot be
+/// measured.
+fn check_differences(
+    flawed: &Motion,
+    clean: &Motion,
+    times: &Times,
+    lead: Side,
+) -> [Option<f32>; CHECKS.len()] {
     let skeleton = &clean.skeleton;
     let Ok(body) = body::Body::new(skeleton, lead) else {
-        return Vec::new();
+        return [None; CHECKS.len()];
     };
     let pose = |m: &Motion, t: f32| -> Vec<Vec3> {
         let x = (t * m.rate_hz).clamp(0.0, (m.frames() - 1) as f32);
@@ -267,30 +297,26 @@ fn body_truths(flawed: &Motion, clean: &Motion, times: &Times, lead: Side) -> Ve
             body.measure(&stance, &address, &pose(m, t))?,
         ))
     };
-    let mut truths = Vec::new();
-    for check in CHECKS {
-        let Some(event) = check.position.event() else {
-            continue;
-        };
-        let t = times[event as usize];
+    CHECKS.map(|check| {
+        let t = times[check.position.event()? as usize];
         let change = |m: &Motion| {
             let (zero, at) = metrics(m, t)?;
             check.change(&zero, &at)
         };
-        if let (Some(f), Some(c)) = (change(flawed), change(clean)) {
-            if (f - c).abs() > check.measure.tolerance() {
-                truths.push(Truth::Body { check, more: f > c });
-            }
-        }
-    }
-    truths
+        Some(change(flawed)? - change(clean)?)
+    })
 }
 
-/// The gaps of the kinematic sequence ([`GAPS`]) that `flawed` moves past their tolerance
-/// from `clean`'s, both between the same top and impact (`times`).
-fn sequence_truths(flawed: &Motion, clean: &Motion, times: &Times, lead: Side) -> Vec<Truth> {
+/// Each gap of the kinematic sequence ([`GAPS`]), `flawed`'s less `clean`'s, both between the
+/// same top and impact (`times`), seconds; `None` where a peak is not found.
+fn gap_differences(
+    flawed: &Motion,
+    clean: &Motion,
+    times: &Times,
+    lead: Side,
+) -> [Option<f32>; GAPS.len()] {
     let Ok(body) = body::Body::new(&clean.skeleton, lead) else {
-        return Vec::new();
+        return [None; GAPS.len()];
     };
     let gaps = |m: &Motion| {
         let frame = |e: Event| {
@@ -305,17 +331,8 @@ fn sequence_truths(flawed: &Motion, clean: &Motion, times: &Times, lead: Side) -
         );
         GAPS.map(|(a, b)| Some((k.peak(b)?.time - k.peak(a)?.time) / m.rate_hz))
     };
-    GAPS.into_iter()
-        .zip(gaps(flawed).into_iter().zip(gaps(clean)))
-        .filter_map(|((first, then), (f, c))| {
-            let (f, c) = (f?, c?);
-            ((f - c).abs() > GAP_TOLERANCE_S).then_some(Truth::Sequence {
-                first,
-                then,
-                more: f > c,
-            })
-        })
-        .collect()
+    let (f, c) = (gaps(flawed), gaps(clean));
+    core::array::from_fn(|i| Some(f[i]? - c[i]?))
 }
 
 /// The unit vector of `direction` in the stance frame.
