@@ -46,12 +46,14 @@ pub struct Replay {
     pub pages: Vec<html::Swing>,
     /// The frames the device sends back, in order, as on the serial link.
     pub wire: Vec<u8>,
+    /// The range session after the last swing: its JSON and its lines.
+    pub session: (Value, String),
 }
 
 impl Replay {
     /// The JSON `--json` prints.
     pub fn to_json(&self) -> Value {
-        json!({"swings": self.swings, "refused": self.refused, "counters": self.counters})
+        json!({"swings": self.swings, "session": self.session.0, "refused": self.refused, "counters": self.counters})
     }
 }
 
@@ -79,6 +81,7 @@ pub fn run(args: &Args) -> Result<String> {
         format!("{json}\n")
     } else {
         let mut out = replay.text;
+        out.push_str(&replay.session.1);
         for r in &replay.refused {
             let _ = writeln!(out, "refused: {r}");
         }
@@ -189,6 +192,7 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
             "the log ends inside a frame: it was cut short, and its last frame is lost\n",
         );
     }
+    let tendencies = session.tendencies();
     Ok(Replay {
         swings,
         text,
@@ -196,5 +200,9 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
         counters,
         pages,
         wire: sent,
+        session: (
+            crate::session::to_json(tendencies),
+            crate::session::to_text(tendencies),
+        ),
     })
 }

@@ -8,7 +8,8 @@ use posecoach_core::band::Band;
 use posecoach_core::format::Format;
 use posecoach_core::frames::Frames;
 use posecoach_core::plausible::Implausible;
-use posecoach_core::session::JointTallies;
+use posecoach_core::score::Phase;
+use posecoach_core::session::{JointTallies, Quantity};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{Config, ImuSample, Message, NackReason, PoseFrame, StudentProfile};
 use posecoach_core::Vec3;
@@ -669,4 +670,55 @@ proptest! {
             prop_assert!(given <= MAX_FRAMES_PER_MESSAGE, "{given} frames from {message:?}");
         }
     }
+}
+
+#[test]
+fn the_range_session_counts_every_swing_and_starts_afresh_with_a_new_coach_or_profile() {
+    let messages = device_log();
+    let profile = messages
+        .iter()
+        .find(|m| matches!(m, Message::StudentProfile { .. }))
+        .cloned()
+        .unwrap();
+    posecoach_cli::coaches::session(None, |session| {
+        let mut scored = Vec::new();
+        for m in &messages {
+            session.handle(m, |o| {
+                if let Outcome::Scored { report, .. } = o {
+                    scored.push(report.tempo[0].ratio);
+                }
+            });
+        }
+        let tendencies = session.tendencies();
+        assert_eq!(scored.len(), 2);
+        assert_eq!((tendencies.swings(), tendencies.used()), (2, 2));
+        // Its backswing is the swings' geometric mean (two values are never pulled in).
+        let backswing = tendencies
+            .estimate(Quantity::Tempo(Phase::Backswing))
+            .unwrap();
+        let mean = (scored.iter().map(|r| r.ln()).sum::<f32>() / 2.0).exp();
+        assert!((backswing.value.exp() - mean).abs() < 1e-3, "{backswing:?}");
+        // Another coach starts a new range session; so does another profile.
+        let select = Message::CoachSelect { seq: 90, coach: 1 };
+        session.handle(&select, |_| {});
+        assert_eq!(session.tendencies().swings(), 0);
+        for m in &messages {
+            session.handle(m, |_| {});
+        }
+        assert!(session.tendencies().swings() > 0);
+        let Message::StudentProfile { profile: p, .. } = profile else {
+            unreachable!()
+        };
+        let mut taller = p.clone();
+        for j in taller.joints_mm.iter_mut() {
+            j[1] = (f32::from(j[1]) * 1.05) as i16;
+        }
+        let message = Message::StudentProfile {
+            seq: 91,
+            profile: taller,
+        };
+        session.handle(&message, |_| {});
+        assert_eq!(session.tendencies().swings(), 0);
+    })
+    .unwrap();
 }

@@ -32,6 +32,7 @@
 
 pub mod bodies;
 pub mod flaws;
+mod sessions;
 
 use crate::coaches;
 use crate::phone::{self, Camera, PhoneNoise};
@@ -66,6 +67,8 @@ pub const LAYOUT_HZ: f32 = 240.0;
 pub const MODEL_HZ: u16 = 60;
 /// The IMUs' sample rate.
 pub const IMU_HZ: f32 = 200.0;
+/// The longest range session of the quick configuration, swings (on the first body only).
+pub const QUICK_SESSION: usize = 3;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -80,7 +83,8 @@ pub struct Args {
     /// Noise levels, mm of drift (3D RMS; white jitter and bias a third of it each).
     #[arg(long, value_delimiter = ',', default_value = "0,10,20,30,50")]
     levels: Vec<f32>,
-    /// The small configuration CI runs: 3 bodies, one case per flaw family.
+    /// The small configuration CI runs: 3 bodies, one case per flaw family, range sessions of
+    /// at most three swings on the first body.
     #[arg(long)]
     quick: bool,
     /// Leave out the two IMU rows (six IMUs at 200 Hz, with and without magnetometers).
@@ -96,6 +100,16 @@ pub struct Args {
     /// `--cases-out`), for `posecoach replay`.
     #[arg(long)]
     logs_out: Option<PathBuf>,
+    /// Range sessions: after how many swings their tendencies are judged (each session as
+    /// long as the largest number).
+    #[arg(long = "session", value_delimiter = ',', default_value = "1,3,5,10,20")]
+    sessions: Vec<usize>,
+    /// Leave the range sessions out.
+    #[arg(long)]
+    no_sessions: bool,
+    /// Unflawed range sessions per golfer and input.
+    #[arg(long, default_value_t = 2)]
+    unflawed_sessions: usize,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
@@ -249,40 +263,57 @@ pub fn run(args: &Args) -> Result<String> {
     if let Some(dir) = &args.logs_out {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let progress = Progress::new(cases.len() as u64, "cases");
-    let (tx, rx) = mpsc::channel();
-    let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let outcomes: Vec<Outcome1> = std::thread::scope(|scope| {
-        for _ in 0..workers {
-            let (tx, next, cases, cleans) = (tx.clone(), &next, &cases, &cleans);
-            scope.spawn(move || loop {
-                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let Some(case) = cases.get(i) else { break };
-                let outcome = run_case(&cleans[case.clean], case, args.logs_out.as_deref())
-                    .unwrap_or_else(|e| Outcome1 {
-                        error: Some(format!("{e:#}")),
-                        ..Outcome1::default()
-                    });
-                if tx.send((i, outcome)).is_err() {
-                    break;
-                }
-            });
-        }
-        drop(tx);
-        let mut out: Vec<Option<Outcome1>> = (0..cases.len()).map(|_| None).collect();
-        for (i, o) in rx {
-            out[i] = Some(o);
-            progress.inc();
-        }
-        out.into_iter().map(Option::unwrap_or_default).collect()
+    let outcomes: Vec<Outcome1> = parallel(&cases, "cases", |case| {
+        run_case(&cleans[case.clean], case, args.logs_out.as_deref()).unwrap_or_else(|e| Outcome1 {
+            error: Some(format!("{e:#}")),
+            ..Outcome1::default()
+        })
     });
-    progress.finish_and_clear();
+    // The quick configuration's sessions stop at three swings, on the first body.
+    let ns: Vec<usize> = match args.no_sessions {
+        true => Vec::new(),
+        false => args
+            .sessions
+            .iter()
+            .copied()
+            .filter(|&n| n > 0 && (!args.quick || n <= QUICK_SESSION))
+            .collect(),
+    };
+    let session_cases = match ns.is_empty() {
+        true => Vec::new(),
+        false => {
+            let mut rng = ChaCha8Rng::seed_from_u64(args.seed ^ 0x5e55_10);
+            let unflawed = if args.quick {
+                1
+            } else {
+                args.unflawed_sessions
+            };
+            let golfers: Vec<usize> = (0..cleans.len())
+                .filter(|c| !args.quick || c % bodies.len() == 0)
+                .collect();
+            sessions::cases(&golfers, &inputs(args), unflawed, &mut rng)
+        }
+    };
+    let session_outcomes: Vec<sessions::SessionOutcome> =
+        parallel(&session_cases, "range sessions", |case| {
+            sessions::run_case(&cleans[case.clean], case, &ns).unwrap_or_else(|e| {
+                sessions::SessionOutcome {
+                    error: Some(format!("{e:#}")),
+                    ..sessions::SessionOutcome::default()
+                }
+            })
+        });
     if let Some(path) = &args.cases_out {
         let lines: String = cases
             .iter()
             .zip(&outcomes)
             .map(|(c, o)| format!("{}\n", case_json(&cleans[c.clean], c, o)))
+            .chain(
+                session_cases
+                    .iter()
+                    .zip(&session_outcomes)
+                    .map(|(c, o)| format!("{}\n", sessions::case_json(&cleans[c.clean], c, o))),
+            )
             .collect();
         std::fs::write(path, lines).with_context(|| format!("writing {}", path.display()))?;
     }
@@ -304,15 +335,84 @@ pub fn run(args: &Args) -> Result<String> {
             summary(row, &pairs)
         })
         .collect();
+    let mut session_rows: Vec<String> = Vec::new();
+    for c in &session_cases {
+        let row = c.input.row();
+        if !session_rows.contains(&row) {
+            session_rows.push(row);
+        }
+    }
+    let session_levels: Vec<Value> = session_rows
+        .iter()
+        .map(|row| {
+            let pairs: Vec<_> = session_cases
+                .iter()
+                .zip(&session_outcomes)
+                .filter(|(c, _)| c.input.row() == *row)
+                .collect();
+            sessions::summary(row, &ns, &pairs)
+        })
+        .collect();
     let doc = json!({
         "sources": sources.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         "bodies": bodies.len(), "cases": cases.len(), "layout_hz": LAYOUT_HZ, "model_hz": MODEL_HZ,
         "levels": levels,
+        "sessions": session_levels,
     });
     if args.json {
         return Ok(format!("{doc}\n"));
     }
-    Ok(table(&doc))
+    Ok(table(&doc) + &sessions::table(&session_levels))
+}
+
+/// The inputs of `args`: a phone at each noise level, then the IMU rows.
+fn inputs(args: &Args) -> Vec<Input> {
+    let mut out: Vec<Input> = args
+        .levels
+        .iter()
+        .map(|&level_mm| Input::Phone {
+            level_mm,
+            rate_hz: 60.0,
+            face_on: true,
+        })
+        .collect();
+    if !args.no_imu {
+        out.extend([true, false].map(|magnetometers| Input::Imu { magnetometers }));
+    }
+    out
+}
+
+/// `run` of every item on every core, in the items' order, with progress shown as `what`.
+fn parallel<C: Sync, O: Send + Default>(
+    items: &[C],
+    what: &'static str,
+    run: impl Fn(&C) -> O + Sync,
+) -> Vec<O> {
+    let progress = Progress::new(items.len() as u64, what);
+    let (tx, rx) = mpsc::channel();
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let out = std::thread::scope(|scope| {
+        for _ in 0..workers {
+            let (tx, next, run) = (tx.clone(), &next, &run);
+            scope.spawn(move || loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(item) = items.get(i) else { break };
+                if tx.send((i, run(item))).is_err() {
+                    break;
+                }
+            });
+        }
+        drop(tx);
+        let mut out: Vec<Option<O>> = (0..items.len()).map(|_| None).collect();
+        for (i, o) in rx {
+            out[i] = Some(o);
+            progress.inc();
+        }
+        out.into_iter().map(Option::unwrap_or_default).collect()
+    });
+    progress.finish_and_clear();
+    out
 }
 
 /// The cases: for every clean swing and noise level, unflawed swings, tempo flaws, a pause,
@@ -903,14 +1003,23 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
     })
 }
 
+/// A phone's rate and view, as `--cases-out` gives them (null for IMUs).
+fn camera_json(input: &Input) -> Value {
+    match *input {
+        Input::Phone {
+            rate_hz, face_on, ..
+        } => {
+            json!({"rate_hz": rate_hz, "view": if face_on { "face_on" } else { "down_the_line" }})
+        }
+        Input::Imu { .. } => json!(null),
+    }
+}
+
 fn case_json(clean: &Clean, case: &Case, o: &Outcome1) -> Value {
     json!({
         "source": clean.source.file_name().map(|n| n.to_string_lossy().into_owned()),
         "height_m": clean.body.skeleton.height(), "flaws": case.flaws, "input": case.input.row(),
-        "seed": case.seed, "camera": match case.input {
-            Input::Phone { rate_hz, face_on, .. } => json!({"rate_hz": rate_hz, "view": if face_on { "face_on" } else { "down_the_line" }}),
-            Input::Imu { .. } => json!(null),
-        },
+        "seed": case.seed, "camera": camera_json(&case.input),
         "shown_cm": o.shown_m * 100.0, "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
         "tempo_error": o.tempo_error, "backswing_z": o.backswing_z, "score": o.score, "first": o.first, "right_first": o.right_first, "cause_first": o.cause_first, "right_coach": o.right_coach,
         "any_advice": o.any_advice, "body_truth": o.body_truth, "body_named": o.body_named, "truths": o.truths, "body": o.body, "gaps": o.gaps, "error": o.error,
