@@ -1,12 +1,14 @@
 //! A swing as it is stored, frame after frame of joint positions, and how it is read.
 //!
-//! Positions are kept either as `f32` metres (a motion read from a file, a virtual coach) or as
-//! 16-bit millimetres ([`Mm`]: a device's ring of live frames, in half the RAM, and the coach
-//! references in flash, [`crate::reference`], in half the flash); every reader
-//! of a swing (events, body metrics, the sequence, the alignment, the score) takes [`Frames`]
-//! and sees metres either way. A millimetre position is the metre one rounded to the nearest
-//! millimetre, so it is off by at most 0.5 mm an axis (0.87 mm in all); [`to_mm`] refuses what
-//! is not finite or lies outside −32.768 m to 32.767 m.
+//! Positions are kept either as `f32` metres (a motion read from a file, a virtual coach on the
+//! host) or as 16-bit millimetres ([`Mm`]: a device's ring of live frames and its virtual
+//! coach, in half the RAM, and the coach references in flash, [`crate::reference`], in half the
+//! flash); every reader of a swing (events, body metrics, the sequence, the alignment, the
+//! score) takes [`Frames`] and sees metres either way. A millimetre position is the metre one
+//! rounded to the nearest millimetre, so it is off by at most 0.5 mm an axis (0.87 mm in all);
+//! [`to_mm`] refuses what is not finite or lies outside −32.768 m to 32.767 m. Millimetres may
+//! also be read turned about the vertical ([`Frames::millimetres_turned`], a [`Turn`]): a
+//! stored swing faced another way for one comparison without being rounded again.
 //!
 //! ```
 //! use posecoach_core::frames::{to_mm, Frames};
@@ -49,6 +51,45 @@ pub fn from_mm(p: Mm) -> Vec3 {
     )
 }
 
+/// A turn about the vertical (+Y) through a point: `p` becomes
+/// `origin + (cos·d.x + sin·d.z, d.y, −sin·d.x + cos·d.z)` with `d = p − origin`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Turn {
+    origin: Vec3,
+    sin: f32,
+    cos: f32,
+}
+
+impl Turn {
+    /// The turn through `origin` by the angle whose sine and cosine are `sin` and `cos`
+    /// (right-handed about +Y: +Z toward +X).
+    pub fn new(origin: Vec3, sin: f32, cos: f32) -> Turn {
+        Turn { origin, sin, cos }
+    }
+
+    /// `p` turned.
+    #[inline]
+    pub fn apply(&self, p: &Vec3) -> Vec3 {
+        let (sin, cos) = (self.sin, self.cos);
+        let d = p - self.origin;
+        self.origin + Vec3::new(cos * d.x + sin * d.z, d.y, -sin * d.x + cos * d.z)
+    }
+
+    /// The direction `v` turned back (the inverse turn, without the point it turns about).
+    #[inline]
+    pub fn back(&self, v: &Vec3) -> Vec3 {
+        let (sin, cos) = (self.sin, self.cos);
+        Vec3::new(cos * v.x - sin * v.z, v.y, sin * v.x + cos * v.z)
+    }
+}
+
+/// `p` in metres, turned. (Out of line, so that [`Frames::at`] stays small enough to inline
+/// for the other storages.)
+#[inline(never)]
+fn turned(p: Mm, turn: &Turn) -> Vec3 {
+    turn.apply(&from_mm(p))
+}
+
 /// Whole frames of `joints` positions each, frame-major, as they are stored; a partial frame
 /// at the end is not read.
 #[derive(Clone, Copy, Debug)]
@@ -64,6 +105,8 @@ pub(crate) enum Stored<'a> {
     Metres(&'a [Vec3]),
     /// 16-bit millimetres.
     Millimetres(&'a [Mm]),
+    /// 16-bit millimetres, each position turned as it is read.
+    Turned(&'a [Mm], &'a Turn),
 }
 
 impl<'a> Frames<'a> {
@@ -83,6 +126,15 @@ impl<'a> Frames<'a> {
         }
     }
 
+    /// `positions` in millimetres, `joints` to a frame, each read as [`Frames::millimetres`]
+    /// reads it, then turned by `turn`.
+    pub fn millimetres_turned(positions: &'a [Mm], joints: usize, turn: &'a Turn) -> Frames<'a> {
+        Frames {
+            stored: Stored::Turned(positions, turn),
+            joints,
+        }
+    }
+
     /// Positions in a frame.
     pub fn joints(&self) -> usize {
         self.joints
@@ -92,7 +144,7 @@ impl<'a> Frames<'a> {
     fn stored_len(&self) -> usize {
         match self.stored {
             Stored::Metres(p) => p.len(),
-            Stored::Millimetres(p) => p.len(),
+            Stored::Millimetres(p) | Stored::Turned(p, _) => p.len(),
         }
     }
 
@@ -115,7 +167,7 @@ impl<'a> Frames<'a> {
     pub fn is_finite(&self) -> bool {
         match self.stored {
             Stored::Metres(p) => p.iter().all(|p| p.iter().all(|v| v.is_finite())),
-            Stored::Millimetres(_) => true,
+            Stored::Millimetres(_) | Stored::Turned(..) => true,
         }
     }
 
@@ -130,6 +182,7 @@ impl<'a> Frames<'a> {
         match self.stored {
             Stored::Metres(p) => p[k],
             Stored::Millimetres(p) => from_mm(p[k]),
+            Stored::Turned(p, turn) => turned(p[k], turn),
         }
     }
 
@@ -158,6 +211,7 @@ impl<'a> Frames<'a> {
         let stored = match self.stored {
             Stored::Metres(p) => Stored::Metres(p.get(from..to)?),
             Stored::Millimetres(p) => Stored::Millimetres(p.get(from..to)?),
+            Stored::Turned(p, turn) => Stored::Turned(p.get(from..to)?, turn),
         };
         Some(Frames {
             stored,
@@ -170,7 +224,7 @@ impl<'a> Frames<'a> {
     pub fn as_metres(&self) -> Option<&'a [Vec3]> {
         match self.stored {
             Stored::Metres(p) => Some(p),
-            Stored::Millimetres(_) => None,
+            Stored::Millimetres(_) | Stored::Turned(..) => None,
         }
     }
 
@@ -219,6 +273,27 @@ mod tests {
         assert!(Frames::metres(&metres[..6], 3).is_whole());
         assert!(!Frames::metres(&metres, 0).is_whole());
         assert_eq!(Frames::metres(&metres, 0).len(), 0);
+    }
+
+    #[test]
+    fn turned_millimetres_read_as_their_metres_turned() {
+        const QUARTER: (f32, f32) = (1.0, 0.0);
+        let metres: [Vec3; 6] = core::array::from_fn(|k| Vec3::new(0.5 + k as f32, 1.0, -0.25));
+        let mm = metres.map(|p| to_mm(&p).unwrap());
+        let turn = Turn::new(Vec3::new(0.5, 0.0, 0.0), QUARTER.0, QUARTER.1);
+        let turned = Frames::millimetres_turned(&mm, 3, &turn);
+        assert_eq!((turned.len(), turned.is_finite()), (2, true));
+        assert!(turned.as_metres().is_none());
+        // A quarter turn through (0.5, 0, 0): +X goes to −Z, −Z to −X.
+        let p = turned.at(1, 0);
+        assert!((p - Vec3::new(0.25, 1.0, -3.0)).norm() < 1e-6, "{p:?}");
+        for (k, p) in turned.iter().enumerate() {
+            assert_eq!(p, turn.apply(&metres[k]));
+        }
+        let cut = turned.get(1..2).unwrap();
+        assert_eq!(cut.at(0, 2), turned.at(1, 2));
+        let back = turn.back(&(turned.at(1, 2) - turned.at(1, 0)));
+        assert!((back - (metres[5] - metres[3])).norm() < 1e-6, "{back:?}");
     }
 
     #[test]
