@@ -102,20 +102,20 @@ impl Coach<'_> {
     /// coach's golf contacts ([`Contacts`]: planted feet, both hands on one grip, the club at
     /// the ball) a frame at a time, each frame read from `out` and stored back in its place,
     /// and in a session with IMUs as the student's IMUs would see it (the coach seen the way
-    /// the student is). The coach's address, impact and lead side are the retargeted swing's
-    /// (without a swing found, only the feet are kept). (Out of line: its frame is not on the
-    /// stack while a coach is retargeted or its swing found.)
+    /// the student is). The coach's address, impact and lead side are the retargeted swing's,
+    /// [`Coach::swing_of`] (without a swing found, only the feet are kept). (Out of line: its
+    /// frame is not on the stack while a coach is retargeted or its swing found.)
     #[inline(never)]
     pub(super) fn keep_contacts(
         &self,
         student: &Skeleton,
         rate_hz: u16,
+        swing: Option<Swing>,
         imu: Option<&ImuAdapter>,
         out: &mut [Mm],
     ) -> Result<(), Refusal> {
         let n = student.len();
         let rate = self.rate_at(rate_hz);
-        let swing = swing_of(student, Frames::millimetres(out, n), rate);
         let count = out.len() / n.max(1);
         // Each frame is read before it is written, and not after.
         let stored = Cell::from_mut(out).as_slice_of_cells();
@@ -154,6 +154,15 @@ impl Coach<'_> {
                 write,
             )
             .map_err(|_| refusal)
+    }
+
+    /// What the contacts need of the swing of the retargeted coach in `out` (whole frames of
+    /// `student` at `rate_hz`, millimetres), if one is found: its address, impact and lead side.
+    pub(super) fn swing_of(&self, student: &Skeleton, rate_hz: u16, out: &[Mm]) -> Option<Swing> {
+        let frames = Frames::millimetres(out, student.len());
+        events::detect(student, frames, self.rate_at(rate_hz))
+            .ok()
+            .map(|s| Swing::from(&s))
     }
 
     /// The coach at `rate_hz` retargeted onto `student` frame by frame with the analytic
@@ -226,15 +235,6 @@ impl Coach<'_> {
         })?;
         stored.then_some(()).ok_or(Refusal::Retarget)
     }
-}
-
-/// The swing the contacts need of a retargeted coach (`frames` at `rate_hz`), if one is found.
-/// (Out of line, so that the contacts' frame is not on the stack while it is found.)
-#[inline(never)]
-fn swing_of(student: &Skeleton, frames: Frames<'_>, rate_hz: f32) -> Option<Swing> {
-    events::detect(student, frames, rate_hz)
-        .ok()
-        .map(|s| Swing::from(&s))
 }
 
 /// `frame` (whole frames of `skeleton`) as the student's IMUs would see it, into `out`. (Out

@@ -762,7 +762,9 @@ fn make_virtual(
         Some((w, ring)) => coach.retarget_network(w, skeleton, rate, ring, out)?,
         _ => coach.retarget_analytic(skeleton, rate, out)?,
     }
-    coach.keep_contacts(skeleton, rate, imu, out)?;
+    // Found before the contacts are kept, so that their frame is not under the finding's.
+    let swing = coach.swing_of(skeleton, rate, out);
+    coach.keep_contacts(skeleton, rate, swing, imu, out)?;
     swing_span(
         skeleton,
         Frames::millimetres(out, joints),
