@@ -4,7 +4,9 @@
 //! A retargeter copies the coach's joint angles onto the student's bones; where the bodies
 //! differ, angles alone lift a planted foot, open a gap between the hands or leave the club
 //! head above the ball. [`Contacts::apply`] moves the retargeted swing back onto them, changing
-//! as few angles as it can, in three passes over the frames (in place, `O(frames · joints)`):
+//! as few angles as it can, in three passes over the frames (in place, `O(frames · joints)`;
+//! [`Contacts::apply_by_frame`] makes them as one, a frame at a time, for a swing stored
+//! otherwise):
 //!
 //! - **Feet.** Where the coach plants a foot (its toe where both skeletons have toes, else its
 //!   ankle: [`feet`], within
@@ -70,6 +72,7 @@ use crate::kinematics::{swing, LengthError};
 use crate::math::norm;
 use crate::skeleton::Skeleton;
 use crate::{Quat, Vec3};
+use core::cell::Cell;
 
 /// A coach's foot counts as planted within this height above its lowest point (metres)...
 pub const CONTACT_HEIGHT_M: f32 = 0.03;
@@ -94,6 +97,8 @@ pub enum ContactError {
     Frames { coach: usize, student: usize },
     /// The address or impact frame is outside the swing, or impact is not after address.
     Events,
+    /// A frame could not be read or written ([`Contacts::apply_by_frame`]'s caller said so).
+    Frame(usize),
 }
 
 impl core::fmt::Display for ContactError {
@@ -104,6 +109,7 @@ impl core::fmt::Display for ContactError {
                 write!(f, "the coach has {coach} frames, the student {student}")
             }
             ContactError::Events => f.write_str("address and impact are not frames of the swing"),
+            ContactError::Frame(frame) => write!(f, "frame {frame} could not be read or written"),
         }
     }
 }
@@ -402,6 +408,58 @@ impl Contacts {
             }));
         }
         let frames = student.len() / m;
+        // Read and written in place: no frame is read after it is written.
+        let cells = Cell::from_mut(student).as_slice_of_cells();
+        let read = |f: usize, out: &mut [Vec3]| match cells.get(f * m..(f + 1) * m) {
+            Some(frame) => {
+                for (o, p) in out.iter_mut().zip(frame) {
+                    *o = p.get();
+                }
+                true
+            }
+            None => false,
+        };
+        let write = |f: usize, frame: &[Vec3]| match cells.get(f * m..(f + 1) * m) {
+            Some(to) => {
+                for (to, p) in to.iter().zip(frame) {
+                    to.set(*p);
+                }
+                true
+            }
+            None => false,
+        };
+        self.apply_by_frame(coach, rate_hz, swing, frames, read, write)
+    }
+
+    /// [`Contacts::apply`] on a swing of `frames` frames read and written a frame at a time,
+    /// for a swing not held as `f32` metres (a device keeps its virtual coach in millimetres):
+    /// `read(f, out)` puts frame `f` as retargeted into `out` (the student's joints),
+    /// `write(f, frame)` takes it moved onto the contacts; each returns whether it could. When
+    /// the grip or the club is kept, the frames up to impact are read first (for their
+    /// corrections at address and impact); then each frame is read and written, in order. No
+    /// frame is read after it is written, so both may use one storage. The arithmetic is
+    /// [`Contacts::apply`]'s, in the same order: the same frames to the bit.
+    ///
+    /// # Errors
+    /// [`ContactError::Length`] for a student of no joints, [`ContactError::Events`] as for
+    /// [`Contacts::apply`] (nothing read or written then); [`ContactError::Frame`] when `read`
+    /// or `write` could not (the frames before it are written).
+    pub fn apply_by_frame(
+        &self,
+        coach: impl Fn(usize, usize) -> Vec3,
+        rate_hz: f32,
+        swing: Option<Swing>,
+        frames: usize,
+        mut read: impl FnMut(usize, &mut [Vec3]) -> bool,
+        mut write: impl FnMut(usize, &[Vec3]) -> bool,
+    ) -> Result<(), ContactError> {
+        let m = self.student_joints;
+        if m == 0 || m > MAX_JOINTS {
+            return Err(ContactError::Length(LengthError {
+                expected: m,
+                actual: 0,
+            }));
+        }
         if let Some(swing) = swing {
             if swing.address >= swing.impact || swing.impact >= frames {
                 return Err(ContactError::Events);
@@ -413,50 +471,73 @@ impl Contacts {
             true => libm::roundf(RELEASE_S * rate_hz).clamp(1.0, MAX_RELEASE) as usize,
             false => 1,
         };
-        for foot in self.feet.iter().flatten() {
-            plant(foot, &coach, rate_hz, release, student, m);
-        }
-        let Some(swing) = swing else {
-            return Ok(());
-        };
-        if let Some(grip) = &self.grip {
-            // The lead arm keeps the coach's angles (its bend is what a coach reads); the
-            // trail wrist moves along the line between the wrists (the line the grip lies on;
-            // its direction is the retargeting's) to the coach's distance from the lead wrist.
-            let (lead, trail) = match swing.lead {
-                Side::Left => (0, 1),
-                Side::Right => (1, 0),
-            };
-            let [lead_wrist, trail_wrist] = [lead, trail].map(|k| grip.student[k]);
-            // The gap is scaled by the ratio of the coach's to the retargeted one at address,
-            // then at impact, interpolated between them and held outside: exact at the two
-            // moments the club is at the ball, smooth between, and never the coach's own
-            // frame-to-frame wobble (which moved the still set-up's hands).
-            let ratio = |f: usize| {
-                let frame = &student[f * m..(f + 1) * m];
-                let now = norm(&(frame[trail_wrist] - frame[lead_wrist]));
-                let gap = norm(&(coach(f, grip.coach[trail]) - coach(f, grip.coach[lead])));
-                // A gap less than half or more than twice the coach's is a pose that scaling
-                // cannot mend (and a scale of it would carry the trail hand away mid-swing).
-                match now > MIN_LENGTH && gap.is_finite() {
-                    true => (gap / now).clamp(1.0 / MAX_GRIP_SCALE, MAX_GRIP_SCALE),
-                    false => 1.0,
-                }
-            };
-            let (at_address, at_impact) = (ratio(swing.address), ratio(swing.impact));
-            for (f, to) in student.chunks_exact_mut(m).enumerate() {
-                let t = match f {
-                    f if f <= swing.address => 0.0,
-                    f if f >= swing.impact => 1.0,
-                    f => (f - swing.address) as f32 / (swing.impact - swing.address) as f32,
-                };
-                let scale = at_address + (at_impact - at_address) * t;
-                let apart = to[trail_wrist] - to[lead_wrist];
-                grip.arms[trail].reach(to, to[lead_wrist] + apart * scale);
+        let coach = &coach;
+        let feet = self.feet.map(|foot| {
+            foot.map(|foot| {
+                let ground = Ground::new(coach, frames, foot.coach, rate_hz);
+                (foot, ground, Planting::NEW)
+            })
+        });
+        // Each foot in turn, each keeping its correction from frame to frame.
+        let plant = |plants: &mut [Option<(Foot, Ground, Planting)>; 2], f, frame: &mut [Vec3]| {
+            for (foot, ground, plant) in plants.iter_mut().flatten() {
+                let (at, planted) = ground.next(coach, f);
+                plant.step(foot, at, planted, frame, release);
             }
+        };
+        let mut pose = [Vec3::zeros(); MAX_JOINTS];
+        let frame = &mut pose[..m];
+        // The grip's scales and the club's turns, from the frames at address and impact as the
+        // passes before each leave them.
+        let mut golf = None;
+        if let Some(swing) = swing.filter(|_| self.grip.is_some() || self.club.is_some()) {
+            let mut plants = feet;
+            let mut at = [[Vec3::zeros(); MAX_JOINTS]; 2];
+            for f in 0..=swing.impact {
+                if !read(f, frame) {
+                    return Err(ContactError::Frame(f));
+                }
+                plant(&mut plants, f, frame);
+                if let Some(k) = [swing.address, swing.impact].iter().position(|&e| e == f) {
+                    at[k][..m].copy_from_slice(frame);
+                }
+            }
+            let [address, impact] = &mut at;
+            let (address, impact) = (&mut address[..m], &mut impact[..m]);
+            let scales = self.grip.as_ref().map(|grip| {
+                let scales = [
+                    grip.ratio(coach, swing, swing.address, address),
+                    grip.ratio(coach, swing, swing.impact, impact),
+                ];
+                grip.step(swing, scales, swing.address, address);
+                grip.step(swing, scales, swing.impact, impact);
+                scales
+            });
+            let turns = self.club.as_ref().map(|club| {
+                [
+                    club.turn(coach, swing.address, address),
+                    club.turn(coach, swing.impact, impact),
+                ]
+            });
+            golf = Some((swing, scales, turns));
         }
-        if let Some(club) = &self.club {
-            ground(club, &coach, swing, release, student, m);
+        let mut plants = feet;
+        for f in 0..frames {
+            if !read(f, frame) {
+                return Err(ContactError::Frame(f));
+            }
+            plant(&mut plants, f, frame);
+            if let Some((swing, scales, turns)) = golf {
+                if let (Some(grip), Some(scales)) = (&self.grip, scales) {
+                    grip.step(swing, scales, f, frame);
+                }
+                if let (Some(club), Some(turns)) = (&self.club, turns) {
+                    club.step(swing, turns, release, f, frame);
+                }
+            }
+            if !write(f, frame) {
+                return Err(ContactError::Frame(f));
+            }
         }
         Ok(())
     }
@@ -485,41 +566,93 @@ pub fn frames(positions: &[Vec3], joints: usize) -> impl Fn(usize, usize) -> Vec
     }
 }
 
-/// Keeps `foot` planted where the coach's is (see the module's documentation): one pass, the
-/// correction carried from frame to frame.
-fn plant(
-    foot: &Foot,
-    coach: &impl Fn(usize, usize) -> Vec3,
-    rate_hz: f32,
-    release: usize,
-    student: &mut [Vec3],
-    m: usize,
-) {
-    let planted = planted(coach, student.len() / m, foot.coach, rate_hz);
-    // Where the contact began, on the student and on the coach; the correction moving the
-    // foot, and how many frames ago its contact ended.
-    let (mut anchor, mut start) = (Vec3::zeros(), Vec3::zeros());
-    let (mut correction, mut since) = (Vec3::zeros(), usize::MAX);
-    let mut was_planted = false;
-    for (f, frame) in student.chunks_exact_mut(m).enumerate() {
-        let now = planted(f);
+/// A foot kept planted where the coach's is (see the module's documentation), frame after
+/// frame: where its contact began, on the student and on the coach; the correction moving the
+/// foot, and how many frames ago its contact ended.
+#[derive(Clone, Copy, Debug)]
+struct Planting {
+    anchor: Vec3,
+    start: Vec3,
+    correction: Vec3,
+    since: usize,
+    was_planted: bool,
+}
+
+impl Planting {
+    /// Before the first frame.
+    const NEW: Planting = Planting {
+        anchor: Vec3::new(0.0, 0.0, 0.0),
+        start: Vec3::new(0.0, 0.0, 0.0),
+        correction: Vec3::new(0.0, 0.0, 0.0),
+        since: usize::MAX,
+        was_planted: false,
+    };
+
+    /// Moves `foot` in `frame` (the one after the last), where the coach's contact is at `coach`
+    /// and planted (`now`) or its correction fades.
+    fn step(&mut self, foot: &Foot, coach: Vec3, now: bool, frame: &mut [Vec3], release: usize) {
         let free = frame[foot.contact];
         if now {
-            if !was_planted {
-                anchor = free + faded(correction, since, release);
-                start = coach(f, foot.coach);
+            if !self.was_planted {
+                self.anchor = free + faded(self.correction, self.since, release);
+                self.start = coach;
             }
-            correction = anchor + (coach(f, foot.coach) - start) - free;
-            since = 0;
-        } else if since != usize::MAX {
-            since += 1;
+            self.correction = self.anchor + (coach - self.start) - free;
+            self.since = 0;
+        } else if self.since != usize::MAX {
+            self.since += 1;
         }
-        was_planted = now;
-        let moved = faded(correction, since, release);
+        self.was_planted = now;
+        let moved = faded(self.correction, self.since, release);
         if moved != Vec3::zeros() {
             let goal = frame[foot.leg.end] + moved;
             foot.leg.reach(frame, goal);
         }
+    }
+}
+
+/// A coach's contact joint read once a frame, frames in order from the first: where it is,
+/// and whether it is planted there as [`planted`] says (each frame's reads of the coach, which
+/// interpolates its frames in `f64`, made once).
+#[derive(Clone, Copy, Debug)]
+struct Ground {
+    k: usize,
+    count: usize,
+    rate_hz: f32,
+    lowest: f32,
+    /// The joint in the frame before.
+    before: Vec3,
+}
+
+impl Ground {
+    /// Joint `k` of `count` frames of `coach` at `rate_hz`, before its first frame.
+    fn new(coach: &impl Fn(usize, usize) -> Vec3, count: usize, k: usize, rate_hz: f32) -> Ground {
+        Ground {
+            k,
+            count,
+            rate_hz,
+            lowest: (0..count)
+                .map(|f| coach(f, k).y)
+                .fold(f32::INFINITY, f32::min),
+            before: Vec3::zeros(),
+        }
+    }
+
+    /// The joint in frame `f`, the one after the last read (0 first), and whether it is
+    /// planted.
+    fn next(&mut self, coach: &impl Fn(usize, usize) -> Vec3, f: usize) -> (Vec3, bool) {
+        let now = coach(f, self.k);
+        let (a, b) = match f {
+            0 => (now, coach(1.min(self.count.saturating_sub(1)), self.k)),
+            _ => (self.before, now),
+        };
+        self.before = now;
+        let step = b - a;
+        let speed = libm::sqrtf(step.x * step.x + step.z * step.z) * self.rate_hz;
+        (
+            now,
+            now.y <= self.lowest + CONTACT_HEIGHT_M && speed < CONTACT_SPEED_M_S,
+        )
     }
 }
 
@@ -554,27 +687,66 @@ fn faded(correction: Vec3, since: usize, release: usize) -> Vec3 {
     }
 }
 
-/// Turns the club about its grip so that its head is at the coach's height at address and
-/// impact (see the module's documentation).
-fn ground(
-    club: &Club,
-    coach: &impl Fn(usize, usize) -> Vec3,
-    Swing {
-        address, impact, ..
-    }: Swing,
-    release: usize,
-    student: &mut [Vec3],
-    m: usize,
-) {
-    let turn = |f: usize| {
-        let frame = &student[f * m..(f + 1) * m];
-        let height = match club.coach_head {
+impl Grip {
+    /// The student's lead and trail sides, 0 for the left and 1 for the right.
+    fn sides(swing: Swing) -> (usize, usize) {
+        match swing.lead {
+            Side::Left => (0, 1),
+            Side::Right => (1, 0),
+        }
+    }
+
+    /// The ratio of the coach's gap between the wrists to `frame`'s (frame `f`): the scale
+    /// that puts the trail wrist at the coach's distance from the lead wrist. A gap less than
+    /// half or more than twice the coach's is a pose that scaling cannot mend (and a scale of
+    /// it would carry the trail hand away mid-swing): 1 then.
+    fn ratio(
+        &self,
+        coach: &impl Fn(usize, usize) -> Vec3,
+        swing: Swing,
+        f: usize,
+        frame: &[Vec3],
+    ) -> f32 {
+        let (lead, trail) = Grip::sides(swing);
+        let now = norm(&(frame[self.student[trail]] - frame[self.student[lead]]));
+        let gap = norm(&(coach(f, self.coach[trail]) - coach(f, self.coach[lead])));
+        match now > MIN_LENGTH && gap.is_finite() {
+            true => (gap / now).clamp(1.0 / MAX_GRIP_SCALE, MAX_GRIP_SCALE),
+            false => 1.0,
+        }
+    }
+
+    /// Moves the trail wrist of `frame` (frame `f`) along the line between the wrists (the
+    /// line the grip lies on; its direction is the retargeting's), its gap scaled by the
+    /// `scales` at address and impact, interpolated between them and held outside: exact at
+    /// the two moments the club is at the ball, smooth between, and never the coach's own
+    /// frame-to-frame wobble (which moved the still set-up's hands). The lead arm keeps the
+    /// coach's angles (its bend is what a coach reads).
+    fn step(&self, swing: Swing, [at_address, at_impact]: [f32; 2], f: usize, frame: &mut [Vec3]) {
+        let (lead, trail) = Grip::sides(swing);
+        let [lead_wrist, trail_wrist] = [lead, trail].map(|k| self.student[k]);
+        let t = match f {
+            f if f <= swing.address => 0.0,
+            f if f >= swing.impact => 1.0,
+            f => (f - swing.address) as f32 / (swing.impact - swing.address) as f32,
+        };
+        let scale = at_address + (at_impact - at_address) * t;
+        let apart = frame[trail_wrist] - frame[lead_wrist];
+        self.arms[trail].reach(frame, frame[lead_wrist] + apart * scale);
+    }
+}
+
+impl Club {
+    /// The turn about the grip that puts the club head of `frame` (frame `f`) at the coach's
+    /// height (see the module's documentation).
+    fn turn(&self, coach: &impl Fn(usize, usize) -> Vec3, f: usize, frame: &[Vec3]) -> Quat {
+        let height = match self.coach_head {
             Some(head) => coach(f, head).y,
             None => CLUB_HEAD_CLEARANCE_M,
         };
-        let shaft = frame[club.head] - frame[club.grip];
+        let shaft = frame[self.head] - frame[self.grip];
         let length = norm(&shaft);
-        let drop = height - frame[club.grip].y;
+        let drop = height - frame[self.grip].y;
         // (False for NaN too: a club that is not finite is left as it is.)
         if !(length.is_finite() && drop.is_finite()) {
             return Quat::identity();
@@ -583,7 +755,7 @@ fn ground(
         // way from the root (the pelvis) to the grip, as far as that is known (the ball is in
         // front of the hands). Across PLUMB the direction may jump; no golfer's shaft hangs
         // plumb at address or impact.
-        let away = frame[club.grip] - frame[0];
+        let away = frame[self.grip] - frame[0];
         let least = (PLUMB * length).max(MIN_LENGTH);
         let Some((x, z)) = [shaft, away].into_iter().find_map(|v| {
             let across = libm::sqrtf(v.x * v.x + v.z * v.z);
@@ -594,9 +766,21 @@ fn ground(
         let drop = drop.max(-length).min(length);
         let spread = crate::math::sqrt((length * length - drop * drop).max(0.0));
         swing(shaft, Vec3::new(x * spread, drop, z * spread))
-    };
-    let (at_address, at_impact) = (turn(address), turn(impact));
-    for (f, frame) in student.chunks_exact_mut(m).enumerate() {
+    }
+
+    /// Turns the club of `frame` (frame `f`) about its grip: the `turns` at address and
+    /// impact, interpolated between them, held before address and faded out over `release`
+    /// frames after impact.
+    fn step(
+        &self,
+        Swing {
+            address, impact, ..
+        }: Swing,
+        [at_address, at_impact]: [Quat; 2],
+        release: usize,
+        f: usize,
+        frame: &mut [Vec3],
+    ) {
         let q = if f <= address {
             at_address
         } else if f <= impact {
@@ -609,9 +793,9 @@ fn ground(
             let t = ((f - impact) as f32 / release.saturating_add(1) as f32).min(1.0);
             blend(at_impact, Quat::identity(), t)
         };
-        let grip = frame[club.grip];
+        let grip = frame[self.grip];
         for (k, p) in frame.iter_mut().enumerate() {
-            if club.below & (1 << k) != 0 {
+            if self.below & (1 << k) != 0 {
                 *p = grip + q * (*p - grip);
             }
         }
@@ -909,6 +1093,143 @@ mod tests {
             ),
             Err(ContactError::Events)
         );
+    }
+
+    /// [`Contacts::apply`] as it was written before [`Contacts::apply_by_frame`]: each foot,
+    /// then the grip, then the club, one pass over all the frames each.
+    fn in_passes(
+        contacts: &Contacts,
+        coach: &impl Fn(usize, usize) -> Vec3,
+        rate_hz: f32,
+        swing: Swing,
+        student: &mut [Vec3],
+    ) {
+        let m = contacts.student_joints;
+        let frames = student.len() / m;
+        let release = libm::roundf(RELEASE_S * rate_hz) as usize;
+        for foot in contacts.feet.iter().flatten() {
+            let planted = planted(coach, frames, foot.coach, rate_hz);
+            let mut plant = Planting::NEW;
+            for (f, frame) in student.chunks_exact_mut(m).enumerate() {
+                plant.step(foot, coach(f, foot.coach), planted(f), frame, release);
+            }
+        }
+        if let Some(grip) = &contacts.grip {
+            let at =
+                |f: usize, student: &[Vec3]| grip.ratio(coach, swing, f, &student[f * m..][..m]);
+            let scales = [at(swing.address, student), at(swing.impact, student)];
+            for (f, frame) in student.chunks_exact_mut(m).enumerate() {
+                grip.step(swing, scales, f, frame);
+            }
+        }
+        if let Some(club) = &contacts.club {
+            let at = |f: usize| club.turn(coach, f, &student[f * m..][..m]);
+            let turns = [at(swing.address), at(swing.impact)];
+            for (f, frame) in student.chunks_exact_mut(m).enumerate() {
+                club.step(swing, turns, release, f, frame);
+            }
+        }
+    }
+
+    #[test]
+    fn a_frame_at_a_time_is_every_pass_in_turn_to_the_bit_and_reads_no_frame_it_wrote() {
+        // A golfer with a club whose hips sway and whose left foot lifts after impact, onto a
+        // student of longer legs, arms and club: every contact moves something.
+        const FRAMES: usize = 24;
+        let (s, mut frames) = coach(Format::GolfMarkers, FRAMES, |f| {
+            Vec3::new(0.004 * f as f32, -0.002 * f as f32, 0.001 * f as f32)
+        });
+        let n = s.len();
+        let [toe, head] = [Joint::LeftToe, Joint::ClubHead].map(|j| s.index_of(j).unwrap());
+        for f in 0..FRAMES {
+            frames[f * n + toe] =
+                frames[toe] + Vec3::new(0.0, 0.01 * f.saturating_sub(14) as f32, 0.0);
+            frames[f * n + head] += Vec3::new(0.0, -0.02, 0.01 * f as f32);
+        }
+        bend_elbows(&s, &mut frames);
+        let student = scaled(&s, |k| 1.0 + 0.02 * (k % 7) as f32);
+        let retargeted = retarget(&s, &frames, &student);
+        let contacts = Contacts::new(&s, &student);
+        assert_eq!(
+            contacts.kept(),
+            Kept {
+                feet: true,
+                grip: true,
+                club: true
+            }
+        );
+        let coach = super::frames(&frames, n);
+        let swing = Swing {
+            address: 4,
+            impact: 13,
+            lead: Side::Left,
+        };
+        let mut expected = retargeted.clone();
+        in_passes(&contacts, &coach, 30.0, swing, &mut expected);
+        assert!(expected
+            .iter()
+            .zip(&retargeted)
+            .any(|(a, b)| norm(&(a - b)) > 0.01));
+        let mut in_place = retargeted.clone();
+        contacts
+            .apply(&coach, 30.0, Some(swing), &mut in_place)
+            .unwrap();
+        let mut written = vec![Vec3::zeros(); retargeted.len()];
+        let log = core::cell::RefCell::new(Vec::new());
+        let read = |f: usize, out: &mut [Vec3]| {
+            log.borrow_mut().push((f, false));
+            out.copy_from_slice(&retargeted[f * n..(f + 1) * n]);
+            true
+        };
+        let write = |f: usize, frame: &[Vec3]| {
+            log.borrow_mut().push((f, true));
+            written[f * n..(f + 1) * n].copy_from_slice(frame);
+            true
+        };
+        contacts
+            .apply_by_frame(&coach, 30.0, Some(swing), FRAMES, read, write)
+            .unwrap();
+        let bits = |v: &[Vec3]| {
+            v.iter()
+                .flat_map(|p| p.iter().map(|x| x.to_bits()))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(bits(&in_place), bits(&expected));
+        assert_eq!(bits(&written), bits(&expected));
+        let log = log.into_inner();
+        // Up to impact once to find the corrections, then each frame read and written in turn.
+        let first: Vec<_> = (0..=swing.impact).map(|f| (f, false)).collect();
+        let then: Vec<_> = (0..FRAMES).flat_map(|f| [(f, false), (f, true)]).collect();
+        assert_eq!(log, [first, then].concat());
+        // A frame that cannot be read or written stops the work there.
+        let mut out = vec![Vec3::zeros(); retargeted.len()];
+        let refused = contacts.apply_by_frame(
+            &coach,
+            30.0,
+            Some(swing),
+            FRAMES,
+            |f, out| {
+                out.copy_from_slice(&retargeted[f * n..(f + 1) * n]);
+                f != 7
+            },
+            |f, frame| {
+                out[f * n..(f + 1) * n].copy_from_slice(frame);
+                f != 20
+            },
+        );
+        assert_eq!(refused, Err(ContactError::Frame(7)));
+        let refused = contacts.apply_by_frame(
+            &coach,
+            30.0,
+            None,
+            FRAMES,
+            |f, out| {
+                out.copy_from_slice(&retargeted[f * n..(f + 1) * n]);
+                true
+            },
+            |f, _| f != 20,
+        );
+        assert_eq!(refused, Err(ContactError::Frame(20)));
     }
 
     #[test]

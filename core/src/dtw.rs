@@ -36,7 +36,7 @@
 
 use crate::band::Band;
 use crate::config::MAX_JOINTS;
-use crate::frames::{from_mm, Frames, Stored};
+use crate::frames::{from_mm, Frames, Mm, Stored};
 use crate::math::{rooted_distances, sqrt};
 use crate::Vec3;
 
@@ -814,7 +814,10 @@ impl CellCost<'_> {
     /// ones to the bit.
     ///
     /// `b`'s frames are read as they are stored: `f32` metres as they are, millimetres each
-    /// turned into metres ([`from_mm`]) first.
+    /// turned into metres ([`from_mm`]) first. Millimetres read turned
+    /// ([`Frames::millimetres_turned`]) are read as stored and `a`'s root-relative pose turned
+    /// back instead: the same distances (a turn about the vertical keeps them), to within their
+    /// rounding, for one turn a row rather than one a cell's every joint.
     #[inline(always)]
     fn sum_rooted(
         &self,
@@ -831,19 +834,39 @@ impl CellCost<'_> {
         for (k, h) in here.iter_mut().enumerate().take(joints) {
             *h = a.at(i, k) - root;
         }
-        let here = &here[..joints];
-        match b.stored() {
-            Stored::Metres(p) => self.rooted_costs(here, &p[first * joints..], out, &weigh),
-            Stored::Millimetres(p) => {
-                let mut metres = [Vec3::zeros(); MAX_JOINTS];
-                for (o, frame) in out.iter_mut().zip(p[first * joints..].chunks_exact(joints)) {
-                    for (m, p) in metres.iter_mut().zip(frame) {
-                        *m = from_mm(*p);
-                    }
-                    let o = core::slice::from_mut(o);
-                    self.rooted_costs(here, &metres[..joints], o, &weigh);
-                }
+        let (p, turn) = match b.stored() {
+            Stored::Metres(p) => {
+                return self.rooted_costs(&here[..joints], &p[first * joints..], out, &weigh)
             }
+            Stored::Millimetres(p) => (p, None),
+            Stored::Turned(p, turn) => (p, Some(turn)),
+        };
+        if let Some(turn) = turn {
+            for h in here.iter_mut().take(joints) {
+                *h = turn.back(h);
+            }
+        }
+        self.decoded_costs(&here[..joints], &p[first * joints..], out, &weigh);
+    }
+
+    /// [`CellCost::rooted_costs`] of frames of millimetres, each frame turned into metres
+    /// ([`from_mm`]) first.
+    #[inline(always)]
+    fn decoded_costs(
+        &self,
+        here: &[Vec3],
+        frames: &[Mm],
+        out: &mut [f32],
+        weigh: &impl Fn(f32, f32) -> f32,
+    ) {
+        let joints = here.len();
+        let mut decoded = [Vec3::zeros(); MAX_JOINTS];
+        for (o, frame) in out.iter_mut().zip(frames.chunks_exact(joints)) {
+            for (m, p) in decoded.iter_mut().zip(frame) {
+                *m = from_mm(*p);
+            }
+            let o = core::slice::from_mut(o);
+            self.rooted_costs(here, &decoded[..joints], o, weigh);
         }
     }
 
@@ -911,7 +934,7 @@ impl StepWriter<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frames::{to_mm, Mm};
+    use crate::frames::{to_mm, Turn};
     use proptest::prelude::*;
     use std::vec::Vec;
 
@@ -1053,6 +1076,25 @@ mod tests {
             let read = run(&Sequence::rooted(Frames::metres(&fa, joints)).unwrap(), &Sequence::rooted(Frames::metres(&fb, joints)).unwrap(), weights, &window);
             prop_assert_eq!(stored.0.distance.to_bits(), read.0.distance.to_bits());
             prop_assert_eq!(stored.1, read.1);
+        }
+
+        #[test]
+        fn turned_millimetre_frames_align_as_the_turned_metres_they_read(
+            (joints, a, b, w) in sequences(), radius in 0u16..8, angle in -3.2f32..3.2,
+        ) {
+            let mm = |c: &[f32]| -> Vec<Mm> { c.chunks_exact(3).filter_map(|v| to_mm(&Vec3::new(v[0], v[1], v[2]))).collect() };
+            let (ma, mb) = (mm(&a), mm(&b));
+            prop_assume!(3 * ma.len() == a.len() && 3 * mb.len() == b.len());
+            let turn = Turn::new(Vec3::new(0.3, 0.0, -1.2), angle.sin(), angle.cos());
+            let fa: Vec<Vec3> = ma.iter().map(|&p| from_mm(p)).collect();
+            let fb: Vec<Vec3> = mb.iter().map(|&p| turn.apply(&from_mm(p))).collect();
+            let weights: &[f32] = if w.iter().sum::<f32>() > 0.0 { &w } else { &[] };
+            let window = Window::new(Band::global(radius), &[]).unwrap();
+            let stored = run(&Sequence::rooted(Frames::millimetres(&ma, joints)).unwrap(), &Sequence::rooted(Frames::millimetres_turned(&mb, joints, &turn)).unwrap(), weights, &window);
+            let read = run(&Sequence::rooted(Frames::metres(&fa, joints)).unwrap(), &Sequence::rooted(Frames::metres(&fb, joints)).unwrap(), weights, &window);
+            // The row turned back rather than the columns turned: the same up to rounding.
+            let (d, e) = (stored.0.distance, read.0.distance);
+            prop_assert!((d - e).abs() <= 1e-5 * (1.0 + e.abs()), "{} against {}", d, e);
         }
 
         #[test]

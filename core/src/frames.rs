@@ -1,12 +1,14 @@
 //! A swing as it is stored, frame after frame of joint positions, and how it is read.
 //!
-//! Positions are kept either as `f32` metres (a motion read from a file, a virtual coach) or as
-//! 16-bit millimetres ([`Mm`]: a device's ring of live frames, in half the RAM, and the coach
-//! references in flash, [`crate::reference`], in half the flash); every reader
-//! of a swing (events, body metrics, the sequence, the alignment, the score) takes [`Frames`]
-//! and sees metres either way. A millimetre position is the metre one rounded to the nearest
-//! millimetre, so it is off by at most 0.5 mm an axis (0.87 mm in all); [`to_mm`] refuses what
-//! is not finite or lies outside −32.768 m to 32.767 m.
+//! Positions are kept either as `f32` metres (a motion read from a file, a virtual coach on the
+//! host) or as 16-bit millimetres ([`Mm`]: a device's ring of live frames and its virtual
+//! coach, in half the RAM, and the coach references in flash, [`crate::reference`], in half the
+//! flash); every reader of a swing (events, body metrics, the sequence, the alignment, the
+//! score) takes [`Frames`] and sees metres either way. A millimetre position is the metre one
+//! rounded to the nearest millimetre, so it is off by at most 0.5 mm an axis (0.87 mm in all);
+//! [`to_mm`] refuses what is not finite or lies outside −32.768 m to 32.767 m. Millimetres may
+//! also be read turned about the vertical ([`Frames::millimetres_turned`], a [`Turn`]): a
+//! stored swing faced another way for one comparison without being rounded again.
 //!
 //! ```
 //! use posecoach_core::frames::{to_mm, Frames};
@@ -30,9 +32,12 @@ pub type Mm = [i16; 3];
 /// millimetres lie outside `i16` (−32.768 m to 32.767 m).
 pub fn to_mm(p: &Vec3) -> Option<Mm> {
     let axis = |v: f32| {
-        let mm = libm::roundf(v * 1000.0);
-        // NaN fails both comparisons.
-        (mm >= f32::from(i16::MIN) && mm <= f32::from(i16::MAX)).then_some(mm as i16)
+        // Rounded half away from zero as `libm::roundf` rounds (it truncates this sum), the
+        // truncation the conversion's own: one instruction, not a call for each axis.
+        let mm = v * 1000.0;
+        let away = mm + libm::copysignf(0.5 - 0.25 * f32::EPSILON, mm);
+        // Truncated to −32 768 to 32 767; NaN fails both comparisons.
+        (away > -32769.0 && away < 32768.0).then_some(away as i16)
     };
     Some([axis(p.x)?, axis(p.y)?, axis(p.z)?])
 }
@@ -44,6 +49,45 @@ pub fn from_mm(p: Mm) -> Vec3 {
         f32::from(p[1]) / 1000.0,
         f32::from(p[2]) / 1000.0,
     )
+}
+
+/// A turn about the vertical (+Y) through a point: `p` becomes
+/// `origin + (cos·d.x + sin·d.z, d.y, −sin·d.x + cos·d.z)` with `d = p − origin`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Turn {
+    origin: Vec3,
+    sin: f32,
+    cos: f32,
+}
+
+impl Turn {
+    /// The turn through `origin` by the angle whose sine and cosine are `sin` and `cos`
+    /// (right-handed about +Y: +Z toward +X).
+    pub fn new(origin: Vec3, sin: f32, cos: f32) -> Turn {
+        Turn { origin, sin, cos }
+    }
+
+    /// `p` turned.
+    #[inline]
+    pub fn apply(&self, p: &Vec3) -> Vec3 {
+        let (sin, cos) = (self.sin, self.cos);
+        let d = p - self.origin;
+        self.origin + Vec3::new(cos * d.x + sin * d.z, d.y, -sin * d.x + cos * d.z)
+    }
+
+    /// The direction `v` turned back (the inverse turn, without the point it turns about).
+    #[inline]
+    pub fn back(&self, v: &Vec3) -> Vec3 {
+        let (sin, cos) = (self.sin, self.cos);
+        Vec3::new(cos * v.x - sin * v.z, v.y, sin * v.x + cos * v.z)
+    }
+}
+
+/// `p` in metres, turned. (Out of line, so that [`Frames::at`] stays small enough to inline
+/// for the other storages.)
+#[inline(never)]
+fn turned(p: Mm, turn: &Turn) -> Vec3 {
+    turn.apply(&from_mm(p))
 }
 
 /// Whole frames of `joints` positions each, frame-major, as they are stored; a partial frame
@@ -61,6 +105,8 @@ pub(crate) enum Stored<'a> {
     Metres(&'a [Vec3]),
     /// 16-bit millimetres.
     Millimetres(&'a [Mm]),
+    /// 16-bit millimetres, each position turned as it is read.
+    Turned(&'a [Mm], &'a Turn),
 }
 
 impl<'a> Frames<'a> {
@@ -80,6 +126,15 @@ impl<'a> Frames<'a> {
         }
     }
 
+    /// `positions` in millimetres, `joints` to a frame, each read as [`Frames::millimetres`]
+    /// reads it, then turned by `turn`.
+    pub fn millimetres_turned(positions: &'a [Mm], joints: usize, turn: &'a Turn) -> Frames<'a> {
+        Frames {
+            stored: Stored::Turned(positions, turn),
+            joints,
+        }
+    }
+
     /// Positions in a frame.
     pub fn joints(&self) -> usize {
         self.joints
@@ -89,7 +144,7 @@ impl<'a> Frames<'a> {
     fn stored_len(&self) -> usize {
         match self.stored {
             Stored::Metres(p) => p.len(),
-            Stored::Millimetres(p) => p.len(),
+            Stored::Millimetres(p) | Stored::Turned(p, _) => p.len(),
         }
     }
 
@@ -112,7 +167,7 @@ impl<'a> Frames<'a> {
     pub fn is_finite(&self) -> bool {
         match self.stored {
             Stored::Metres(p) => p.iter().all(|p| p.iter().all(|v| v.is_finite())),
-            Stored::Millimetres(_) => true,
+            Stored::Millimetres(_) | Stored::Turned(..) => true,
         }
     }
 
@@ -127,6 +182,7 @@ impl<'a> Frames<'a> {
         match self.stored {
             Stored::Metres(p) => p[k],
             Stored::Millimetres(p) => from_mm(p[k]),
+            Stored::Turned(p, turn) => turned(p[k], turn),
         }
     }
 
@@ -155,6 +211,7 @@ impl<'a> Frames<'a> {
         let stored = match self.stored {
             Stored::Metres(p) => Stored::Metres(p.get(from..to)?),
             Stored::Millimetres(p) => Stored::Millimetres(p.get(from..to)?),
+            Stored::Turned(p, turn) => Stored::Turned(p.get(from..to)?, turn),
         };
         Some(Frames {
             stored,
@@ -167,7 +224,7 @@ impl<'a> Frames<'a> {
     pub fn as_metres(&self) -> Option<&'a [Vec3]> {
         match self.stored {
             Stored::Metres(p) => Some(p),
-            Stored::Millimetres(_) => None,
+            Stored::Millimetres(_) | Stored::Turned(..) => None,
         }
     }
 
@@ -218,7 +275,70 @@ mod tests {
         assert_eq!(Frames::metres(&metres, 0).len(), 0);
     }
 
+    #[test]
+    fn turned_millimetres_read_as_their_metres_turned() {
+        const QUARTER: (f32, f32) = (1.0, 0.0);
+        let metres: [Vec3; 6] = core::array::from_fn(|k| Vec3::new(0.5 + k as f32, 1.0, -0.25));
+        let mm = metres.map(|p| to_mm(&p).unwrap());
+        let turn = Turn::new(Vec3::new(0.5, 0.0, 0.0), QUARTER.0, QUARTER.1);
+        let turned = Frames::millimetres_turned(&mm, 3, &turn);
+        assert_eq!((turned.len(), turned.is_finite()), (2, true));
+        assert!(turned.as_metres().is_none());
+        // A quarter turn through (0.5, 0, 0): +X goes to −Z, −Z to −X.
+        let p = turned.at(1, 0);
+        assert!((p - Vec3::new(0.25, 1.0, -3.0)).norm() < 1e-6, "{p:?}");
+        for (k, p) in turned.iter().enumerate() {
+            assert_eq!(p, turn.apply(&metres[k]));
+        }
+        let cut = turned.get(1..2).unwrap();
+        assert_eq!(cut.at(0, 2), turned.at(1, 2));
+        let back = turn.back(&(turned.at(1, 2) - turned.at(1, 0)));
+        assert!((back - (metres[5] - metres[3])).norm() < 1e-6, "{back:?}");
+    }
+
+    #[test]
+    fn millimetres_are_libm_s_rounding() {
+        const EDGES: [f32; 14] = [
+            0.0,
+            -0.0,
+            0.0005,
+            -0.0005,
+            0.0015,
+            0.00049999997,
+            -0.0025,
+            1e-9,
+            32.7674,
+            32.7675,
+            -32.7684,
+            -32.7685,
+            7.0000005,
+            -0.1234565,
+        ];
+        let libm_s = |v: f32| {
+            let mm = libm::roundf(v * 1000.0);
+            (-32768.0..=32767.0).contains(&mm).then_some(mm as i16)
+        };
+        // Under Miri, which takes a second over a few hundred, fewer draws.
+        const DRAWS: usize = if cfg!(miri) { 200 } else { 20_000 };
+        let mut v = 0.3f32;
+        let draws = (0..DRAWS).map(|_| {
+            v = (v * 7919.0 + 0.123).rem_euclid(70.0) - 35.0;
+            v
+        });
+        for v in EDGES.into_iter().chain(draws) {
+            let ours = to_mm(&Vec3::new(v, 0.0, 0.0)).map(|p| p[0]);
+            assert_eq!(ours, libm_s(v), "{v}");
+        }
+    }
+
     proptest! {
+        #[test]
+        fn rounding_is_libm_s(v in -40.0f32..40.0) {
+            let mm = libm::roundf(v * 1000.0);
+            let expected = (-32768.0..=32767.0).contains(&mm).then_some(mm as i16);
+            prop_assert_eq!(to_mm(&Vec3::new(0.0, v, 0.0)).map(|p| p[1]), expected);
+        }
+
         #[test]
         fn a_position_comes_back_within_half_a_millimetre_an_axis(
             x in -32.7f32..32.7, y in -32.7f32..32.7, z in -32.7f32..32.7,

@@ -33,6 +33,7 @@ use crate::weights::{
     QUATERNION, REST_CHANNELS, SEGMENTS, WINDOW,
 };
 use crate::{Quat, Vec3};
+use core::ops::Range;
 use nalgebra::Quaternion;
 
 /// Added to a quaternion's squared norm before its square root, as in training.
@@ -225,9 +226,36 @@ pub fn retarget(
     scratch: &mut [u8],
     out: &mut [Vec3],
 ) -> Result<(), NetworkError> {
+    let n = target.len();
+    if out.len() != frames.len() / source.len().max(1) * n {
+        return Err(NetworkError::Length);
+    }
+    retarget_each(weights, source, target, frames, scratch, &mut |f, pose| {
+        if let Some(out) = out.get_mut(f * n..(f + 1) * n) {
+            out.copy_from_slice(pose);
+        }
+    })
+}
+
+/// [`retarget`], giving each frame of `target`'s joints to `pose(f, positions)` as it is made
+/// rather than writing it into a slice of `f32` metres (a device stores its virtual coach in
+/// millimetres). Frames come in windows of [`WINDOW`]; the last window may overlap the one
+/// before, so a frame may come twice, the second time as [`retarget`] leaves it. (The callback
+/// through `dyn`: one copy of the network in flash, whoever takes its frames.)
+///
+/// # Errors
+/// As [`retarget`].
+pub fn retarget_each(
+    weights: &Weights<'_>,
+    source: &Skeleton,
+    target: &Skeleton,
+    frames: &[Vec3],
+    scratch: &mut [u8],
+    pose: &mut dyn FnMut(usize, &[Vec3]),
+) -> Result<(), NetworkError> {
     let (m, n) = (source.len(), target.len());
     let count = frames.len() / m.max(1);
-    if m == 0 || n == 0 || count == 0 || count * m != frames.len() || out.len() != count * n {
+    if m == 0 || n == 0 || count == 0 || count * m != frames.len() || n > MAX_JOINTS {
         return Err(NetworkError::Length);
     }
     if let Some(joint) = frames.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
@@ -254,7 +282,7 @@ pub fn retarget(
     loop {
         let last = count.saturating_sub(WINDOW);
         let window = start.min(last);
-        net.window(frames, count, window, &mut buffers, out)?;
+        net.window(frames, count, window, &mut buffers, pose)?;
         if window == last {
             return Ok(());
         }
@@ -429,14 +457,15 @@ impl Net<'_, '_> {
         }
     }
 
-    /// Retargets the window of frames `start..start + WINDOW` (held past `count`) into `out`.
+    /// Retargets the window of frames `start..start + WINDOW` (held past `count`), giving
+    /// each of its frames up to `count` to `pose`.
     fn window(
         &self,
         frames: &[Vec3],
         count: usize,
         start: usize,
         buffers: &mut Buffers<'_>,
-        out: &mut [Vec3],
+        pose: &mut dyn FnMut(usize, &[Vec3]),
     ) -> Result<(), NetworkError> {
         let m = self.source.len();
         let frame = |t: usize| {
@@ -446,9 +475,8 @@ impl Net<'_, '_> {
         self.encode(frame, buffers)?;
         self.tokens(buffers)?;
         self.convolve(buffers)?;
-        let n = self.target.len();
-        let poses = out[start * n..].chunks_exact_mut(n).take(WINDOW);
-        self.decode(frame, poses, buffers)
+        let poses = count.saturating_sub(start).min(WINDOW);
+        self.decode(frame, start..start + poses, pose, buffers)
     }
 
     /// The motion encoder over the window's frames (`frame(t)`, source positions), leaving
@@ -501,18 +529,23 @@ impl Net<'_, '_> {
         Ok(())
     }
 
-    /// The decoder's per-frame part over the window's frames (`frame(t)`, source positions),
-    /// one target pose of `poses` each.
+    /// The decoder's per-frame part over the window's frames `poses` (`frame(t)`, source
+    /// positions, `t` counted from the window's first), each target pose given to `pose`.
+    /// (The output through `dyn`: one copy of the decoder in flash, whoever takes it.)
     #[inline(never)]
-    fn decode<'f, 'p>(
+    fn decode<'f>(
         &self,
         frame: impl Fn(usize) -> &'f [Vec3],
-        poses: impl Iterator<Item = &'p mut [Vec3]>,
+        poses: Range<usize>,
+        pose: &mut dyn FnMut(usize, &[Vec3]),
         buffers: &mut Buffers<'_>,
     ) -> Result<(), NetworkError> {
         let mut decoding = Decoding::new();
-        for (t, pose) in poses.enumerate() {
-            self.decode_frame(frame(t), t, buffers, &mut decoding, pose)?;
+        let mut out = [Vec3::zeros(); MAX_JOINTS];
+        let out = &mut out[..self.target.len()];
+        for (t, f) in poses.enumerate() {
+            self.decode_frame(frame(t), t, buffers, &mut decoding, out)?;
+            pose(f, out);
         }
         Ok(())
     }

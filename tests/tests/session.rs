@@ -358,7 +358,7 @@ fn a_network_borrows_the_ring_at_its_rate() {
         // A ring starting 2 bytes past a 4-byte boundary: the network's room starts at the
         // next one, within the length asked for.
         let mut ring = vec![[0i16; 3]; lens.ring + 1];
-        let (mut coach, mut floats) = (vec![Vec3::zeros(); lens.coach], vec![0.0; lens.floats]);
+        let (mut coach, mut floats) = (vec![[0i16; 3]; lens.coach], vec![0.0; lens.floats]);
         let (mut bytes, mut unsure) = (vec![0u8; lens.bytes], vec![0u64; lens.unsure]);
         let mut tallies = vec![JointTallies::EMPTY; lens.tallies];
         let ring = &mut ring[1..];

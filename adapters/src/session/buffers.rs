@@ -15,7 +15,7 @@ use posecoach_core::Vec3;
 pub struct BufferLens {
     /// Positions of the detector's history, in millimetres.
     pub ring: usize,
-    /// Positions of the virtual coach.
+    /// Positions of the virtual coach, in millimetres.
     pub coach: usize,
     /// Scoring floats.
     pub floats: usize,
@@ -78,8 +78,8 @@ pub struct Buffers<'b> {
     /// The detector's history, in millimetres (and the network's room while a session is set
     /// up).
     pub ring: &'b mut [Mm],
-    /// The virtual coach.
-    pub coach: &'b mut [Vec3],
+    /// The virtual coach, in millimetres.
+    pub coach: &'b mut [Mm],
     /// Scoring floats.
     pub floats: &'b mut [f32],
     /// Scoring bytes.
@@ -95,7 +95,7 @@ pub struct Buffers<'b> {
 #[derive(Clone, Debug)]
 pub struct OwnedBuffers {
     ring: std::vec::Vec<Mm>,
-    coach: std::vec::Vec<Vec3>,
+    coach: std::vec::Vec<Mm>,
     floats: std::vec::Vec<f32>,
     bytes: std::vec::Vec<u8>,
     unsure: std::vec::Vec<u64>,
@@ -108,7 +108,7 @@ impl OwnedBuffers {
     pub fn new(lens: BufferLens) -> OwnedBuffers {
         OwnedBuffers {
             ring: std::vec![[0; 3]; lens.ring],
-            coach: std::vec![Vec3::zeros(); lens.coach],
+            coach: std::vec![[0; 3]; lens.coach],
             floats: std::vec![0.0; lens.floats],
             bytes: std::vec![0; lens.bytes],
             unsure: std::vec![0; lens.unsure],

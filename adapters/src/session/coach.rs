@@ -1,14 +1,14 @@
 //! The coach reference as the session keeps it: its frames at the model rate, and the virtual
-//! coach made from them on the student's skeleton (by the analytic retargeter or the int8
-//! network, then moved onto the coach's golf contacts).
+//! coach made from them on the student's skeleton, in millimetres (by the analytic retargeter
+//! or the int8 network, then moved onto the coach's golf contacts a frame at a time).
 
 use super::Refusal;
+use crate::imu::{ImuAdapter, ImuError};
+use core::cell::Cell;
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::contacts::{Contacts, Swing};
 use posecoach_core::events;
-use posecoach_core::frames::Frames;
-#[cfg(feature = "network")]
-use posecoach_core::frames::Mm;
+use posecoach_core::frames::{from_mm, to_mm, Frames, Mm};
 #[cfg(feature = "network")]
 use posecoach_core::network::{self, NetworkError};
 use posecoach_core::reference::Reference;
@@ -98,52 +98,101 @@ impl Coach<'_> {
             .unwrap_or_else(Vec3::zeros)
     }
 
-    /// `out`, the coach at `rate_hz` retargeted onto `student`, moved onto the coach's golf
-    /// contacts ([`Contacts`]: planted feet, both hands on one grip, the club at the ball): the
-    /// coach's address, impact and lead side are the retargeted swing's (without a swing
-    /// found, only the feet are kept). (Out of line: its frame is not on the stack while a
-    /// coach is retargeted.)
+    /// The retargeted coach in `out` (whole frames of `student`, millimetres) moved onto the
+    /// coach's golf contacts ([`Contacts`]: planted feet, both hands on one grip, the club at
+    /// the ball) a frame at a time, each frame read from `out` and stored back in its place,
+    /// and in a session with IMUs as the student's IMUs would see it (the coach seen the way
+    /// the student is). The coach's address, impact and lead side are the retargeted swing's,
+    /// [`Coach::swing_of`] (without a swing found, only the feet are kept). (Out of line: its
+    /// frame is not on the stack while a coach is retargeted or its swing found.)
     #[inline(never)]
     pub(super) fn keep_contacts(
         &self,
         student: &Skeleton,
         rate_hz: u16,
-        out: &mut [Vec3],
+        swing: Option<Swing>,
+        imu: Option<&ImuAdapter>,
+        out: &mut [Mm],
     ) -> Result<(), Refusal> {
+        let n = student.len();
         let rate = self.rate_at(rate_hz);
-        let swing = events::detect(student, Frames::metres(out, student.len()), rate)
-            .ok()
-            .map(|s| Swing::from(&s));
+        let count = out.len() / n.max(1);
+        // Each frame is read before it is written, and not after.
+        let stored = Cell::from_mut(out).as_slice_of_cells();
+        let read = |f: usize, pose: &mut [Vec3]| {
+            stored.get(f * n..(f + 1) * n).is_some_and(|frame| {
+                for (p, s) in pose.iter_mut().zip(frame) {
+                    *p = from_mm(s.get());
+                }
+                true
+            })
+        };
+        let mut refusal = Refusal::Retarget;
+        let write = |f: usize, pose: &[Vec3]| {
+            let mut seen = [Vec3::zeros(); MAX_JOINTS];
+            let pose = match imu.map(|imu| seen_by(imu, student, pose, &mut seen)) {
+                None => pose,
+                Some(Ok(())) => &seen[..n],
+                Some(Err(e)) => {
+                    refusal = Refusal::Imu(e);
+                    return false;
+                }
+            };
+            stored.get(f * n..(f + 1) * n).is_some_and(|to| {
+                to.iter()
+                    .zip(pose)
+                    .all(|(to, p)| to_mm(p).map(|p| to.set(p)).is_some())
+            })
+        };
         Contacts::new(self.skeleton, student)
-            .apply(|f, k| self.joint_at(f, k, rate_hz), rate, swing, out)
-            .map_err(|_| Refusal::Retarget)
+            .apply_by_frame(
+                |f, k| self.joint_at(f, k, rate_hz),
+                rate,
+                swing,
+                count,
+                read,
+                write,
+            )
+            .map_err(|_| refusal)
+    }
+
+    /// What the contacts need of the swing of the retargeted coach in `out` (whole frames of
+    /// `student` at `rate_hz`, millimetres), if one is found: its address, impact and lead side.
+    pub(super) fn swing_of(&self, student: &Skeleton, rate_hz: u16, out: &[Mm]) -> Option<Swing> {
+        let frames = Frames::millimetres(out, student.len());
+        events::detect(student, frames, self.rate_at(rate_hz))
+            .ok()
+            .map(|s| Swing::from(&s))
     }
 
     /// The coach at `rate_hz` retargeted onto `student` frame by frame with the analytic
-    /// retargeter, into `out` (whole frames of the student). (Out of line: its retargeter is
-    /// not on the stack while the network runs.)
+    /// retargeter, into `out` (whole frames of the student, millimetres). (Out of line: its
+    /// retargeter is not on the stack while the network runs.)
     #[inline(never)]
     pub(super) fn retarget_analytic(
         &self,
         student: &Skeleton,
         rate_hz: u16,
-        out: &mut [Vec3],
+        out: &mut [Mm],
     ) -> Result<(), Refusal> {
         let retarget = Analytic::new(self.skeleton, student).map_err(|_| Refusal::Retarget)?;
-        let mut resampled = [Vec3::zeros(); MAX_JOINTS];
-        for (k, pose) in out.chunks_exact_mut(student.len()).enumerate() {
+        let (mut resampled, mut pose) = ([Vec3::zeros(); MAX_JOINTS], [Vec3::zeros(); MAX_JOINTS]);
+        let pose = pose.get_mut(..student.len()).ok_or(Refusal::Retarget)?;
+        for (k, stored) in out.chunks_exact_mut(student.len()).enumerate() {
             let source = self
                 .frame_at(k, rate_hz, &mut resampled)
                 .ok_or(Refusal::Retarget)?;
             retarget
                 .frame(source, pose)
                 .map_err(|_| Refusal::Retarget)?;
+            store(pose, stored).ok_or(Refusal::Retarget)?;
         }
         Ok(())
     }
 
     /// The coach at `rate_hz` retargeted onto `student` by the int8 network of `weights`, into
-    /// `out` (whole frames of the student); its input and scratch are carved from `ring`.
+    /// `out` (whole frames of the student, millimetres); its input and scratch are carved from
+    /// `ring`.
     #[cfg(feature = "network")]
     pub(super) fn retarget_network(
         &self,
@@ -151,10 +200,10 @@ impl Coach<'_> {
         student: &Skeleton,
         rate_hz: u16,
         ring: &mut [Mm],
-        out: &mut [Vec3],
+        out: &mut [Mm],
     ) -> Result<(), Refusal> {
-        let n = self.skeleton.len();
-        let frames = out.len() / student.len().max(1);
+        let (n, m) = (self.skeleton.len(), student.len());
+        let frames = out.len() / m.max(1);
         // The ring's room as positions in metres (from its first word boundary).
         let (_, room, _) = bytemuck::pod_align_to_mut::<u8, Vec3>(bytemuck::cast_slice_mut(ring));
         let (source, rest) = room
@@ -168,11 +217,43 @@ impl Coach<'_> {
             pose.copy_from_slice(frame);
         }
         let scratch: &mut [u8] = bytemuck::cast_slice_mut(rest);
-        network::retarget(weights, self.skeleton, student, source, scratch, out).map_err(
-            |e| match e {
-                NetworkError::Scratch => Refusal::Buffers,
-                _ => Refusal::Retarget,
+        let mut stored = true;
+        network::retarget_each(
+            weights,
+            self.skeleton,
+            student,
+            source,
+            scratch,
+            &mut |f, pose| {
+                let to = out.get_mut(f * m..(f + 1) * m);
+                stored &= to.is_some_and(|to| store(pose, to).is_some());
             },
         )
+        .map_err(|e| match e {
+            NetworkError::Scratch => Refusal::Buffers,
+            _ => Refusal::Retarget,
+        })?;
+        stored.then_some(()).ok_or(Refusal::Retarget)
     }
+}
+
+/// `frame` (whole frames of `skeleton`) as the student's IMUs would see it, into `out`. (Out
+/// of line, so that its frame is on the stack only while a frame is seen.)
+#[inline(never)]
+fn seen_by(
+    imu: &ImuAdapter,
+    skeleton: &Skeleton,
+    frame: &[Vec3],
+    out: &mut [Vec3],
+) -> Result<(), ImuError> {
+    imu.view(skeleton, frame, out)
+}
+
+/// `pose` (metres) stored in `out` in millimetres; `None` if a position has none
+/// ([`to_mm`]).
+fn store(pose: &[Vec3], out: &mut [Mm]) -> Option<()> {
+    for (o, p) in out.iter_mut().zip(pose) {
+        *o = to_mm(p)?;
+    }
+    Some(())
 }

@@ -143,7 +143,9 @@ pub struct Session<'b> {
     student: Option<Student<'b>>,
     /// The ring while no detector holds it.
     spare: &'b mut [Mm],
-    virtual_coach: &'b mut [Vec3],
+    /// The virtual coach, in millimetres, as it was made: each swing reads it turned toward its
+    /// own target line ([`score::facing`]).
+    virtual_coach: &'b mut [Mm],
     floats: &'b mut [f32],
     bytes: &'b mut [u8],
     /// Per stream frame, the student's joints the pose stream was unsure of (slot: frame index
@@ -409,7 +411,7 @@ impl<'b> Session<'b> {
                         *setup = made.ok().and_then(|(swing, events)| {
                             let address = swing.start + events.address();
                             let out = &self.virtual_coach[..swing.end * joints];
-                            let out = Frames::metres(out, joints);
+                            let out = Frames::millimetres(out, joints);
                             setup_of(&skeleton, out, address, events.lead, c.rate_at(rate))
                         });
                     }
@@ -667,16 +669,26 @@ impl<'b> Session<'b> {
             let Some(student) = frames.get(span.clone()) else {
                 return;
             };
-            let coach = &mut virtual_coach[coach_swing.start * joints..coach_swing.end * joints];
+            let Some(coach) =
+                virtual_coach.get(coach_swing.start * joints..coach_swing.end * joints)
+            else {
+                return;
+            };
             let mut address = [Vec3::zeros(); MAX_JOINTS];
             let address = student.frame(events.address(), &mut address);
             let stance = Stance::new(skeleton, address, events.lead);
-            score::face(skeleton, coach, coach_events, stance.toward_target());
+            // The coach faces this swing's target line as it is read: turned where it is
+            // stored, it would be rounded again swing after swing.
+            let stored = Frames::millimetres(coach, joints);
+            let turn = score::facing(skeleton, stored, coach_events, stance.toward_target());
             let compared = Compared {
                 skeleton,
                 student,
                 student_hz: rate,
-                coach: Frames::metres(coach, joints),
+                coach: match &turn {
+                    Some(turn) => Frames::millimetres_turned(coach, joints, turn),
+                    None => stored,
+                },
                 coach_hz,
             };
             let coach = Detected {
@@ -756,10 +768,10 @@ fn valid(config: &Config) -> bool {
 }
 
 /// Makes the virtual coach of `coach` on `skeleton` at the model rate `rate` into the front of
-/// `out`: with the int8 network (its scratch the ring) where given, else the analytic
-/// retargeter, then moved onto the coach's golf contacts; as the student's IMUs would see it in
-/// a session with them. Returns its swing and
-/// events, as [`swing_span`]. (Kept out of line: three callers, one copy in flash.)
+/// `out`, in millimetres: with the int8 network (its scratch the ring) where given, else the
+/// analytic retargeter, then moved onto the coach's golf contacts; as the student's IMUs would
+/// see it in a session with them. Returns its swing and events, as [`swing_span`]. (Kept out of
+/// line: three callers, one copy in flash.)
 #[inline(never)]
 fn make_virtual(
     coach: &Coach<'_>,
@@ -767,7 +779,7 @@ fn make_virtual(
     rate: u16,
     network: Option<(&Weights<'_>, &mut [Mm])>,
     imu: Option<&ImuAdapter>,
-    out: &mut [Vec3],
+    out: &mut [Mm],
 ) -> Result<(Range<usize>, SwingEvents), Refusal> {
     let joints = skeleton.len();
     let out = out
@@ -778,26 +790,15 @@ fn make_virtual(
         Some((w, ring)) => coach.retarget_network(w, skeleton, rate, ring, out)?,
         _ => coach.retarget_analytic(skeleton, rate, out)?,
     }
-    coach.keep_contacts(skeleton, rate, out)?;
-    if let Some(imu) = imu {
-        seen_by(imu, skeleton, out)?;
-    }
-    swing_span(skeleton, Frames::metres(out, joints), coach.rate_at(rate))
-        .map_err(Refusal::CoachSwing)
-}
-
-/// `frames` (whole frames of `skeleton`) as the student's IMUs would see them: the coach seen
-/// the way the student is. (Out of line, so that its frame is not on the stack while a coach
-/// is retargeted.)
-#[inline(never)]
-fn seen_by(imu: &ImuAdapter, skeleton: &Skeleton, frames: &mut [Vec3]) -> Result<(), Refusal> {
-    let joints = skeleton.len();
-    for frame in frames.chunks_exact_mut(joints) {
-        let mut seen = [Vec3::zeros(); MAX_JOINTS];
-        imu.view(skeleton, frame, &mut seen).map_err(Refusal::Imu)?;
-        frame.copy_from_slice(&seen[..joints]);
-    }
-    Ok(())
+    // Found before the contacts are kept, so that their frame is not under the finding's.
+    let swing = coach.swing_of(skeleton, rate, out);
+    coach.keep_contacts(skeleton, rate, swing, imu, out)?;
+    swing_span(
+        skeleton,
+        Frames::millimetres(out, joints),
+        coach.rate_at(rate),
+    )
+    .map_err(Refusal::CoachSwing)
 }
 
 /// The set-up of the swing in `positions` (at `rate_hz`) whose takeaway is at frame

@@ -30,7 +30,8 @@ pub struct Compared<'r> {
     pub student: Frames<'r>,
     /// Its frame rate.
     pub student_hz: f32,
-    /// The virtual coach's swing (the coach retargeted onto the student).
+    /// The virtual coach's swing (the coach retargeted onto the student, as the session keeps
+    /// it in millimetres, read turned to face the student's target line).
     pub coach: Frames<'r>,
     /// Its frame rate.
     pub coach_hz: f32,

@@ -59,10 +59,10 @@ pub use unsure::Unsure;
 use crate::band::Band;
 use crate::body::Stance;
 use crate::checks::BodyDeviation;
-use crate::config::{MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS, MAX_SWING_FRAMES};
+use crate::config::{MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS, MAX_JOINTS, MAX_SWING_FRAMES};
 use crate::dtw::{self, DtwError};
 use crate::events::{self, Event, EventError, SwingEvents};
-use crate::frames::Frames;
+use crate::frames::{Frames, Turn};
 use crate::sequence::Gap;
 use crate::skeleton::Skeleton;
 use crate::Vec3;
@@ -244,13 +244,33 @@ pub const fn scratch_len(student: usize, coach: usize) -> ScratchLen {
 /// stance origin so that its target line runs along `toward_target` (a student's
 /// [`Stance::toward_target`]): the alignment compares root-relative poses, which a camera's or
 /// a sensor's heading would otherwise turn away from the coach's. Positions along the target
-/// line and toward the ball are unchanged in the coach's own stance frame.
+/// line and toward the ball are unchanged in the coach's own stance frame. The turn is
+/// [`facing`]'s.
 pub fn face(skeleton: &Skeleton, coach: &mut [Vec3], events: &SwingEvents, toward_target: Vec3) {
-    let joints = skeleton.len();
-    let address = events.address() * joints;
-    let Some(pose) = coach.get(address..address + joints) else {
+    let frames = Frames::metres(coach, skeleton.len());
+    let Some(turn) = facing(skeleton, frames, events, toward_target) else {
         return;
     };
+    for p in coach.iter_mut() {
+        *p = turn.apply(p);
+    }
+}
+
+/// The turn [`face`] gives `coach` (frames of the skeleton's joints, with its `events`), for a
+/// coach read turned rather than turned where it is stored
+/// ([`Frames::millimetres_turned`]); `None` when it is left as it is: it already faces that
+/// way (to a micro-radian), there is no line to turn, or no address frame.
+pub fn facing(
+    skeleton: &Skeleton,
+    coach: Frames<'_>,
+    events: &SwingEvents,
+    toward_target: Vec3,
+) -> Option<Turn> {
+    if events.address() >= coach.len() || coach.joints() != skeleton.len() {
+        return None;
+    }
+    let mut pose = [Vec3::zeros(); MAX_JOINTS];
+    let pose = coach.frame(events.address(), &mut pose);
     let stance = Stance::new(skeleton, pose, events.lead);
     let (from, to) = (stance.toward_target(), toward_target);
     // The angle about +Y taking `from` to `to` (both horizontal).
@@ -258,14 +278,9 @@ pub fn face(skeleton: &Skeleton, coach: &mut [Vec3], events: &SwingEvents, towar
     let norm = libm::hypotf(sin, cos);
     // Already facing that way (to a micro-radian), or no line to turn: leave it bit for bit.
     if norm.is_nan() || norm <= 0.0 || (cos > 0.0 && libm::fabsf(sin) <= 1e-6 * norm) {
-        return;
+        return None;
     }
-    let (sin, cos) = (sin / norm, cos / norm);
-    let origin = stance.origin();
-    for p in coach.iter_mut() {
-        let d = *p - origin;
-        *p = origin + Vec3::new(cos * d.x + sin * d.z, d.y, -sin * d.x + cos * d.z);
-    }
+    Some(Turn::new(stance.origin(), sin / norm, cos / norm))
 }
 
 /// Scores `student` (frames × skeleton joints at `student_hz`) against the coach's virtual
@@ -346,8 +361,9 @@ impl<'a> Detected<'a> {
 }
 
 /// [`score`] of two swings whose events are known (a device detects its coach's once), the
-/// coach already turned to [`face`] the way the student does. `sink` is told the swing's
-/// body-level results and, where it asks, every judged joint's offset at every event.
+/// coach already turned to [`face`] the way the student does (or read turned by [`facing`]'s
+/// turn). `sink` is told the swing's body-level results and, where it asks, every judged
+/// joint's offset at every event.
 ///
 /// # Errors
 /// [`ScoreError`] when a swing is too long, the swings are of different kinds or the

@@ -42,7 +42,7 @@ pub extern "C" fn posecoach_no_alloc_replay(log: &[u8; 64]) -> i32 {
     let Ok(reader) = LogReader::new(log) else {
         return -1;
     };
-    let (mut ring, mut coach) = ([[0i16; 3]; 8], [Vec3::zeros(); 8]);
+    let (mut ring, mut coach) = ([[0i16; 3]; 8], [[0i16; 3]; 8]);
     let (mut floats, mut bytes, mut unsure) = ([0.0; 8], [0u8; 8], [0u64; 8]);
     let mut tallies = [JointTallies::EMPTY; 1];
     let mut session = Session::new(

@@ -29,7 +29,6 @@ use posecoach_core::reference::Reference;
 use posecoach_core::resample;
 use posecoach_core::session::JointTallies;
 use posecoach_core::wire::{encode, Config, Decoder, Message, MAX_FRAME};
-use posecoach_core::Vec3;
 use static_cell::ConstStaticCell;
 
 static COACHES: [&Aligned<[u8]>; 2] = [
@@ -50,8 +49,8 @@ const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RAT
 const UART_WAIT_US: u32 = 200;
 
 static RING: ConstStaticCell<[Mm; LENS.ring]> = ConstStaticCell::new([[0; 3]; LENS.ring]);
-static VIRTUAL_COACH: ConstStaticCell<[Vec3; LENS.coach]> =
-    ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.coach]);
+static VIRTUAL_COACH: ConstStaticCell<[Mm; LENS.coach]> =
+    ConstStaticCell::new([[0; 3]; LENS.coach]);
 static FLOATS: ConstStaticCell<[f32; LENS.floats]> = ConstStaticCell::new([0.0; LENS.floats]);
 static BYTES: ConstStaticCell<[u8; LENS.bytes]> = ConstStaticCell::new([0; LENS.bytes]);
 static UNSURE: ConstStaticCell<[u64; LENS.unsure]> = ConstStaticCell::new([0; LENS.unsure]);

@@ -42,7 +42,6 @@ use posecoach_core::weights::Weights;
 #[cfg(feature = "network")]
 use posecoach_core::weights::{Architecture, SEGMENTS, WINDOW};
 use posecoach_core::wire::{encode, Config, Message, MAX_FRAME};
-use posecoach_core::Vec3;
 use static_cell::ConstStaticCell;
 
 static LOG: &Aligned<[u8]> = &Aligned(*include_bytes!(
@@ -100,8 +99,8 @@ const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RAT
 );
 
 static RING: ConstStaticCell<[Mm; LENS.ring]> = ConstStaticCell::new([[0; 3]; LENS.ring]);
-static VIRTUAL_COACH: ConstStaticCell<[Vec3; LENS.coach]> =
-    ConstStaticCell::new([Vec3::new(0.0, 0.0, 0.0); LENS.coach]);
+static VIRTUAL_COACH: ConstStaticCell<[Mm; LENS.coach]> =
+    ConstStaticCell::new([[0; 3]; LENS.coach]);
 static FLOATS: ConstStaticCell<[f32; LENS.floats]> = ConstStaticCell::new([0.0; LENS.floats]);
 static BYTES: ConstStaticCell<[u8; LENS.bytes]> = ConstStaticCell::new([0; LENS.bytes]);
 static UNSURE: ConstStaticCell<[u64; LENS.unsure]> = ConstStaticCell::new([0; LENS.unsure]);
@@ -173,7 +172,7 @@ fn run() -> Result<(), &'static str> {
     let coaches = [Coach::from(&driver), Coach::from(&iron)];
     let (ring, coach) = (RING.take(), VIRTUAL_COACH.take());
     #[cfg(feature = "network")]
-    let weights = Some(network::checked(ring, coach)?);
+    let weights = Some(network::checked(ring)?);
     #[cfg(not(feature = "network"))]
     let weights: Option<Weights<'_>> = None;
     let weights = weights.as_ref();
@@ -197,11 +196,10 @@ fn run() -> Result<(), &'static str> {
         EXPECTED,
     )?;
     print("STAGE", &clean.stages);
-    let vec3 = core::mem::size_of::<Vec3>();
     defmt::println!(
         "RAM ring {=usize} coach {=usize} floats {=usize} bytes {=usize} unsure {=usize} tallies {=usize} stack {=usize}",
         LENS.ring * core::mem::size_of::<Mm>(),
-        LENS.coach * vec3,
+        LENS.coach * core::mem::size_of::<Mm>(),
         LENS.floats * core::mem::size_of::<f32>(),
         LENS.bytes,
         LENS.unsure * core::mem::size_of::<u64>(),

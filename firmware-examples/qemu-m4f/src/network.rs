@@ -7,7 +7,7 @@ use posecoach_core::blob::Aligned;
 use posecoach_core::frames::Mm;
 use posecoach_core::network;
 use posecoach_core::reference::Reference;
-use posecoach_core::weights::Weights;
+use posecoach_core::weights::{Weights, WINDOW};
 use posecoach_core::Vec3;
 
 /// The committed int8 weights (`posecoach export`).
@@ -20,9 +20,9 @@ static GOLDEN_IN: &Aligned<[u8]> = &Aligned(*include_bytes!(
 use crate::dtw::SWING as GOLDEN_OUT;
 
 /// The embedded weights, once their kernels are counted and their golden vectors checked with
-/// `scratch` and `out` (see [`check_golden`]); prints what each took.
+/// `scratch` (see [`check_golden`]); prints what each took.
 #[inline(never)]
-pub fn checked(scratch: &mut [Mm], out: &mut [Vec3]) -> Result<Weights<'static>, &'static str> {
+pub fn checked(scratch: &mut [Mm]) -> Result<Weights<'static>, &'static str> {
     let weights = Weights::from_bytes(&WEIGHTS.0).map_err(|_| "the weights are damaged")?;
     if *weights.architecture() != NETWORK {
         return Err("the weights are not the network the buffers were sized for");
@@ -42,7 +42,7 @@ pub fn checked(scratch: &mut [Mm], out: &mut [Vec3]) -> Result<Weights<'static>,
             per_mac % 100
         );
     }
-    let window = check_golden(&weights, scratch, out)?;
+    let window = check_golden(&weights, scratch)?;
     defmt::println!("NETWORK window {=u64} instructions", window);
     Ok(weights)
 }
@@ -52,21 +52,18 @@ pub fn golden_bytes() -> usize {
     GOLDEN_IN.0.len() + GOLDEN_OUT.0.len()
 }
 
-/// Retargets the golden input onto the golden student with `scratch` and `out` (borrowed from
-/// the session's ring and virtual coach before the session starts) and compares every bit
-/// with the host's output; returns the instructions it took.
+/// Retargets the golden input onto the golden student with `scratch` (borrowed from the
+/// session's ring before the session starts) and compares every bit of each frame with the
+/// host's output as it is made; returns the instructions it took.
 #[inline(never)]
-fn check_golden(
-    weights: &Weights<'_>,
-    scratch: &mut [Mm],
-    out: &mut [Vec3],
-) -> Result<u64, &'static str> {
+fn check_golden(weights: &Weights<'_>, scratch: &mut [Mm]) -> Result<u64, &'static str> {
     let input = Reference::from_bytes(&GOLDEN_IN.0).map_err(|_| "golden input damaged")?;
     let expected = Reference::from_bytes(&GOLDEN_OUT.0).map_err(|_| "golden output damaged")?;
     let student = expected.skeleton();
-    let out = out
-        .get_mut(..expected.frames() * student.len())
-        .ok_or("virtual coach buffer shorter than the golden output")?;
+    // One window: each frame is made once, as the host's output holds it.
+    if input.frames() > WINDOW || expected.frames() != input.frames() {
+        return Err("golden vectors not one window of frames");
+    }
     // Stored in metres: the network's exact input, and its output to the bit.
     let source = input
         .positions()
@@ -74,23 +71,35 @@ fn check_golden(
         .ok_or("golden input not stored in metres")?;
     // The ring's room from its first word boundary, as the session takes it.
     let (_, room, _) = bytemuck::pod_align_to_mut::<u8, u32>(bytemuck::cast_slice_mut(scratch));
-    let start = count::now();
-    network::retarget(
-        weights,
-        input.skeleton(),
-        student,
-        source,
-        bytemuck::cast_slice_mut(room),
-        out,
-    )
-    .map_err(|_| "the network refused the golden input")?;
-    let spent = count::now() - start;
     let bits = |v: &Vec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
-    if out
-        .iter()
-        .zip(expected.positions().iter())
-        .any(|(a, b)| bits(a) != bits(&b))
-    {
+    let golden = expected.positions();
+    let mut differ = false;
+    // Counted without the comparison, then run again to compare each frame as it is made (no
+    // buffer holds the output).
+    let mut spent = 0;
+    for compare in [false, true] {
+        let start = count::now();
+        network::retarget_each(
+            weights,
+            input.skeleton(),
+            student,
+            source,
+            bytemuck::cast_slice_mut(&mut *room),
+            &mut |f, pose| {
+                differ |= compare
+                    && (f >= golden.len()
+                        || pose
+                            .iter()
+                            .enumerate()
+                            .any(|(k, p)| bits(p) != bits(&golden.at(f, k))));
+            },
+        )
+        .map_err(|_| "the network refused the golden input")?;
+        if !compare {
+            spent = count::now() - start;
+        }
+    }
+    if differ {
         return Err("the int8 network's output differs from the host's golden vectors");
     }
     defmt::println!(
