@@ -122,8 +122,8 @@ fn the_firmwares_log_replays_with_the_int8_network_to_its_goldens() {
     }
 }
 
-/// Replays `log` with `network`, checks its swings against the sidecar and its reports and
-/// device frames against the goldens (`<log>.<prefix>replay.json`, `<log>.<prefix>device.bin`).
+/// Replays `log` with `network`, checks its swings against the sidecar and its reports, its
+/// range session and its device frames against the goldens (`<log>.<prefix>replay.json`, `<log>.<prefix>device.bin`).
 fn check_log(log: &Path, network: Option<&Weights<'_>>, prefix: &str) -> Replay {
     let name = log.file_name().unwrap().to_string_lossy().into_owned();
     let bytes = std::fs::read(log).unwrap();
@@ -139,14 +139,16 @@ fn check_log(log: &Path, network: Option<&Weights<'_>>, prefix: &str) -> Replay 
     );
     check_swings(&name, &replay, &expected, BACKSWING);
     let golden = log.with_extension(format!("{prefix}replay.json"));
-    let got = format!("{:#}\n", serde_json::Value::Array(replay.swings.clone()));
+    // Every swing's report, and the range session they made.
+    let reports = serde_json::json!({"swings": replay.swings, "session": replay.session.0});
+    let got = format!("{reports:#}\n");
     if std::env::var_os("POSECOACH_BLESS").is_some() {
         std::fs::write(&golden, &got).unwrap();
     }
     let want = std::fs::read_to_string(&golden)
         .unwrap_or_else(|_| panic!("{}: missing; POSECOACH_BLESS=1 writes it", golden.display()));
     let want: Value = serde_json::from_str(&want).unwrap();
-    let difference = json_difference(&Value::Array(replay.swings.clone()), &want, 1e-5);
+    let difference = json_difference(&reports, &want, 1e-5);
     assert!(
         difference.is_none(),
         "{name}: the reports differ from {} at {} (POSECOACH_BLESS=1 rewrites it after a deliberate change)",
