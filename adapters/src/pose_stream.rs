@@ -66,40 +66,42 @@ pub const UNSURE_BONE_SHARE: f32 = 0.3;
 /// A frame is taken as swapped (or flipped) when the last frame taken is nearer its swapped
 /// (flipped) reading than the reading as sent by at least this share of the squared distance
 /// between the two readings: the last frame lies at least three quarters of the way from the
-/// one reading to the other, measured along the line between them.
+/// one reading to the other, measured along the line between them. The last frame is first
+/// turned on about the vertical through its mean at the rate the body turned between the two
+/// frames before it (the rigid turn that fits their sure joints best), so a body turning fast is
+/// compared where it should be.
 ///
 /// Why three quarters. Between two left/right counterparts (hips, knees, ankles, shoulders,
 /// elbows, wrists: a person's are 0.2 to 0.5 m apart), the sent reading and the swapped one
 /// differ only in the direction from the one to the other. A frame as sent is then taken as
 /// swapped only if those directions turned, on average weighted by the squared widths, more
-/// than 120° since the last frame (cos 120° = -1/2), and a swapped frame is missed only if
-/// they turned more than 60°. The fastest turn in a golf swing, the arms' about 1 000 °/s
-/// through impact, is 33° in a frame at 30 Hz, and the feet, knees and hips, which weigh most,
-/// turn far less; neither mistake needs a turn a body makes between two frames. The midpoint (a
-/// half) would be the likelier reading at even odds; the margin keeps a frame as sent where
-/// the turn is unusual.
+/// than 120° from where the last frame's turn would have them (cos 120° = -1/2), and a swapped
+/// frame is missed only if they turned more than 60°. The fastest turn in a golf swing, the
+/// arms' about 1 000 °/s through impact, is 33° in a frame at 30 Hz, and the feet, knees and
+/// hips, which weigh most, turn far less; neither mistake needs a turn a body makes between two
+/// frames. The midpoint (a half) would be the likelier reading at even odds; the margin keeps a
+/// frame as sent where the turn is unusual.
 ///
 /// For flips the other reading is the frame with its left and right exchanged and its depth
-/// (the sender's Z axis: a phone's camera axis) mirrored about its joints' mean depth. That is
-/// the body as it would be turned about the vertical where the body is its own mirror image:
-/// by 180° for a golfer at address facing the camera, but by little for one whose left and
-/// right lie along the camera's axis (filmed down the line), whose flip barely moves the body
-/// and cannot be told from a turn. So a reading only counts where it is unlike every turn the
-/// body could have made ([`MIN_RELABEL`], [`RELABEL_TURN_DEG`]).
+/// (the sender's Z axis: a phone's camera axis) mirrored about its joints' mean depth. Where
+/// the pose is its own mirror image across the camera's axis (a T-pose side on to the camera; a
+/// golfer at address filmed down the line) the flipped reading barely differs from the sent
+/// one, the flip barely matters, and it cannot be told from noise or a small turn:
+/// [`MIN_RELABEL`].
 pub const RELABEL_MARGIN: f32 = 0.5;
-/// A relabelled reading counts only where it lies, in the sum of its joints' squared distances,
-/// at least this many times what exchanging the two hips moves the frame (twice their distance
-/// squared, 0.06 m² or more for an adult) from every turn of the sent reading about the vertical
-/// by up to [`RELABEL_TURN_DEG`]. Then three quarters of the way is at least 0.5 hip widths,
-/// 10 cm or more, along the line between them, three times a keypoint's noise of 30 mm (3D) along
-/// any one line. A swap always passes (no turn exchanges the hips); a flip passes where the pose
-/// is not its own mirror image about the vertical plane across the camera's axis, and where it
-/// is, the flip moves the body about as a turn would.
+/// A relabelled reading counts only where it lies at least this many times what exchanging the
+/// two hips moves a frame (twice their distance squared: 0.06 m² for hips 18 cm apart; their
+/// mean distance over the frames taken) from the sent reading, in the sum of the joints'
+/// squared distances. Three quarters of the way is then at least 0.19 m along the line between
+/// them, nine times a sound frame's change along any one line from the fresh noise of the
+/// phone model's 50 mm level (17 mm per keypoint, 3D; its drift, correlated over 0.2-1 s,
+/// changes less between frames). A swap always passes (it exchanges the hips and more); a flip
+/// that moves the frame less changes the body less than a swap of its hips would.
 pub const MIN_RELABEL: f32 = 1.0;
 /// Longest run of relabelled frames, seconds: a labelling the estimator holds for longer is its
 /// reading of the golfer (a stream that started on a swapped frame, a flip that began where it
-/// could not be told from a turn), and the frame is taken as sent. Estimators' swaps and flips
-/// last a few frames.
+/// barely moved the body and was followed), and the frame is taken as sent. Estimators' swaps
+/// and flips last a few frames.
 pub const MAX_RELABEL_S: f32 = 1.0;
 
 /// Settings of a [`PoseStream`].
@@ -344,6 +346,7 @@ impl PoseStream {
     /// # Errors
     /// [`StreamError::Format`] or [`StreamError::Keypoints`] for a frame that does not fit the
     /// stream; the stream is unchanged.
+    #[inline(never)]
     pub fn push(
         &mut self,
         frame: &PoseFrame,
@@ -494,7 +497,8 @@ impl PoseStream {
     /// frame ([`RELABEL_MARGIN`], [`MIN_RELABEL`], [`MAX_RELABEL_S`]). A reading is kept until
     /// another is clearly better, so a run of swapped or flipped frames is followed through
     /// poses that are their own mirror image (where the readings do not differ). Bounded work:
-    /// two passes over the joints.
+    /// a few passes over the joints.
+    #[inline(never)]
     fn relabelling(&mut self, joints: &[(Vec3, u8)], t_us: u64) -> Option<(Relabel, bool)> {
         let Some(c) = self.compare(joints, t_us) else {
             (self.reading, self.relabelled_since) = (0, None);
@@ -576,7 +580,7 @@ impl PoseStream {
         let centre = sum.z / n as f32;
         let around = sum_last / n as f32;
         let dt = t_us.saturating_sub(last.t_us) as f32 * 1e-6;
-        let (sin, cos) = libm::sincosf(self.spin * dt);
+        let (sin, cos) = (libm::sinf(self.spin * dt), libm::cosf(self.spin * dt));
         let turned = |q: &Vec3| {
             let d = q - around;
             Vec3::new(
@@ -615,6 +619,7 @@ impl PoseStream {
     /// The body's turn rate about the vertical from the last frame taken to `current` (taken
     /// `dt` seconds later), rad/s: the rigid turn of the joints sure in both that fits them
     /// best, about their means (0 without a last frame).
+    #[inline(never)]
     fn turn_rate(&self, current: &[Vec3], masked: u64, dt: f32) -> f32 {
         let both = |k: usize| k < 64 && (masked | self.previous_masked) & (1 << k) == 0;
         let pairs = || {
@@ -646,6 +651,7 @@ impl PoseStream {
     /// Puts `joints` back as `relabel` says: each joint (with its confidence) takes its
     /// counterpart's place, and for a flip its depth is mirrored back about `centre`; counted
     /// where `counted`.
+    #[inline(never)]
     fn relabel(&mut self, joints: &mut [(Vec3, u8)], relabel: Relabel, counted: bool) {
         let mut read = [(Vec3::zeros(), 0u8); MAX_JOINTS];
         for (r, j) in read.iter_mut().zip(joints.iter()) {
