@@ -87,7 +87,7 @@ pub struct Args {
     #[arg(long)]
     no_imu: bool,
     /// Film with a phone whose estimator makes no left/right swaps, front/back flips or lean
-    /// (as the benchmark did before 2026-12-08): noise, occlusion and losses only.
+    /// (as the benchmark did until 2026-12-07): noise, occlusion and losses only.
     #[arg(long)]
     no_failures: bool,
     /// Seed of the flaws, cameras and noise.
