@@ -497,6 +497,127 @@ const SMPL_KEYPOINTS: [&str; 24] = names(&SMPL);
 const CMU_KEYPOINTS: [&str; 31] = names(&CMU);
 const GOLF_KEYPOINTS: [&str; 22] = names(&GOLF);
 
+/// Whether `a` is `b` with `b`'s first `from` bytes replaced by `a`'s first `to` bytes, where
+/// those are `left` and `right` (in either order): `a = x + rest`, `b = y + rest`.
+const fn same_rest(a: &[u8], b: &[u8], from: usize, to: usize, suffix: bool) -> bool {
+    if a.len() < from || b.len() < to || a.len() - from != b.len() - to {
+        return false;
+    }
+    let n = a.len() - from;
+    let (a0, b0) = if suffix { (0, 0) } else { (from, to) };
+    let mut i = 0;
+    while i < n {
+        if a[a0 + i] != b[b0 + i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+/// Whether `s` starts (or, with `suffix`, ends) with `part`.
+const fn has(s: &[u8], part: &[u8], suffix: bool) -> bool {
+    if s.len() < part.len() {
+        return false;
+    }
+    let at = if suffix { s.len() - part.len() } else { 0 };
+    let mut i = 0;
+    while i < part.len() {
+        if s[at + i] != part[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+/// Whether `a` and `b` name a keypoint and its counterpart on the other side of the body: the
+/// same name but for a leading `Left`/`Right`, `left`/`right`, `L`/`R` or `l`/`r`, or a trailing
+/// `_L`/`_R` or `_left`/`_right`, in either order.
+const fn mirror_names(a: &str, b: &str) -> bool {
+    const SIDES: [(&str, &str, bool); 6] = [
+        ("Left", "Right", false),
+        ("left", "right", false),
+        ("L", "R", false),
+        ("l", "r", false),
+        ("_L", "_R", true),
+        ("_left", "_right", true),
+    ];
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    let mut i = 0;
+    while i < SIDES.len() {
+        let (l, r, suffix) = SIDES[i];
+        let (l, r) = (l.as_bytes(), r.as_bytes());
+        if (has(a, l, suffix) && has(b, r, suffix) && same_rest(a, b, l.len(), r.len(), suffix))
+            || (has(a, r, suffix) && has(b, l, suffix) && same_rest(a, b, r.len(), l.len(), suffix))
+        {
+            return true;
+        }
+        i += 1;
+    }
+    false
+}
+
+/// Each of `names`' counterpart ([`mirror_names`]), else itself.
+const fn keypoint_mirrors<const N: usize>(names: &[&str; N]) -> [u8; N] {
+    let mut out = [0u8; N];
+    let mut i = 0;
+    while i < N {
+        out[i] = i as u8;
+        let mut j = 0;
+        while j < N {
+            if mirror_names(names[i], names[j]) {
+                out[i] = j as u8;
+            }
+            j += 1;
+        }
+        i += 1;
+    }
+    out
+}
+
+/// Each of `joints`' counterpart: the joint read from its keypoints' counterparts `mirrors`
+/// (a midpoint's in either order), else itself.
+const fn joint_mirrors<const J: usize>(joints: &[FormatJoint; J], mirrors: &[u8]) -> [u8; J] {
+    let mut out = [0u8; J];
+    let mut k = 0;
+    while k < J {
+        out[k] = k as u8;
+        let mut j = 0;
+        while j < J {
+            let same = match (joints[k].source, joints[j].source) {
+                (Source::Keypoint(a), Source::Keypoint(b)) => mirrors[a as usize] == b,
+                (Source::Mid(a, b), Source::Mid(c, d)) => {
+                    let (ma, mb) = (mirrors[a as usize], mirrors[b as usize]);
+                    (ma == c && mb == d) || (ma == d && mb == c)
+                }
+                _ => false,
+            };
+            if same {
+                out[k] = j as u8;
+            }
+            j += 1;
+        }
+        k += 1;
+    }
+    out
+}
+
+const H36M_KEYPOINT_MIRRORS: [u8; 17] = keypoint_mirrors(&H36M_KEYPOINTS);
+const SMPL_KEYPOINT_MIRRORS: [u8; 24] = keypoint_mirrors(&SMPL_KEYPOINTS);
+const CMU_KEYPOINT_MIRRORS: [u8; 31] = keypoint_mirrors(&CMU_KEYPOINTS);
+const GOLF_KEYPOINT_MIRRORS: [u8; 22] = keypoint_mirrors(&GOLF_KEYPOINTS);
+const COCO_KEYPOINT_MIRRORS: [u8; 17] = keypoint_mirrors(&COCO_KEYPOINTS);
+const BLAZEPOSE_KEYPOINT_MIRRORS: [u8; 33] = keypoint_mirrors(&BLAZEPOSE_KEYPOINTS);
+const BANDAI_KEYPOINT_MIRRORS: [u8; 22] = keypoint_mirrors(&BANDAI_KEYPOINTS);
+const H36M_JOINT_MIRRORS: [u8; 17] = joint_mirrors(&H36M, &H36M_KEYPOINT_MIRRORS);
+const SMPL_JOINT_MIRRORS: [u8; 24] = joint_mirrors(&SMPL, &SMPL_KEYPOINT_MIRRORS);
+const CMU_JOINT_MIRRORS: [u8; 31] = joint_mirrors(&CMU, &CMU_KEYPOINT_MIRRORS);
+const GOLF_JOINT_MIRRORS: [u8; 22] = joint_mirrors(&GOLF, &GOLF_KEYPOINT_MIRRORS);
+const COCO_JOINT_MIRRORS: [u8; 15] = joint_mirrors(&COCO, &COCO_KEYPOINT_MIRRORS);
+const BLAZEPOSE_JOINT_MIRRORS: [u8; 19] = joint_mirrors(&BLAZEPOSE, &BLAZEPOSE_KEYPOINT_MIRRORS);
+const BANDAI_JOINT_MIRRORS: [u8; 21] = joint_mirrors(&BANDAI, &BANDAI_KEYPOINT_MIRRORS);
+
 impl Format {
     /// Every format with a fixed joint table.
     pub const BUILT_IN: [Format; 7] = [
@@ -570,6 +691,54 @@ impl Format {
                 && (joints.iter().zip(names).all(|(j, n)| j.name == *n)
                     || joints.iter().zip(names).all(|(j, n)| j.alt_name == *n))
         })
+    }
+
+    /// Keypoint `i`'s counterpart on the other side of the body: the keypoint whose name has
+    /// left and right exchanged (`LHip` and `RHip`, `left_eye` and `right_eye`, `Hand_L` and
+    /// `Hand_R`, `lhand` and `rhand`), else `i` itself (a keypoint on the body's middle, or
+    /// past the format's keypoints). A pose estimator that swaps left and right sends each
+    /// keypoint in its counterpart's place.
+    pub fn mirror_keypoint(self, i: usize) -> usize {
+        self.mirrored_keypoints()
+            .get(i)
+            .map_or(i, |&m| usize::from(m))
+    }
+
+    /// Joint `k`'s counterpart on the other side of the body: the joint read from the
+    /// counterparts of its keypoints ([`Format::mirror_keypoint`]), else `k` itself (a joint on
+    /// the body's middle: a midpoint of two counterparts is its own). Joints, like keypoints,
+    /// pair up: the counterpart's counterpart is the joint itself.
+    pub fn mirror_joint(self, k: usize) -> usize {
+        self.mirrored_joints().get(k).map_or(k, |&m| usize::from(m))
+    }
+
+    /// Each keypoint's counterpart ([`Format::mirror_keypoint`]), made at compile time.
+    pub const fn mirrored_keypoints(self) -> &'static [u8] {
+        match self {
+            Format::Cmu31 => &CMU_KEYPOINT_MIRRORS,
+            Format::Bandai22 => &BANDAI_KEYPOINT_MIRRORS,
+            Format::H36m17 => &H36M_KEYPOINT_MIRRORS,
+            Format::Coco17 => &COCO_KEYPOINT_MIRRORS,
+            Format::BlazePose33 => &BLAZEPOSE_KEYPOINT_MIRRORS,
+            Format::Smpl24 => &SMPL_KEYPOINT_MIRRORS,
+            Format::GolfMarkers => &GOLF_KEYPOINT_MIRRORS,
+            Format::Canonical | Format::Custom => &[],
+        }
+    }
+
+    /// Each joint's counterpart ([`Format::mirror_joint`]), made at compile time: a device
+    /// reads it every frame without storing or searching it.
+    pub const fn mirrored_joints(self) -> &'static [u8] {
+        match self {
+            Format::Cmu31 => &CMU_JOINT_MIRRORS,
+            Format::Bandai22 => &BANDAI_JOINT_MIRRORS,
+            Format::H36m17 => &H36M_JOINT_MIRRORS,
+            Format::Coco17 => &COCO_JOINT_MIRRORS,
+            Format::BlazePose33 => &BLAZEPOSE_JOINT_MIRRORS,
+            Format::Smpl24 => &SMPL_JOINT_MIRRORS,
+            Format::GolfMarkers => &GOLF_JOINT_MIRRORS,
+            Format::Canonical | Format::Custom => &[],
+        }
     }
 
     /// Maps one frame of keypoints onto the format's joints.
@@ -657,6 +826,42 @@ mod tests {
             Format::detect(&BANDAI_KEYPOINTS[1..]),
             Some(Format::Bandai22)
         );
+    }
+
+    #[test]
+    fn left_and_right_pair_up_in_every_format() {
+        for format in Format::BUILT_IN {
+            let (keypoints, joints) = (format.keypoints().len(), format.joints().len());
+            for i in 0..keypoints {
+                let m = format.mirror_keypoint(i);
+                assert_eq!(format.mirror_keypoint(m), i, "{format}: keypoint {i}");
+            }
+            for (k, j) in format.joints().iter().enumerate() {
+                let m = format.mirror_joint(k);
+                assert_eq!(format.mirror_joint(m), k, "{format}: {}", j.name);
+                // A canonical joint's counterpart is its mirror image's.
+                if let (Some(a), Some(b)) = (j.joint, format.joints()[m].joint) {
+                    assert_eq!(a.mirror(), b, "{format}: {}", j.name);
+                }
+                // Every body joint placed off the middle has a counterpart (the club has
+                // none), and a canonical joint on it has none (CMU's hip joints and collars sit on the middle in the
+                // T-pose, and pair up).
+                let club = j.joint.is_some_and(Joint::is_club);
+                if j.place.position().x.abs() > 1e-6 && !club {
+                    assert_ne!(m, k, "{format}: {}", j.name);
+                }
+                if j.joint.is_some_and(|c| c.mirror() == c) {
+                    assert_eq!(m, k, "{format}: {}", j.name);
+                }
+            }
+            assert_eq!(format.mirror_joint(joints), joints);
+            assert_eq!(format.mirrored_joints().len(), joints);
+            assert_eq!(format.mirrored_keypoints().len(), keypoints);
+        }
+        assert_eq!(Format::Cmu31.mirror_keypoint(1), 6); // LHipJoint, RHipJoint
+        assert_eq!(Format::Cmu31.mirror_keypoint(11), 11); // lowerback
+        assert_eq!(Format::Coco17.mirror_keypoint(1), 2); // the eyes
+        assert_eq!(Format::BlazePose33.mirror_keypoint(9), 10); // the mouth's corners
     }
 
     #[test]

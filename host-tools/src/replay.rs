@@ -180,7 +180,8 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
         "overflows": wire.overflows,
         "pose_accepted": stream.accepted, "pose_duplicates": stream.duplicates,
         "pose_out_of_order": stream.out_of_order, "pose_gaps": stream.gaps,
-        "pose_masked": stream.masked, "frames_at_model_rate": stream.emitted,
+        "pose_masked": stream.masked, "pose_swapped": stream.swapped, "pose_flipped": stream.flipped,
+        "frames_at_model_rate": stream.emitted,
         "imu_stale": session.stale_samples(),
         "cut_short": cut,
     });

@@ -68,6 +68,18 @@ pub struct Args {
     /// Share of the time a keypoint is occluded (runs of low confidence).
     #[arg(long, default_value_t = 0.01)]
     occluded: f64,
+    /// Runs of left/right swapped frames (every left keypoint sent as its right counterpart)
+    /// starting per second, 0.1 s long on average (`bench coaching`'s phone: 1).
+    #[arg(long, default_value_t = 0.0)]
+    swaps_per_s: f32,
+    /// Runs of front/back flipped frames (the pose's depth reversed about its centre, left and
+    /// right exchanged) starting per second, 0.2 s long on average (`bench coaching`: 0.2).
+    #[arg(long, default_value_t = 0.0)]
+    flips_per_s: f32,
+    /// Depth bias per metre of height above the feet, mm, toward or away from the camera
+    /// (drawn): the body seen leaning (`bench coaching`: 30).
+    #[arg(long, default_value_t = 0.0)]
+    lean_mm_per_m: f32,
     /// Where the phone stands: facing the golfer, or behind along the target line.
     #[arg(long, value_enum, default_value_t = View::FaceOn)]
     camera: View,
@@ -215,6 +227,13 @@ pub fn run(args: &Args) -> Result<String> {
     {
         bail!("--noise-mm, --drift-mm and --bias-mm must be 0 to 100, --occluded 0 to 0.5, and --jitter-ms under half a frame");
     }
+    if [args.swaps_per_s, args.flips_per_s]
+        .iter()
+        .any(|r| !(0.0..=5.0).contains(r))
+        || !(0.0..=200.0).contains(&args.lean_mm_per_m)
+    {
+        bail!("--swaps-per-s and --flips-per-s must be 0 to 5, and --lean-mm-per-m 0 to 200");
+    }
     let body = match &args.student_tpose {
         Some(path) => args.input.load(path)?,
         None => csv::read(include_str!("../../tests/fixtures/h36m17_tpose.csv"))
@@ -286,12 +305,16 @@ pub fn run(args: &Args) -> Result<String> {
                 &timeline.positions[first.start * timeline.joints..][..timeline.joints],
                 first.events.lead,
             );
+            let depth = match args.camera {
+                View::FaceOn => stance.toward_ball(),
+                View::DownTheLine => stance.toward_target(),
+            };
+            // Into the phone's frame, as its estimator sends it: the depth axis is +Z.
+            let angle = (-depth.x).atan2(depth.z);
+            let turn = nalgebra::Rotation3::from_axis_angle(&Vec3::y_axis(), angle);
             let camera = Camera {
                 rate_hz: args.pose_rate,
-                depth: match args.camera {
-                    View::FaceOn => stance.toward_ball(),
-                    View::DownTheLine => stance.toward_target(),
-                },
+                depth: Vec3::z(),
             };
             let noise = PhoneNoise {
                 white_mm: args.noise_mm,
@@ -301,11 +324,17 @@ pub fn run(args: &Args) -> Result<String> {
                 lost: 0.0,
                 jitter_ms: args.jitter_ms,
                 drop: args.drop,
+                swaps_per_s: args.swaps_per_s,
+                flips_per_s: args.flips_per_s,
+                lean_mm_per_m: args.lean_mm_per_m,
             };
             let joints = &keypoint_joints;
-            record_pose(
-                &timeline, format, joints, &camera, &noise, &mut rng, &mut bytes,
-            )?
+            let seen = Timeline {
+                joints: timeline.joints,
+                rate: timeline.rate,
+                positions: timeline.positions.iter().map(|p| turn * p).collect(),
+            };
+            record_pose(&seen, format, joints, &camera, &noise, &mut rng, &mut bytes)?
         }
     };
     std::fs::write(&args.out, &bytes).with_context(|| format!("writing {}", args.out.display()))?;
@@ -315,7 +344,8 @@ pub fn run(args: &Args) -> Result<String> {
         "kind": if args.imu_rate.is_some() { "imu" } else { "pose" },
         "rate_hz": args.imu_rate.unwrap_or(args.pose_rate), "magnetometers": args.imu_rate.map(|_| !args.no_mag), "seed": args.seed, "noise_mm": args.noise_mm,
         "drift_mm": args.drift_mm, "bias_mm": args.bias_mm, "occluded": args.occluded,
-        "jitter_ms": args.jitter_ms, "drop": args.drop,
+        "jitter_ms": args.jitter_ms, "drop": args.drop, "swaps_per_s": args.swaps_per_s,
+        "flips_per_s": args.flips_per_s, "lean_mm_per_m": args.lean_mm_per_m,
         "duration_s": timeline.frames() as f32 / TIMELINE_HZ,
         "swings": expected,
     });

@@ -35,7 +35,7 @@ pub mod flaws;
 mod sessions;
 
 use crate::coaches;
-use crate::phone::{self, Camera, PhoneNoise};
+use crate::phone::{self, Camera, Failure, PhoneNoise};
 use crate::progress::Progress;
 use crate::synth::{self, lay_out, Placed, Timeline};
 use crate::synth_imu::{self, ImuNoise};
@@ -51,7 +51,7 @@ use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{Advice, Direction, Phase, Report, TEMPO_CONFIDENCE};
 use posecoach_core::sequence::{Gap, GAPS};
-use posecoach_core::wire::{self, Config, Message, StudentProfile, MAX_FRAME};
+use posecoach_core::wire::{self, Config, Message, PoseFrame, StudentProfile, MAX_FRAME};
 use posecoach_core::Vec3;
 use posecoach_io::{self as io, Motion};
 use rand::{Rng, SeedableRng};
@@ -90,6 +90,10 @@ pub struct Args {
     /// Leave out the two IMU rows (six IMUs at 200 Hz, with and without magnetometers).
     #[arg(long)]
     no_imu: bool,
+    /// Film with a phone whose estimator makes no left/right swaps, front/back flips or lean
+    /// (as the benchmark did until 2026-12-07): noise, occlusion and losses only.
+    #[arg(long)]
+    no_failures: bool,
     /// Seed of the flaws, cameras and noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -129,11 +133,12 @@ struct Clean {
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Input {
     /// A phone's pose frames with errors of a level (mm), at a frame rate, facing the golfer
-    /// or down the line.
+    /// or down the line, with or without the estimator's failures.
     Phone {
         level_mm: f32,
         rate_hz: f32,
         face_on: bool,
+        failures: bool,
     },
     /// Six IMUs at [`IMU_HZ`] with or without magnetometers; the profile's T-pose turned to
     /// any heading.
@@ -199,11 +204,18 @@ struct Outcome1 {
     /// The planted truths.
     truths: Vec<Truth>,
     score: Option<f32>,
+    /// Pose frames by the failure they were sent with (none, swapped, flipped: rows) and how
+    /// the device's pose stream read them (as sent, swapped, flipped: columns).
+    relabels: Relabels,
     /// Per P-position both tables have, each of [`measured_metrics`] measured less true and
     /// that error over the report's uncertainty of it (NaN where a skeleton has no head).
     body_errors: Vec<Vec<(f32, f32)>>,
     error: Option<String>,
 }
+
+/// Pose frames by failure sent (rows: none, swapped, flipped) and read (columns: as sent,
+/// swapped, flipped).
+type Relabels = [[u32; 3]; 3];
 
 /// A swing's body metrics at each P-position, [`Position::ALL`] order.
 type Table = [Option<Metrics>; Position::ALL.len()];
@@ -374,6 +386,7 @@ fn inputs(args: &Args) -> Vec<Input> {
             level_mm,
             rate_hz: 60.0,
             face_on: true,
+            failures: !args.no_failures,
         })
         .collect();
     if !args.no_imu {
@@ -492,6 +505,7 @@ fn cases(cleans: &[Clean], args: &Args) -> Vec<Case> {
                         level_mm,
                         rate_hz: if rng.random_bool(0.5) { 30.0 } else { 60.0 },
                         face_on: rng.random_bool(0.5),
+                        failures: !args.no_failures,
                     },
                     // The first IMU row with magnetometers, the second without.
                     None => Input::Imu {
@@ -519,20 +533,25 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     let swing_end_s = placed[0].end as f64 / f64::from(LAYOUT_HZ);
     let mut rng = ChaCha8Rng::seed_from_u64(case.seed);
 
-    let mut messages = match case.input {
+    let (mut messages, failures) = match case.input {
         Input::Phone {
             level_mm,
             rate_hz,
             face_on,
+            failures,
         } => {
             let camera = PhoneView {
                 level_mm,
                 rate_hz,
                 face_on,
+                failures,
             };
             phone_messages(clean, &mut timeline, &placed, &camera, &mut rng)?
         }
-        Input::Imu { magnetometers } => imu_messages(clean, &timeline, magnetometers, &mut rng)?,
+        Input::Imu { magnetometers } => (
+            imu_messages(clean, &timeline, magnetometers, &mut rng)?,
+            Vec::new(),
+        ),
     };
     messages.insert(
         1,
@@ -565,11 +584,11 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
         let path = dir.join(format!("case_{}.pclog", case.seed));
         std::fs::write(&path, bytes).with_context(|| format!("writing {}", path.display()))?;
     }
-    let (scored, refused) = run_session(&selected)?;
+    let (scored, refused, relabels) = run_session(&selected, &failures)?;
     let model_s = 1.0 / f64::from(MODEL_HZ);
     let overlaps =
         |at: f64, frames: usize| at < swing_end_s && at + frames as f64 * model_s > start_s;
-    let chosen = run_session(&messages)?
+    let chosen = run_session(&messages, &[])?
         .0
         .into_iter()
         .find(|(at, frames, _, _)| overlaps(*at, *frames))
@@ -583,6 +602,7 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     let mut outcome = Outcome1 {
         false_swings: others.len() + ours.len().saturating_sub(1),
         shown_m: planted.shown_m,
+        relabels,
         ..Outcome1::default()
     };
     outcome.right_coach = chosen == Some(clean.coach);
@@ -677,16 +697,18 @@ struct PhoneView {
     level_mm: f32,
     rate_hz: f32,
     face_on: bool,
+    failures: bool,
 }
 
-/// The profile then the pose frames a phone sends of `timeline` (turned into its frame).
+/// The profile then the pose frames a phone sends of `timeline` (turned into its frame), and
+/// the failure each frame was sent with.
 fn phone_messages(
     clean: &Clean,
     timeline: &mut Timeline,
     placed: &[Placed],
     view: &PhoneView,
     rng: &mut ChaCha8Rng,
-) -> Result<Vec<Message>> {
+) -> Result<(Vec<Message>, Vec<Failure>)> {
     // Into the phone's frame: its depth axis is Z, the golfer's stance square to it give or
     // take 15°.
     let joints = timeline.joints;
@@ -710,10 +732,13 @@ fn phone_messages(
         rate_hz: view.rate_hz,
         depth: Vec3::z(),
     };
-    let noise = PhoneNoise::level(view.level_mm);
+    let noise = match view.failures {
+        true => PhoneNoise::level(view.level_mm),
+        false => PhoneNoise::level(view.level_mm).without_failures(),
+    };
     let format = Format::H36m17;
     let keypoint_joints = synth::keypoint_sources(format, &clean.body.skeleton)?;
-    let frames = phone::record(
+    let (frames, failures): (Vec<PoseFrame>, Vec<Failure>) = phone::record_failing(
         |t, k| timeline.at(t, k),
         timeline.duration_s(),
         format,
@@ -721,10 +746,48 @@ fn phone_messages(
         &camera,
         &noise,
         rng,
-    );
-    // The profile: the T-pose the phone saw in the first second.
+    )
+    .into_iter()
+    .unzip();
+    // The profile: the T-pose the phone saw in the first second, from the frames whose left and
+    // right agree with most of them (an app that asks the golfer to face it in a T-pose tells
+    // left from right there, and sets a swapped or flipped frame aside).
+    let first: Vec<&PoseFrame> = frames.iter().filter(|f| f.t_us < 1_000_000).collect();
+    // Each pair of counterparts' vector from the one to the other (zero where either is
+    // unsure), and its sum over the frames.
+    let across = |frame: &PoseFrame| -> Vec<Vec3> {
+        let at = |i: usize| {
+            let p = frame.joints_mm[i];
+            Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)
+        };
+        (0..frame.joints_mm.len())
+            .map(|i| (i, format.mirror_keypoint(i)))
+            .filter(|&(i, m)| m > i)
+            .map(
+                |(i, m)| match frame.confidence[i].min(frame.confidence[m]) >= 180 {
+                    true => at(i) - at(m),
+                    false => Vec3::zeros(),
+                },
+            )
+            .collect()
+    };
+    let mut most: Vec<Vec3> = Vec::new();
+    for frame in &first {
+        most.resize(frame.joints_mm.len(), Vec3::zeros());
+        for (m, v) in most.iter_mut().zip(across(frame)) {
+            *m += v;
+        }
+    }
+    let agrees = |frame: &PoseFrame| {
+        across(frame)
+            .iter()
+            .zip(&most)
+            .map(|(v, m)| v.dot(m))
+            .sum::<f32>()
+            > 0.0
+    };
     let mut sum = vec![(Vec3::zeros(), 0u32); keypoint_joints.len()];
-    for frame in frames.iter().filter(|f| f.t_us < 1_000_000) {
+    for frame in first.iter().filter(|f| agrees(f)) {
         for (k, (p, &c)) in frame.joints_mm.iter().zip(&frame.confidence).enumerate() {
             if c >= 180 {
                 sum[k].0 += Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32);
@@ -744,7 +807,7 @@ fn phone_messages(
     };
     let mut messages = vec![Message::StudentProfile { seq: 0, profile }];
     messages.extend(frames.into_iter().map(Message::PoseFrame));
-    Ok(messages)
+    Ok((messages, failures))
 }
 
 /// The profile (the student's T-pose turned to any heading), the sensor layout and the samples
@@ -797,12 +860,24 @@ type Scored = (
     std::result::Result<(Report, Table, Table), String>,
 );
 
-/// What the device's session makes of `messages`: the swings it found, and its refusals.
-fn run_session(messages: &[Message]) -> Result<(Vec<Scored>, Vec<String>)> {
+/// What the device's session makes of `messages`: the swings it found, its refusals, and
+/// how its pose stream read the pose frames sent with `failures` (one per pose frame, in
+/// order; those it took are counted).
+fn run_session(
+    messages: &[Message],
+    failures: &[Failure],
+) -> Result<(Vec<Scored>, Vec<String>, Relabels)> {
     let mut scored: Vec<Scored> = Vec::new();
     let mut refused = Vec::new();
+    let mut relabels = Relabels::default();
+    let mut failures = failures.iter();
     coaches::session(None, |session| {
         for m in messages {
+            let before = session.stream_counters();
+            let failure = match m {
+                Message::PoseFrame(_) => failures.next(),
+                _ => None,
+            };
             session.handle(m, |outcome| match outcome {
                 Outcome::Scored {
                     swing,
@@ -827,9 +902,26 @@ fn run_session(messages: &[Message]) -> Result<(Vec<Scored>, Vec<String>)> {
                 Outcome::Refused(r) => refused.push(r.to_string()),
                 Outcome::Accepted => {}
             });
+            let after = session.stream_counters();
+            // Frames the stream took (none where the profile was refused).
+            if let Some(failure) = failure.filter(|_| after.accepted > before.accepted) {
+                let read = if after.swapped > before.swapped {
+                    1
+                } else if after.flipped > before.flipped {
+                    2
+                } else {
+                    0
+                };
+                let sent = match failure {
+                    Failure::None => 0,
+                    Failure::Swap => 1,
+                    Failure::Flip => 2,
+                };
+                relabels[sent][read] += 1;
+            }
         }
     })?;
-    Ok((scored, refused))
+    Ok((scored, refused, relabels))
 }
 
 /// Whether `advice` states one of the planted flaws.
@@ -1000,6 +1092,34 @@ fn summary(row: &str, pairs: &[(&Case, &Outcome1)]) -> Value {
             "tempo_15_30pc": mean_score(&tempo_in(15.0, 30.0)),
             "tempo_30_50pc": mean_score(&tempo_in(30.0, 50.01)),
         },
+        "relabelled": relabelled(pairs),
+    })
+}
+
+/// How the device's pose stream read the frames a phone sent swapped, flipped or neither, over
+/// every case of a row (null for IMUs): each failure's frames, the share read relabelled (as
+/// either) and as that failure, and the share of the frames sent without one read relabelled.
+fn relabelled(pairs: &[(&Case, &Outcome1)]) -> Value {
+    let mut all = Relabels::default();
+    for (_, o) in pairs {
+        for (row, add) in all.iter_mut().zip(&o.relabels) {
+            for (n, a) in row.iter_mut().zip(add) {
+                *n += a;
+            }
+        }
+    }
+    if all.iter().flatten().all(|&n| n == 0) {
+        return json!(null);
+    }
+    let of = |row: &[u32; 3]| row.iter().sum::<u32>() as usize;
+    let sent = |i: usize| {
+        json!({"frames": of(&all[i]), "read_relabelled": share((all[i][1] + all[i][2]) as usize, of(&all[i])),
+               "read_as_sent_failure": share(all[i][i] as usize, of(&all[i]))})
+    };
+    json!({
+        "swapped": sent(1), "flipped": sent(2),
+        "sound": {"frames": of(&all[0]), "read_relabelled": share((all[0][1] + all[0][2]) as usize, of(&all[0]))},
+        "matrix": all,
     })
 }
 
@@ -1023,6 +1143,7 @@ fn case_json(clean: &Clean, case: &Case, o: &Outcome1) -> Value {
         "shown_cm": o.shown_m * 100.0, "found": o.found, "false_swings": o.false_swings, "timing_ms": o.timing_ms,
         "tempo_error": o.tempo_error, "backswing_z": o.backswing_z, "score": o.score, "first": o.first, "right_first": o.right_first, "cause_first": o.cause_first, "right_coach": o.right_coach,
         "any_advice": o.any_advice, "body_truth": o.body_truth, "body_named": o.body_named, "truths": o.truths, "body": o.body, "gaps": o.gaps, "error": o.error,
+        "relabels": o.relabels,
     })
 }
 

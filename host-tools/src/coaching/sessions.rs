@@ -168,10 +168,13 @@ pub(super) fn cases(
             }
             for flaw in sets {
                 let input = match *input {
-                    Input::Phone { level_mm, .. } => Input::Phone {
+                    Input::Phone {
+                        level_mm, failures, ..
+                    } => Input::Phone {
                         level_mm,
                         rate_hz: if rng.random_bool(0.5) { 30.0 } else { 60.0 },
                         face_on: rng.random_bool(0.5),
+                        failures,
                     },
                     imu => imu,
                 };
@@ -259,13 +262,15 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
             level_mm,
             rate_hz,
             face_on,
+            failures,
         } => {
             let view = PhoneView {
                 level_mm,
                 rate_hz,
                 face_on,
+                failures,
             };
-            phone_messages(clean, &mut timeline, &placed, &view, &mut rng)?
+            phone_messages(clean, &mut timeline, &placed, &view, &mut rng)?.0
         }
         Input::Imu { magnetometers } => imu_messages(clean, &timeline, magnetometers, &mut rng)?,
     };
