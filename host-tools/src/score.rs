@@ -202,10 +202,10 @@ pub fn run(args: &Args) -> Result<String> {
             .iter()
             .map(|(path, scored)| html::Swing {
                 heading: format!("Swing of {}", path.display()),
-                outcome: scored
-                    .as_ref()
-                    .map(Clone::clone)
-                    .map_err(|e| format!("{e:#}")),
+                outcome: match scored {
+                    Ok(scored) => Ok(scored.clone()),
+                    Err(e) => Err(format!("{e:#}")),
+                },
             })
             .collect();
         write_report(path, &json, || {
