@@ -962,6 +962,13 @@ fn quantiles(values: &[f32]) -> Value {
     json!({"median": q(0.5), "p95": q(0.95), "n": v.len()})
 }
 
+/// A [`share`]'s percentage for the table, `-` where there was none.
+fn pct(v: &Value) -> String {
+    v["share"]
+        .as_f64()
+        .map_or("-".into(), |s| format!("{:.0}%", s * 100.0))
+}
+
 fn share(hits: usize, of: usize) -> Value {
     if of == 0 {
         json!(null)
@@ -1159,11 +1166,6 @@ fn table(doc: &Value) -> String {
         doc["cases"], doc["bodies"], doc["sources"]
     );
     let _ = writeln!(out, "input | found | coach | false | takeaway ms | top ms | impact ms | tempo err | covered | false tempo / body / any | recall@1 offset>=8cm / tempo / body | body named | score unflawed / 10-15cm / tempo 30-50%");
-    let pct = |v: &Value| {
-        v["share"]
-            .as_f64()
-            .map_or("-".into(), |s| format!("{:.0}%", s * 100.0))
-    };
     let q = |v: &Value| {
         v["median"].as_f64().map_or("-".into(), |m| {
             format!("{m:.0} / {:.0}", v["p95"].as_f64().unwrap_or(f64::NAN))

@@ -21,7 +21,7 @@
 //! recall per family.
 
 use super::flaws::{self, Body, Flaw, Planted, Truth};
-use super::{imu_messages, phone_messages, share, states, Clean, Input, PhoneView, MODEL_HZ};
+use super::{imu_messages, pct, phone_messages, share, states, Clean, Input, PhoneView, MODEL_HZ};
 use crate::coaches;
 use crate::synth::lay_out;
 use anyhow::Result;
@@ -449,11 +449,6 @@ pub(super) fn case_json(clean: &Clean, case: &SessionCase, o: &SessionOutcome) -
 pub(super) fn table(levels: &[Value]) -> String {
     use std::fmt::Write;
     let mut out = String::new();
-    let pct = |v: &Value| {
-        v["share"]
-            .as_f64()
-            .map_or("-".into(), |s| format!("{:.0}%", s * 100.0))
-    };
     let _ = writeln!(
         out,
         "range sessions (one golfer, one flaw ×0.7-1.3 each swing): input | swings | reached | set aside | recall@1 {} | false | covered [90 %]",
