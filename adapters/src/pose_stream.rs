@@ -69,7 +69,9 @@ pub const UNSURE_BONE_SHARE: f32 = 0.3;
 /// one reading to the other, measured along the line between them. The last frame is first
 /// turned on about the vertical through its mean at the rate the body turned between the two
 /// frames before it (the rigid turn that fits their sure joints best), so a body turning fast is
-/// compared where it should be.
+/// compared where it should be; until that rate is known (a stream's first two frames, and
+/// after a break) a frame is not taken as flipped, since a turning pose that is its own mirror
+/// image across the camera's axis moves as a flip would move it.
 ///
 /// Why three quarters. Between two left/right counterparts (hips, knees, ankles, shoulders,
 /// elbows, wrists: a person's are 0.2 to 0.5 m apart), the sent reading and the swapped one
@@ -249,6 +251,9 @@ struct Readings {
     /// What exchanging the hips moves a frame (twice their mean distance over the frames
     /// taken, squared), m².
     hips: f32,
+    /// Whether the flipped reading may be taken: once the body's turn rate is known (a turning
+    /// body that is its own mirror image across the camera's axis turns as a flip moves it).
+    flip: bool,
     /// The depth the flip is mirrored about: the mean of the compared joints', m.
     centre: f32,
 }
@@ -283,8 +288,9 @@ pub struct PoseStream {
     reading: u8,
     /// The sum of the hips' distances over the frames taken with both sure, and how many.
     hips: (f32, u32),
-    /// The body's turn rate about the vertical between the last two frames taken, rad/s.
-    spin: f32,
+    /// The body's turn rate about the vertical between the last two frames taken, rad/s, once
+    /// there are two.
+    spin: Option<f32>,
     /// The time of the first frame of the current run read relabelled.
     relabelled_since: Option<u64>,
     /// Joints that have had a confident position.
@@ -314,7 +320,7 @@ impl PoseStream {
             reference: false,
             reading: 0,
             hips: (0.0, 0),
-            spin: 0.0,
+            spin: None,
             relabelled_since: None,
             seen: 0,
             grid: None,
@@ -514,7 +520,8 @@ impl PoseStream {
         // from the one to the other, and the two at least `MIN_RELABEL` apart.
         let clear = |from: usize, to: usize| {
             let between = apart(from, to);
-            c.from_last[from] - c.from_last[to] >= RELABEL_MARGIN * between
+            (to != 2 || c.flip)
+                && c.from_last[from] - c.from_last[to] >= RELABEL_MARGIN * between
                 && between >= MIN_RELABEL * c.hips
         };
         let now = usize::from(self.reading);
@@ -580,7 +587,8 @@ impl PoseStream {
         let centre = sum.z / n as f32;
         let around = sum_last / n as f32;
         let dt = t_us.saturating_sub(last.t_us) as f32 * 1e-6;
-        let (sin, cos) = (libm::sinf(self.spin * dt), libm::cosf(self.spin * dt));
+        let angle = self.spin.unwrap_or(0.0) * dt;
+        let (sin, cos) = (libm::sinf(angle), libm::cosf(angle));
         let turned = |q: &Vec3| {
             let d = q - around;
             Vec3::new(
@@ -594,6 +602,7 @@ impl PoseStream {
             apart: [0.0; 3],
             hips: 2.0 * hip_width * hip_width,
             centre,
+            flip: self.spin.is_some(),
         };
         for (k, (p, _)) in joints.iter().enumerate() {
             let (Some(last), Some(other)) = (previous.get(k), joints.get(mirror(k))) else {
@@ -620,7 +629,7 @@ impl PoseStream {
     /// `dt` seconds later), rad/s: the rigid turn of the joints sure in both that fits them
     /// best, about their means (0 without a last frame).
     #[inline(never)]
-    fn turn_rate(&self, current: &[Vec3], masked: u64, dt: f32) -> f32 {
+    fn turn_rate(&self, current: &[Vec3], masked: u64, dt: f32) -> Option<f32> {
         let both = |k: usize| k < 64 && (masked | self.previous_masked) & (1 << k) == 0;
         let pairs = || {
             current
@@ -633,7 +642,7 @@ impl PoseStream {
         };
         let n = pairs().count();
         if !self.reference || n < 2 || dt <= 0.0 {
-            return 0.0;
+            return None;
         }
         let (now, was) = pairs().fold((Vec3::zeros(), Vec3::zeros()), |(a, b), (p, q)| {
             (a + p, b + q)
@@ -645,7 +654,7 @@ impl PoseStream {
             dot += a.x * b.x + a.z * b.z;
             cross += a.z * b.x - a.x * b.z;
         }
-        libm::atan2f(cross, dot) / dt
+        Some(libm::atan2f(cross, dot) / dt)
     }
 
     /// Puts `joints` back as `relabel` says: each joint (with its confidence) takes its

@@ -15,7 +15,8 @@
 //! axis as across the image; each is given as its 3D RMS. The capture times jitter by up to
 //! `jitter_ms` and a share `drop` of the frames never arrive.
 //!
-//! Beyond noise, the estimator fails as real ones do (`../shared/docs/GOLF.md`):
+//! Beyond noise, the estimator fails as real ones do (swaps as users of MediaPipe and Sports2D
+//! report them, flips as in MediaPipe issue #3500, the lean as in #2918):
 //!
 //! - **left/right swaps** of whole frames, in runs ([`SWAP_RUN_S`] long on average): every left
 //!   keypoint is sent as its right counterpart ([`Format::mirror_keypoint`]) and back, with its
