@@ -63,6 +63,13 @@ pub const MIN_CONFIDENCE: u8 = 77;
 /// keypoint of confidence 0, the joint is carried by its parent.
 pub const UNSURE_BONE_SHARE: f32 = 0.3;
 
+/// A flip is read only across a step of at most this many seconds from the last frame taken:
+/// one frame at 20 Hz, the slowest stream. The body's turn is carried over the step, and across
+/// a lost frame a turning pose that is its own mirror image moves as a flip would move it (the
+/// amateur's recording through a damaged link, 5 % of frames lost, had 21 frames read flipped
+/// and its first swing lost before this bound).
+pub const FLIP_STEP_S: f32 = 0.05;
+
 /// A frame is taken as swapped (or flipped) when the last frame taken is nearer its swapped
 /// (flipped) reading than the reading as sent by at least this share of the squared distance
 /// between the two readings: the last frame lies at least three quarters of the way from the
@@ -70,8 +77,9 @@ pub const UNSURE_BONE_SHARE: f32 = 0.3;
 /// turned on about the vertical through its mean at the rate the body turned between the two
 /// frames before it (the rigid turn that fits their sure joints best), so a body turning fast is
 /// compared where it should be; until that rate is known (a stream's first two frames, and
-/// after a break) a frame is not taken as flipped, since a turning pose that is its own mirror
-/// image across the camera's axis moves as a flip would move it.
+/// after a break), and across a step longer than [`FLIP_STEP_S`], a frame is not taken as
+/// flipped, since a turning pose that is its own mirror image across the camera's axis moves
+/// as a flip would move it.
 ///
 /// Why three quarters. Between two left/right counterparts (hips, knees, ankles, shoulders,
 /// elbows, wrists: a person's are 0.2 to 0.5 m apart), the sent reading and the swapped one
@@ -251,8 +259,9 @@ struct Readings {
     /// What exchanging the hips moves a frame (twice their mean distance over the frames
     /// taken, squared), m².
     hips: f32,
-    /// Whether the flipped reading may be taken: once the body's turn rate is known (a turning
-    /// body that is its own mirror image across the camera's axis turns as a flip moves it).
+    /// Whether the flipped reading may be taken: once the body's turn rate is known and across
+    /// a step of at most [`FLIP_STEP_S`] (a turning body that is its own mirror image across
+    /// the camera's axis turns as a flip moves it).
     flip: bool,
     /// The depth the flip is mirrored about: the mean of the compared joints', m.
     centre: f32,
@@ -602,7 +611,7 @@ impl PoseStream {
             apart: [0.0; 3],
             hips: 2.0 * hip_width * hip_width,
             centre,
-            flip: self.spin.is_some(),
+            flip: self.spin.is_some() && dt <= FLIP_STEP_S,
         };
         for (k, (p, _)) in joints.iter().enumerate() {
             let (Some(last), Some(other)) = (previous.get(k), joints.get(mirror(k))) else {
