@@ -39,7 +39,7 @@ pub const CLAMP: f32 = 3.5;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Tally {
-    /// Values counted (saturating at 255; the statistics keep their last weights past it).
+    /// Values counted, to 255: later values are not counted.
     n: u8,
     /// Values past the tolerance above.
     above: u8,
@@ -170,7 +170,7 @@ impl Tally {
 
     /// Counts `value` with its stated uncertainty `u` (both in units; `u` non-negative),
     /// counting it past `tolerance` (units) above or below where it is. A value that is not
-    /// finite is not counted.
+    /// finite is not counted, nor any past the 255th.
     pub fn add(&mut self, value: f32, u: f32, tolerance: f32) {
         if !value.is_finite() || !u.is_finite() || self.n == u8::MAX {
             return;

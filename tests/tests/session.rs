@@ -722,3 +722,30 @@ fn the_range_session_counts_every_swing_and_starts_afresh_with_a_new_coach_or_pr
     })
     .unwrap();
 }
+
+#[test]
+fn a_refused_set_up_keeps_the_range_session() {
+    let coach = io::load(&fixture("golf_driver_60hz.csv")).unwrap();
+    let coaches = [Coach {
+        skeleton: &coach.skeleton,
+        positions: Frames::metres(&coach.positions, coach.skeleton.len()),
+        rate_hz: coach.rate_hz,
+    }];
+    // Buffers for 60 Hz: the device log's 30 Hz fits, 120 Hz does not.
+    let mut buffers = OwnedBuffers::new(BufferLens::new(17, coach.frames(), 60));
+    let mut session = Session::new(&coaches, buffers.buffers());
+    for m in &device_log() {
+        session.handle(m, |_| {});
+    }
+    let swings = session.tendencies().swings();
+    assert!(swings > 0);
+    let config = Message::Config {
+        seq: 90,
+        config: Config {
+            model_rate_hz: 120,
+            band: Band::DEFAULT,
+        },
+    };
+    assert_eq!(outcomes(&mut session, &config), [Refusal::Buffers]);
+    assert_eq!(session.tendencies().swings(), swings);
+}

@@ -327,20 +327,26 @@ impl<'b> Session<'b> {
             return Err(Refusal::SwingUnderWay);
         }
         let previous = field(self).map(|f| core::mem::replace(f, value));
-        self.restart().inspect_err(|_| {
-            if let (Some(f), Some(previous)) = (field(self), previous) {
-                *f = previous;
+        match self.restart() {
+            // A change taken starts a new range session; a refused one changes nothing.
+            Ok(()) => {
+                self.tendencies.reset();
+                self.tendencies_coach = None;
+                Ok(())
             }
-            // What worked before works again.
-            let _ = self.restart();
-        })
+            Err(refusal) => {
+                if let (Some(f), Some(previous)) = (field(self), previous) {
+                    *f = previous;
+                }
+                // What worked before works again.
+                let _ = self.restart();
+                Err(refusal)
+            }
+        }
     }
 
-    /// Rebuilds everything that follows the profile, coach and settings (a new range session
-    /// too).
+    /// Rebuilds everything that follows the profile, coach and settings.
     fn restart(&mut self) -> Result<(), Refusal> {
-        self.tendencies.reset();
-        self.tendencies_coach = None;
         let Some(skeleton) = self.student().cloned() else {
             return Ok(());
         };
