@@ -63,13 +63,6 @@ pub const MIN_CONFIDENCE: u8 = 77;
 /// keypoint of confidence 0, the joint is carried by its parent.
 pub const UNSURE_BONE_SHARE: f32 = 0.3;
 
-/// A flip is read only across a step of at most this many seconds from the last frame taken:
-/// one frame at 20 Hz, the slowest stream. The body's turn is carried over the step, and across
-/// a lost frame a turning pose that is its own mirror image moves as a flip would move it (the
-/// amateur's recording through a damaged link, 5 % of frames lost, had 21 frames read flipped
-/// and its first swing lost before this bound).
-pub const FLIP_STEP_S: f32 = 0.05;
-
 /// A frame is taken as swapped (or flipped) when the last frame taken is nearer its swapped
 /// (flipped) reading than the reading as sent by at least this share of the squared distance
 /// between the two readings: the last frame lies at least three quarters of the way from the
@@ -77,9 +70,8 @@ pub const FLIP_STEP_S: f32 = 0.05;
 /// turned on about the vertical through its mean at the rate the body turned between the two
 /// frames before it (the rigid turn that fits their sure joints best), so a body turning fast is
 /// compared where it should be; until that rate is known (a stream's first two frames, and
-/// after a break), and across a step longer than [`FLIP_STEP_S`], a frame is not taken as
-/// flipped, since a turning pose that is its own mirror image across the camera's axis moves
-/// as a flip would move it.
+/// after a break) a frame is not taken as flipped, since a turning pose that is its own mirror
+/// image across the camera's axis moves as a flip would move it.
 ///
 /// Why three quarters. Between two left/right counterparts (hips, knees, ankles, shoulders,
 /// elbows, wrists: a person's are 0.2 to 0.5 m apart), the sent reading and the swapped one
@@ -90,7 +82,11 @@ pub const FLIP_STEP_S: f32 = 0.05;
 /// arms' about 1 000 °/s through impact, is 33° in a frame at 30 Hz, and the feet, knees and
 /// hips, which weigh most, turn far less; neither mistake needs a turn a body makes between two
 /// frames. The midpoint (a half) would be the likelier reading at even odds; the margin keeps a
-/// frame as sent where the turn is unusual.
+/// frame as sent where the turn is unusual. A relabelled reading must also lie within half the
+/// distance between the readings of the last frame, in every direction and not only along the
+/// line: where no reading comes near it (a downswing across lost frames, the arms a metre on),
+/// the last frame cannot judge the frame, which keeps the reading in force. Going back to the
+/// frame as sent needs no such nearness.
 ///
 /// For flips the other reading is the frame with its left and right exchanged and its depth
 /// (the sender's Z axis: a phone's camera axis) mirrored about its joints' mean depth. Where
@@ -259,9 +255,8 @@ struct Readings {
     /// What exchanging the hips moves a frame (twice their mean distance over the frames
     /// taken, squared), m².
     hips: f32,
-    /// Whether the flipped reading may be taken: once the body's turn rate is known and across
-    /// a step of at most [`FLIP_STEP_S`] (a turning body that is its own mirror image across
-    /// the camera's axis turns as a flip moves it).
+    /// Whether the flipped reading may be taken: once the body's turn rate is known (a turning
+    /// body that is its own mirror image across the camera's axis turns as a flip moves it).
     flip: bool,
     /// The depth the flip is mirrored about: the mean of the compared joints', m.
     centre: f32,
@@ -526,11 +521,13 @@ impl PoseStream {
             _ => c.apart[2],
         };
         // Reading `to` clearly better than `from`: the last frame three quarters of the way
-        // from the one to the other, and the two at least `MIN_RELABEL` apart.
+        // from the one to the other (and, for a relabelled one, within half the distance
+        // between them of it), and the two at least `MIN_RELABEL` apart.
         let clear = |from: usize, to: usize| {
             let between = apart(from, to);
             (to != 2 || c.flip)
                 && c.from_last[from] - c.from_last[to] >= RELABEL_MARGIN * between
+                && (to == 0 || c.from_last[to] <= 0.25 * between)
                 && between >= MIN_RELABEL * c.hips
         };
         let now = usize::from(self.reading);
@@ -611,7 +608,7 @@ impl PoseStream {
             apart: [0.0; 3],
             hips: 2.0 * hip_width * hip_width,
             centre,
-            flip: self.spin.is_some() && dt <= FLIP_STEP_S,
+            flip: self.spin.is_some(),
         };
         for (k, (p, _)) in joints.iter().enumerate() {
             let (Some(last), Some(other)) = (previous.get(k), joints.get(mirror(k))) else {
