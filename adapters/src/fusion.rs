@@ -303,7 +303,7 @@ impl Mahony {
         if let Some(m) = mag.filter(|m| self.magnetic && m.norm() > 0.0) {
             let m = m.normalize();
             let h = self.q * m;
-            let horizontal = libm::sqrtf(h.x * h.x + h.z * h.z);
+            let horizontal = posecoach_core::math::sqrt(h.x * h.x + h.z * h.z);
             let expected = inverse * Vec3::new(0.0, h.y, horizontal);
             error += up * up.dot(&m.cross(&expected));
         }
@@ -313,7 +313,7 @@ impl Mahony {
             self.integral *= MAX_INTEGRAL / bias_norm;
         }
         let rate = gyro + error * self.gains.kp + self.integral;
-        let turned = self.q * Quat::from_scaled_axis(rate * dt);
+        let turned = self.q * posecoach_core::math::turn(rate * dt);
         self.q = Quat::new_normalize(turned.into_inner());
     }
 }

@@ -608,7 +608,7 @@ fn heading_fit(rotations: impl Iterator<Item = Quat>) -> Quat {
 
 /// The rotation a fraction `f` of the way from `a` to `b` (shortest arc).
 fn interpolate(a: Quat, b: Quat, f: f32) -> Quat {
-    a * Quat::from_scaled_axis((a.inverse() * b).scaled_axis() * f.clamp(0.0, 1.0))
+    a * posecoach_core::math::turn((a.inverse() * b).scaled_axis() * f.clamp(0.0, 1.0))
 }
 
 #[cfg(test)]

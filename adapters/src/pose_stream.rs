@@ -594,7 +594,7 @@ impl PoseStream {
         let around = sum_last / n as f32;
         let dt = t_us.saturating_sub(last.t_us) as f32 * 1e-6;
         let angle = self.spin.unwrap_or(0.0) * dt;
-        let (sin, cos) = (libm::sinf(angle), libm::cosf(angle));
+        let (sin, cos) = libm::sincosf(angle);
         let turned = |q: &Vec3| {
             let d = q - around;
             Vec3::new(
@@ -1028,7 +1028,7 @@ mod tests {
         ] {
             pose[k] = p;
         }
-        let (sin, cos) = (libm::sinf(turn), libm::cosf(turn));
+        let (sin, cos) = libm::sincosf(turn);
         pose.map(|p| Vec3::new(cos * p.x + sin * p.z + x, p.y, -sin * p.x + cos * p.z))
     }
 
@@ -1197,10 +1197,12 @@ mod tests {
 
         /// A keypoint's error of 3D RMS `mm`, the depth axis (Z) twice the others, metres.
         fn keypoint(&mut self, mm: f32) -> Vec3 {
-            let sigma = mm * 1e-3 / libm::sqrtf(6.0);
+            let sigma = mm * 1e-3 / posecoach_core::math::sqrt(6.0);
             let mut normal = || {
                 let (a, b) = (self.uniform(), self.uniform());
-                libm::sqrtf(-2.0 * libm::logf(a)) * libm::cosf(core::f32::consts::TAU * b) * sigma
+                posecoach_core::math::sqrt(-2.0 * libm::logf(a))
+                    * libm::cosf(core::f32::consts::TAU * b)
+                    * sigma
             };
             Vec3::new(normal(), normal(), 2.0 * normal())
         }
@@ -1247,7 +1249,7 @@ mod tests {
                     let t = i as f32 / 30.0;
                     let pose = address(start + turn_deg_s.to_radians() * t, 0.2 * t);
                     for d in &mut drift {
-                        *d = *d * keep + noise.keypoint(level_mm) * libm::sqrtf(1.0 - keep * keep);
+                        *d = *d * keep + noise.keypoint(level_mm) * posecoach_core::math::sqrt(1.0 - keep * keep);
                     }
                     let noisy: [Vec3; 17] =
                         core::array::from_fn(|k| pose[k] + drift[k] + noise.keypoint(level_mm / 3.0));

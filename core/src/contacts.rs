@@ -648,7 +648,7 @@ impl Ground {
         };
         self.before = now;
         let step = b - a;
-        let speed = libm::sqrtf(step.x * step.x + step.z * step.z) * self.rate_hz;
+        let speed = crate::math::sqrt(step.x * step.x + step.z * step.z) * self.rate_hz;
         (
             now,
             now.y <= self.lowest + CONTACT_HEIGHT_M && speed < CONTACT_SPEED_M_S,
@@ -673,7 +673,7 @@ pub fn planted(
             _ => (f - 1, f),
         };
         let step = at(b, k) - at(a, k);
-        let speed = libm::sqrtf(step.x * step.x + step.z * step.z) * rate_hz;
+        let speed = crate::math::sqrt(step.x * step.x + step.z * step.z) * rate_hz;
         at(f, k).y <= lowest + CONTACT_HEIGHT_M && speed < CONTACT_SPEED_M_S
     }
 }
@@ -758,7 +758,7 @@ impl Club {
         let away = frame[self.grip] - frame[0];
         let least = (PLUMB * length).max(MIN_LENGTH);
         let Some((x, z)) = [shaft, away].into_iter().find_map(|v| {
-            let across = libm::sqrtf(v.x * v.x + v.z * v.z);
+            let across = crate::math::sqrt(v.x * v.x + v.z * v.z);
             (across >= least).then(|| (v.x / across, v.z / across))
         }) else {
             return Quat::identity();

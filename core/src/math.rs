@@ -1,5 +1,5 @@
-//! Float functions that `core` lacks: square roots, a dot product and scaled sums, and the
-//! median and selection the scoring's robust spreads read.
+//! Float functions that `core` lacks: square roots, a turn from its scaled axis, a dot product
+//! and scaled sums, and the median and selection the scoring's robust spreads read.
 //!
 //! With std (the host build and tests) the square roots are std's, which the compiler can
 //! vectorize; on an ARM FPU (the `eabihf` targets: the Cortex-M4F) the square root is the FPU's `VSQRT.F32`;
@@ -35,6 +35,22 @@ pub fn unit(v: crate::Vec3, min: f32) -> Option<crate::Vec3> {
 pub fn rotation(q: nalgebra::Quaternion<f32>) -> crate::Quat {
     let norm = sqrt(q.coords.norm_squared());
     crate::Quat::new_unchecked(nalgebra::Quaternion::from(q.coords / norm))
+}
+
+/// The rotation about `axis_angle`'s direction by its length (radians): nalgebra's
+/// `UnitQuaternion::from_scaled_axis`, to the bit (the quaternion exponential of half of it,
+/// the identity below `f32::EPSILON`), with the root through [`sqrt`] and the sine and cosine
+/// from one `sincosf` (the same values as `sinf` and `cosf`, so neither is linked).
+#[inline]
+pub fn turn(axis_angle: crate::Vec3) -> crate::Quat {
+    let half = axis_angle / 2.0;
+    let squared = half.norm_squared();
+    if squared <= f32::EPSILON * f32::EPSILON {
+        return crate::Quat::identity();
+    }
+    let n = sqrt(squared);
+    let (sin, cos) = libm::sincosf(n);
+    crate::Quat::new_unchecked(nalgebra::Quaternion::from_parts(cos, half * (sin / n)))
 }
 
 /// The costs of `here` against consecutive frames of `here.len()` joints: for each whole frame
@@ -441,6 +457,18 @@ mod tests {
     use super::*;
 
     proptest::proptest! {
+        #[test]
+        fn a_turn_is_nalgebras_from_its_scaled_axis(
+            v in proptest::array::uniform3(-4.0f32..4.0),
+            tiny in proptest::bool::ANY,
+        ) {
+            let v = crate::Vec3::from(v) * if tiny { 1e-8 } else { 1.0 };
+            // nalgebra's sine and cosine are the host's (std), ours libm's: to an ulp or so.
+            let (ours, theirs) = (turn(v), crate::Quat::from_scaled_axis(v));
+            proptest::prop_assert!((ours.coords - theirs.coords).amax() <= 2.0 * f32::EPSILON);
+            proptest::prop_assert!((ours.norm() - 1.0).abs() <= 2.0 * f32::EPSILON);
+        }
+
         #[test]
         fn dot_from_is_a_plain_fold_to_the_bit(
             a in proptest::collection::vec(-100.0f32..100.0, 0..23),

@@ -186,7 +186,7 @@ fn peak(
                 + 2.0 * da * db * inverse[(0, 1)]);
         let time = at as f32 + x;
         // Another hump the noise could have made the highest: the peak may be there instead.
-        let rival = 2.0 * libm::sqrtf(2.0 * scatter);
+        let rival = 2.0 * crate::math::sqrt(2.0 * scatter);
         let mut farthest = 0.0f32;
         for t in (from..lo.max(from)).chain(hi.max(from) + 1..=to) {
             let (Some(v), before, after) =
@@ -202,8 +202,8 @@ fn peak(
             }
         }
         let uncertainty = Spread {
-            speed: libm::sqrtf(scatter),
-            time: libm::sqrtf(spread.max(0.0)).max(farthest),
+            speed: crate::math::sqrt(scatter),
+            time: crate::math::sqrt(spread.max(0.0)).max(farthest),
         };
         Some((time, uncertainty))
     });
@@ -695,7 +695,7 @@ mod tests {
                 let peak = sequence.peak(link).unwrap();
                 // Peak speed of the bell: degrees turned / (σ √(2π)); the window of ±17 ms
                 // averages a little off the top.
-                let fastest = total / (0.03 * libm::sqrtf(core::f32::consts::TAU));
+                let fastest = total / (0.03 * crate::math::sqrt(core::f32::consts::TAU));
                 assert!(
                     (shifted(peak.time) / hz - at).abs() < 0.1 / hz + 0.001,
                     "{hz} Hz {link:?}: {peak:?}"

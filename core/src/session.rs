@@ -306,7 +306,7 @@ impl<'a> Tendencies<'a> {
         let distance_m = crate::math::norm(&o);
         let along = o
             .try_normalize(f32::MIN_POSITIVE)
-            .map_or(crate::math::norm(&u) / libm::sqrtf(3.0), |d| {
+            .map_or(crate::math::norm(&u) / crate::math::sqrt(3.0), |d| {
                 crate::math::norm(&u.component_mul(&d))
             });
         let direction = Direction::of(o);

@@ -83,7 +83,7 @@ impl Setup {
             self.stance_m - other.stance_m,
             self.hands_out_m - other.hands_out_m,
         );
-        libm::sqrtf(stance * stance + hands * hands + head * head)
+        crate::math::sqrt(stance * stance + hands * hands + head * head)
     }
 }
 

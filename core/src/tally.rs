@@ -103,7 +103,7 @@ impl Estimate {
     /// nothing is known of the scatter yet or the value sits on the tolerance.
     pub fn swings_to_settle(&self, tolerance: f32) -> Option<u32> {
         let gap = libm::fabsf(libm::fabsf(self.value) - tolerance);
-        let sigma = self.uncertainty * libm::sqrtf(f32::from(self.n));
+        let sigma = self.uncertainty * crate::math::sqrt(f32::from(self.n));
         if self.n < 2 || gap <= 0.0 || !sigma.is_finite() {
             return None;
         }
@@ -194,7 +194,7 @@ impl Tally {
     fn predictive(&self) -> f32 {
         let n = f32::from(self.n);
         let per_swing = f32::from(self.spread).max(self.noise());
-        per_swing * libm::sqrtf(1.0 + 1.0 / n)
+        per_swing * crate::math::sqrt(1.0 + 1.0 / n)
     }
 
     /// Welford's update of the mean, the spread and the noise with `value`.
@@ -205,12 +205,12 @@ impl Tally {
         let next = mean + (value - mean) / (n + 1.0);
         let m2 = m2 + (value - mean) * (value - next);
         let noise = self.noise();
-        let rms = libm::sqrtf((noise * noise * n + u * u) / (n + 1.0));
+        let rms = crate::math::sqrt((noise * noise * n + u * u) / (n + 1.0));
         self.noise = libm::roundf(rms / NOISE_STEP).clamp(0.0, 255.0) as u8;
         self.mean = to_units(next);
         self.spread = match self.n {
             0 => 0,
-            _ => to_units_u(libm::sqrtf(m2.max(0.0) / n)),
+            _ => to_units_u(crate::math::sqrt(m2.max(0.0) / n)),
         };
         self.n += 1;
     }
@@ -229,7 +229,7 @@ impl Tally {
         let median = sorted[1];
         // The median absolute deviation of three values: the smaller of the outer two's.
         let mad = libm::fabsf(sorted[0] - median).min(libm::fabsf(sorted[2] - median));
-        let noise_all = libm::sqrtf((2.0 * noise * noise + u * u) / 3.0);
+        let noise_all = crate::math::sqrt((2.0 * noise * noise + u * u) / 3.0);
         let reach = reach((1.4826 * mad).max(noise_all), tolerance);
         for v in &mut values {
             *v = v.clamp(median - reach, median + reach);
@@ -255,9 +255,9 @@ impl Tally {
             value: f32::from(self.mean) * scale,
             uncertainty: match self.n {
                 0 => f32::INFINITY,
-                _ => per_swing / libm::sqrtf(n) * scale,
+                _ => per_swing / crate::math::sqrt(n) * scale,
             },
-            spread: libm::sqrtf((spread * spread - noise * noise).max(0.0)) * scale,
+            spread: crate::math::sqrt((spread * spread - noise * noise).max(0.0)) * scale,
             noise: noise * scale,
             above: self.above,
             below: self.below,

@@ -279,7 +279,7 @@ fn fit(points: &[(f32, f32, f32)], s_top: f32) -> Option<Takeaway> {
     Some(Takeaway {
         time,
         top_gain: gain / den,
-        spread: libm::sqrtf(scatter),
+        spread: crate::math::sqrt(scatter),
     })
 }
 

@@ -150,7 +150,7 @@ pub(super) fn checks(
             check,
             student: here_s - zero_s,
             coach: here_c - zero_c,
-            uncertainty: libm::sqrtf(variance + along * along),
+            uncertainty: crate::math::sqrt(variance + along * along),
         });
     }
     out

@@ -213,7 +213,7 @@ fn at_event(
         }
         let uncertainty_m = match o.try_normalize(f32::MIN_POSITIVE) {
             Some(u) => libm::hypotf(norm(&sigma.component_mul(&u)), along.dot(&u)),
-            None => libm::hypotf(norm(sigma), norm(&along)) / libm::sqrtf(3.0),
+            None => libm::hypotf(norm(sigma), norm(&along)) / crate::math::sqrt(3.0),
         };
         let threshold = SPATIAL_THRESHOLD_M.max(NOISE_FACTOR * uncertainty_m);
         event_excess = event_excess.max(excess(distance_m, threshold, SPATIAL_SOFTNESS_M));

@@ -132,7 +132,8 @@ pub(super) fn tempo(
             Phase::Backswing if !timing.paused => 2.0 * timing.top_gain * b * b,
             _ => 0.0,
         };
-        let relative = libm::sqrtf(a * a + b * b + together) / student_s.max(f32::MIN_POSITIVE);
+        let relative =
+            crate::math::sqrt(a * a + b * b + together) / student_s.max(f32::MIN_POSITIVE);
         let margin = libm::fabsf(libm::logf(ratio)) - TEMPO_CONFIDENCE * relative;
         // (A NaN margin, from a zero duration, gives no verdict.)
         let clear = margin > libm::logf(1.0 + TEMPO_TOLERANCE);

@@ -110,7 +110,7 @@ impl<'a> Change<'a> {
             noise: 0.0,
         };
         let still = libm::floorf(takeaway) as usize;
-        change.noise = libm::sqrtf(
+        change.noise = crate::math::sqrt(
             (0..=still)
                 .map(|f| change.velocity(f as f32).norm_squared())
                 .sum::<f32>()
@@ -135,7 +135,7 @@ impl<'a> Change<'a> {
         let here = self.velocity(x);
         let reach = libm::ceilf(MAX_EVENT_TIMING_S * self.hz) as usize;
         let (noise, changed): (f32, &dyn Fn(Vec3) -> f32) = match vertical {
-            true => (self.noise / libm::sqrtf(3.0), &|v: Vec3| {
+            true => (self.noise / crate::math::sqrt(3.0), &|v: Vec3| {
                 libm::fabsf(v.y - here.y)
             }),
             false => (self.noise, &|v: Vec3| norm(&(v - here))),
