@@ -105,6 +105,11 @@ pub const CHECKS: [Check; MAX_CHECKS] = {
 };
 
 impl Check {
+    /// Its index in [`CHECKS`] (`None` for a check no report makes).
+    pub fn index(self) -> Option<usize> {
+        CHECKS.iter().position(|c| *c == self)
+    }
+
     /// How its measure changed from `address`'s metrics to `at`'s (shifts are counted from
     /// address already, and read 0 there).
     pub fn change(self, address: &Metrics, at: &Metrics) -> Option<f32> {

@@ -25,3 +25,14 @@ pub const MAX_CHECKS: usize = 9;
 /// Most gaps of the kinematic sequence a report holds, and a `SwingReport` carries (one of
 /// each of `sequence::GAPS`, whose array type is this long).
 pub const MAX_GAPS: usize = 2;
+
+/// Most advice items a report holds, and a `SessionReport` carries as tendencies.
+pub const MAX_ADVICE: usize = 8;
+
+/// The body-level quantities a range session keeps, and a `SessionReport` carries: the three
+/// phases, the pause, one of each of the checks and one of each of the gaps
+/// (`session::Quantity::BODY_LEVEL` lists them).
+pub const BODY_LEVEL: usize = 3 + 1 + MAX_CHECKS + MAX_GAPS;
+
+/// Set-aside swings a range session remembers (the latest), and a `SessionReport` carries.
+pub const MAX_SET_ASIDE: usize = 8;

@@ -346,6 +346,11 @@ pub struct Gap {
 }
 
 impl Gap {
+    /// Its index in [`GAPS`] (`None` for a pair of links advice does not compare).
+    pub fn index(&self) -> Option<usize> {
+        GAPS.iter().position(|l| *l == (self.first, self.then))
+    }
+
     /// What coaches call the student's gap where it is out of order and the coach's is not.
     pub fn fault(&self) -> Option<&'static str> {
         match (self.first, self.student_s < 0.0 && self.coach_s >= 0.0) {

@@ -252,7 +252,7 @@ impl Tally {
         let per_swing = spread.max(noise);
         Estimate {
             n: self.n,
-            value: f32::from(self.mean) * scale,
+            value: self.mean(scale),
             uncertainty: match self.n {
                 0 => f32::INFINITY,
                 _ => per_swing / crate::math::sqrt(n) * scale,
@@ -262,6 +262,11 @@ impl Tally {
             above: self.above,
             below: self.below,
         }
+    }
+
+    /// The mean, times `scale` (as [`Self::estimate`] gives it).
+    pub fn mean(&self, scale: f32) -> f32 {
+        f32::from(self.mean) * scale
     }
 
     /// The root mean square of the stated uncertainties, units.

@@ -31,14 +31,14 @@
 //! ```
 
 use crate::band::Band;
-use crate::config::{MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS};
+use crate::config::{BODY_LEVEL, MAX_ADVICE, MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS, MAX_SET_ASIDE};
 use crate::format::Format;
 use crate::joint::Joint;
 use heapless::Vec as HVec;
 use serde::{Deserialize, Serialize};
 
 /// Protocol version carried in every frame.
-pub const VERSION: u8 = 5;
+pub const VERSION: u8 = 6;
 /// Largest frame on the wire, delimiter included.
 pub const MAX_FRAME: usize = 640;
 /// Most joints a pose frame or profile carries (BlazePose's 33 landmarks fit).
@@ -189,7 +189,8 @@ pub struct WireGap {
 }
 
 /// A swing's report, small enough for one frame (the frame correspondence stays on the device).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[cfg_attr(feature = "phone", derive(Deserialize))]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SwingReport {
     /// Swing number since start.
@@ -216,6 +217,125 @@ pub struct SwingReport {
     pub gaps: HVec<WireGap, MAX_GAPS>,
 }
 
+/// One body-level quantity of a range session in a compact form: the session's estimate of
+/// the student's value beside the coach's, its uncertainty and the golfer's swing-to-swing
+/// spread net of the noise, in the unit [`SwingReport`] gives it: milliseconds for a phase,
+/// the pause and a gap, tenths of a degree or millimetres for a body check.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WireMetric {
+    /// Which: 0-2 the backswing, downswing and follow-through, 3 the pause at the top, 4-12 a
+    /// body check (`CHECKS` index + 4), 13-14 a gap of the sequence (`GAPS` index + 13).
+    pub quantity: u8,
+    /// Swings it was measured in.
+    pub swings: u8,
+    /// Of those, how many were past its tolerance above the coach's (slower, more).
+    pub above: u8,
+    /// And below (faster, less).
+    pub below: u8,
+    /// 0 within tolerance or not yet clear, 1 clearly above (slow), 2 clearly below (fast): as
+    /// the session's advice judges it, so not to be recomputed.
+    pub verdict: u8,
+    /// The session's estimate of the student's value.
+    pub student: i16,
+    /// The coach's value.
+    pub coach: i16,
+    /// The estimate's uncertainty (one standard deviation; `u16::MAX`: none yet).
+    pub uncertainty: u16,
+    /// The golfer's swing-to-swing spread net of the noise (one standard deviation).
+    pub spread: u16,
+}
+
+/// One of a range session's tendencies, in the order the session ranks them (causes before
+/// the symptoms they may explain).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WireTendency {
+    /// What it is about: below [`BODY_LEVEL`] the [`WireMetric::quantity`] of that number,
+    /// else the joint offset `spatial[item - BODY_LEVEL]`.
+    pub item: u8,
+    /// Swings it was measured in.
+    pub swings: u8,
+    /// Of those, how many were past the tolerance the way it says.
+    pub past: u8,
+}
+
+/// A swing a range session set aside, and why.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WireSetAside {
+    /// The swing's number in the session, from 1.
+    pub swing: u16,
+    /// In how many body-level quantities it was unlike the session's other swings.
+    pub unlike: u8,
+    /// The [`WireMetric::quantity`] it was most unlike them in.
+    pub worst: u8,
+    /// How far off in that one, tenths of a predictive standard deviation.
+    pub z_tenths: i16,
+}
+
+/// The question nearest to a tendency that a range session cannot settle yet.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WireOpen {
+    /// A [`WireMetric::quantity`], or [`BODY_LEVEL`] for a joint's offset.
+    pub quantity: u8,
+    /// A joint's offset only (else 0): its position, P1 = 0 .. P10 = 9.
+    pub position: u8,
+    /// A joint's offset only (else 0): the canonical joint index.
+    pub joint: u8,
+    /// A joint's offset only (else 0): its direction, as [`WireDeviation::direction`].
+    pub direction: u8,
+    /// The estimate: the student's value less the coach's in the quantity's unit, or the
+    /// joint's offset in millimetres.
+    pub value: i16,
+    /// Its uncertainty (`u16::MAX`: none yet).
+    pub uncertainty: u16,
+    /// About how many more swings would settle it.
+    pub more_swings: u16,
+}
+
+/// What a range session's swings say together, small enough for one frame.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[cfg_attr(feature = "phone", derive(Deserialize))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SessionReport {
+    /// Swings heard since the session started, counted or set aside.
+    pub swings: u16,
+    /// Of those, swings counted.
+    pub used: u16,
+    /// The coach reference the session's swings were scored against.
+    pub coach: u16,
+    /// The body-level quantities measured in at least one swing, in `quantity` order.
+    pub metrics: HVec<WireMetric, BODY_LEVEL>,
+    /// The tendencies, most important first.
+    pub tendencies: HVec<WireTendency, MAX_ADVICE>,
+    /// The joint offsets the tendencies name, as [`SwingReport::deviations`]' entries with the
+    /// session's estimates.
+    pub spatial: HVec<WireDeviation, MAX_ADVICE>,
+    /// The latest swings set aside.
+    pub set_aside: HVec<WireSetAside, MAX_SET_ASIDE>,
+    /// With no tendency yet, the nearest open question.
+    pub open: Option<WireOpen>,
+}
+
+/// Without the `phone` feature a device does not decode the reports it sends: their payload
+/// fails at once (the message's variant index is still read, so every other message keeps
+/// its own), and the decoder counts the frame malformed.
+#[cfg(not(feature = "phone"))]
+macro_rules! undecodable {
+    ($($report:ty),*) => {$(
+        impl<'de> Deserialize<'de> for $report {
+            fn deserialize<D: serde::Deserializer<'de>>(_: D) -> Result<Self, D::Error> {
+                Err(serde::de::Error::custom("a report a device sends"))
+            }
+        }
+    )*};
+}
+
+#[cfg(not(feature = "phone"))]
+undecodable!(SwingReport, SessionReport);
+
 /// Why a message was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -231,14 +351,18 @@ pub enum NackReason {
     Version,
 }
 
-/// Every message of protocol version [`VERSION`].
+/// Every message of protocol version [`VERSION`]. Without the `phone` feature, the messages a
+/// phone sends do not encode ([`EncodeError::PhoneSide`]) and those a device sends do not decode
+/// (counted malformed): a device links only its own half.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Message {
     /// Phone → device: a 3D pose.
+    #[cfg_attr(not(feature = "phone"), serde(skip_serializing))]
     PoseFrame(PoseFrame),
     /// Device internal or device → phone on request: an IMU sample.
     ImuSample(ImuSample),
     /// Phone → device: the student's T-pose.
+    #[cfg_attr(not(feature = "phone"), serde(skip_serializing))]
     StudentProfile {
         /// Sender's sequence number, which the device's `Ack` or `Nack` carries back.
         seq: u32,
@@ -246,6 +370,7 @@ pub enum Message {
         profile: StudentProfile,
     },
     /// Phone → device: which stored coach reference to use.
+    #[cfg_attr(not(feature = "phone"), serde(skip_serializing))]
     CoachSelect {
         /// Sender's sequence number, as in `StudentProfile`.
         seq: u32,
@@ -253,6 +378,7 @@ pub enum Message {
         coach: u16,
     },
     /// Phone → device: scoring settings.
+    #[cfg_attr(not(feature = "phone"), serde(skip_serializing))]
     Config {
         /// Sender's sequence number, as in `StudentProfile`.
         seq: u32,
@@ -276,11 +402,22 @@ pub enum Message {
         reason: NackReason,
     },
     /// Phone → device: where the IMUs are.
+    #[cfg_attr(not(feature = "phone"), serde(skip_serializing))]
     SensorLayout {
         /// Sender's sequence number, as in `StudentProfile`.
         seq: u32,
         /// The sensors.
         layout: SensorLayout,
+    },
+    /// Device → phone: the range session, after each `SwingReport` and on request.
+    SessionReport(SessionReport),
+    /// Phone → device: send the range session (`reset`: start a new one first).
+    #[cfg_attr(not(feature = "phone"), serde(skip_serializing))]
+    SessionRequest {
+        /// Sender's sequence number, as in `StudentProfile`.
+        seq: u32,
+        /// Start a new session before answering.
+        reset: bool,
     },
 }
 
@@ -293,9 +430,19 @@ impl Message {
             | Message::StudentProfile { seq, .. }
             | Message::CoachSelect { seq, .. }
             | Message::Config { seq, .. }
-            | Message::SensorLayout { seq, .. } => Some(*seq),
+            | Message::SensorLayout { seq, .. }
+            | Message::SessionRequest { seq, .. } => Some(*seq),
             _ => None,
         }
+    }
+
+    /// Whether only a device sends this message (`SwingReport`, `SessionReport`, `Status`): a
+    /// device's [`Decoder`] drops it.
+    pub fn from_device(&self) -> bool {
+        matches!(
+            self,
+            Message::SwingReport(_) | Message::SessionReport(_) | Message::Status(_)
+        )
     }
 
     /// Whether this is a set-up message (`StudentProfile`, `CoachSelect`, `Config`,
@@ -317,11 +464,20 @@ impl Message {
 pub enum EncodeError {
     /// The message does not fit in [`MAX_PAYLOAD`] bytes, or `out` is too short.
     TooLong,
+    /// A message a phone sends, encoded without the `phone` feature.
+    PhoneSide,
 }
 
 impl core::fmt::Display for EncodeError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "the message does not fit in a {MAX_FRAME}-byte frame")
+        match self {
+            EncodeError::TooLong => {
+                write!(f, "the message does not fit in a {MAX_FRAME}-byte frame")
+            }
+            EncodeError::PhoneSide => {
+                write!(f, "a phone's message, encoded without the phone feature")
+            }
+        }
     }
 }
 
@@ -330,12 +486,16 @@ impl core::error::Error for EncodeError {}
 /// Frames `message` into `out`; returns the frame's length, delimiter included.
 ///
 /// # Errors
-/// [`EncodeError::TooLong`] if the message does not fit.
+/// [`EncodeError::TooLong`] if the message does not fit, [`EncodeError::PhoneSide`] for a
+/// phone's message without the `phone` feature.
 pub fn encode(message: &Message, out: &mut [u8]) -> Result<usize, EncodeError> {
     let mut payload = [0u8; MAX_PAYLOAD];
     payload[0] = VERSION;
     let body = postcard::to_slice(message, &mut payload[1..MAX_PAYLOAD - 4])
-        .map_err(|_| EncodeError::TooLong)?
+        .map_err(|e| match e {
+            postcard::Error::SerializeBufferFull => EncodeError::TooLong,
+            _ => EncodeError::PhoneSide,
+        })?
         .len();
     let crc = CRC.checksum(&payload[..1 + body]);
     payload[1 + body..5 + body].copy_from_slice(&crc.to_le_bytes());
@@ -345,7 +505,10 @@ pub fn encode(message: &Message, out: &mut [u8]) -> Result<usize, EncodeError> {
     Ok(n + 1)
 }
 
-/// A streaming frame decoder with a fixed [`MAX_FRAME`] buffer.
+/// A streaming frame decoder with a fixed [`MAX_FRAME`] buffer: a device's
+/// ([`Decoder::new`]), which drops the messages a device sends ([`Message::from_device`]) as
+/// malformed, or with the `phone` feature a phone's ([`Decoder::phone`]), which takes every
+/// message.
 #[derive(Clone, Debug)]
 pub struct Decoder {
     buffer: [u8; MAX_FRAME],
@@ -355,6 +518,8 @@ pub struct Decoder {
     counters: Counters,
     /// A frame of another version came since [`Decoder::reply`] was last asked.
     owed: bool,
+    /// Whether it takes the messages a device sends.
+    phone: bool,
 }
 
 impl Default for Decoder {
@@ -371,6 +536,7 @@ impl Decoder {
             len: 0,
             skipping: false,
             owed: false,
+            phone: false,
             counters: Counters {
                 frames_ok: 0,
                 crc_errors: 0,
@@ -379,6 +545,16 @@ impl Decoder {
                 overflows: 0,
                 drops: 0,
             },
+        }
+    }
+
+    /// An empty decoder for a phone (or the bridge): it takes every message, those a device
+    /// sends too.
+    #[cfg(feature = "phone")]
+    pub const fn phone() -> Decoder {
+        Decoder {
+            phone: true,
+            ..Decoder::new()
         }
     }
 
@@ -463,7 +639,13 @@ impl Decoder {
         if body[0] != VERSION {
             return Err(FrameFault::Version);
         }
-        postcard::from_bytes(&body[1..]).map_err(|_| FrameFault::Malformed)
+        // Without the `phone` feature a device cannot decode the reports it sends; with it, a
+        // device's decoder drops them (and `Status`) all the same, so it counts them alike
+        // either way.
+        match postcard::from_bytes::<Message>(&body[1..]) {
+            Ok(m) if self.phone || !m.from_device() => Ok(m),
+            _ => Err(FrameFault::Malformed),
+        }
     }
 }
 
@@ -485,8 +667,9 @@ mod tests {
         out[..n].to_vec()
     }
 
+    /// Every message in `bytes`, as a phone takes them, and the counts.
     fn decode_all(bytes: &[u8]) -> (Vec<Message>, Counters) {
-        let mut decoder = Decoder::new();
+        let mut decoder = Decoder::phone();
         let mut got = Vec::new();
         decoder.push_all(bytes, |m| got.push(m));
         (got, decoder.counters())
@@ -678,6 +861,76 @@ mod tests {
                             .collect()
                     }
                 }),
+            (any::<u32>(), any::<bool>())
+                .prop_map(|(seq, reset)| Message::SessionRequest { seq, reset }),
+            (
+                any::<[u16; 3]>(),
+                prop::collection::vec(
+                    (any::<[u8; 5]>(), any::<[i16; 2]>(), any::<[u16; 2]>()),
+                    0..=BODY_LEVEL
+                ),
+                prop::collection::vec(any::<[u8; 3]>(), 0..=MAX_ADVICE),
+                prop::collection::vec((any::<(u16, u8, u8)>(), any::<i16>()), 0..=MAX_SET_ASIDE),
+                any::<Option<([u8; 4], i16, [u16; 2])>>()
+            )
+                .prop_map(
+                    |([swings, used, coach], metrics, tendencies, set_aside, open)| {
+                        Message::SessionReport(SessionReport {
+                            swings,
+                            used,
+                            coach,
+                            metrics: metrics
+                                .into_iter()
+                                .map(
+                                    |(
+                                        [quantity, swings, above, below, verdict],
+                                        [student, coach],
+                                        [uncertainty, spread],
+                                    )| WireMetric {
+                                        quantity,
+                                        swings,
+                                        above,
+                                        below,
+                                        verdict,
+                                        student,
+                                        coach,
+                                        uncertainty,
+                                        spread,
+                                    },
+                                )
+                                .collect(),
+                            tendencies: tendencies
+                                .into_iter()
+                                .map(|[item, swings, past]| WireTendency { item, swings, past })
+                                .collect(),
+                            spatial: HVec::new(),
+                            set_aside: set_aside
+                                .into_iter()
+                                .map(|((swing, unlike, worst), z_tenths)| WireSetAside {
+                                    swing,
+                                    unlike,
+                                    worst,
+                                    z_tenths,
+                                })
+                                .collect(),
+                            open: open.map(
+                                |(
+                                    [quantity, position, joint, direction],
+                                    value,
+                                    [uncertainty, more_swings],
+                                )| WireOpen {
+                                    quantity,
+                                    position,
+                                    joint,
+                                    direction,
+                                    value,
+                                    uncertainty,
+                                    more_swings,
+                                },
+                            ),
+                        })
+                    }
+                ),
         ]
     }
 
@@ -760,6 +1013,37 @@ mod tests {
     }
 
     #[test]
+    fn a_device_drops_what_a_device_sends_as_malformed() {
+        let sent = [
+            Message::Status(Counters::default()),
+            Message::SessionReport(SessionReport {
+                swings: 1,
+                used: 1,
+                coach: 0,
+                metrics: HVec::new(),
+                tendencies: HVec::new(),
+                spatial: HVec::new(),
+                set_aside: HVec::new(),
+                open: None,
+            }),
+            Message::SessionRequest {
+                seq: 3,
+                reset: false,
+            },
+        ];
+        let stream: Vec<u8> = sent.iter().flat_map(frame).collect();
+        let mut device = Decoder::new();
+        let mut got = Vec::new();
+        device.push_all(&stream, |m| got.push(m));
+        assert_eq!(got, sent[2..]);
+        assert_eq!(
+            (device.counters().frames_ok, device.counters().malformed),
+            (1, 2)
+        );
+        assert_eq!(decode_all(&stream).0, sent);
+    }
+
+    #[test]
     fn an_overlong_frame_is_dropped_and_the_next_one_read() {
         let mut stream = std::vec![0x55u8; 3 * MAX_FRAME];
         stream.push(0);
@@ -821,6 +1105,65 @@ mod tests {
                     MAX_DEVIATIONS,
                 )
                 .collect(),
+            }),
+            Message::SessionReport(SessionReport {
+                swings: u16::MAX,
+                used: u16::MAX,
+                coach: u16::MAX,
+                metrics: core::iter::repeat_n(
+                    WireMetric {
+                        quantity: 255,
+                        swings: 255,
+                        above: 255,
+                        below: 255,
+                        verdict: 255,
+                        student: i16::MIN,
+                        coach: i16::MIN,
+                        uncertainty: u16::MAX,
+                        spread: u16::MAX,
+                    },
+                    BODY_LEVEL,
+                )
+                .collect(),
+                tendencies: core::iter::repeat_n(
+                    WireTendency {
+                        item: 255,
+                        swings: 255,
+                        past: 255,
+                    },
+                    MAX_ADVICE,
+                )
+                .collect(),
+                spatial: core::iter::repeat_n(
+                    WireDeviation {
+                        position: 255,
+                        joint: 255,
+                        direction: 255,
+                        offset_mm: [i16::MIN; 3],
+                        uncertainty_mm: u16::MAX,
+                    },
+                    MAX_ADVICE,
+                )
+                .collect(),
+                set_aside: core::iter::repeat_n(
+                    WireSetAside {
+                        swing: u16::MAX,
+                        unlike: 255,
+                        worst: 255,
+                        z_tenths: i16::MIN,
+                    },
+                    MAX_SET_ASIDE,
+                )
+                .collect(),
+                open: Some(WireOpen {
+                    quantity: 255,
+                    position: 255,
+                    joint: 255,
+                    direction: 255,
+                    value: i16::MIN,
+                    uncertainty: u16::MAX,
+                    more_swings: u16::MAX,
+                }),
             }),
         ];
         for m in &biggest {

@@ -3,8 +3,9 @@
 //!
 //! Every frame read goes through the device's [`Decoder`] into the device's
 //! [`Session`] with the bundled coach references, exactly as `posecoach replay` runs a log.
-//! It answers with wire frames: a `SwingReport` and then a `Status` (the decoder's counters)
-//! per scored swing, an `Ack` per set-up message taken and a `Nack` per refused message (each
+//! It answers with wire frames: a `SwingReport`, a `Status` (the decoder's counters) and the
+//! range session's `SessionReport` per scored swing, an `Ack` per set-up message taken (and an
+//! `Ack` and a `SessionReport` per `SessionRequest`) and a `Nack` per refused message (each
 //! of the message's `seq`, else 0). Frames not yet written when the link fails are kept and written, whole, once a
 //! link is back; the session carries on across links. At most [`REPLY_QUEUE`] replies wait for
 //! the link: when its peer does not read and the queue is full, a new reply is dropped and
@@ -193,7 +194,7 @@ fn serve<L: Read + Write>(
                             eprintln!("device-sim: swing {} not scored: {error}", swing.number);
                         }
                         Outcome::Refused(_) => totals.refused += 1,
-                        Outcome::Accepted => {}
+                        Outcome::Accepted | Outcome::Session { .. } => {}
                     }
                     if let Some(reply) = outcome.reply(message) {
                         totals.send(&mut unsent, &reply);

@@ -21,8 +21,9 @@ pub struct Args {
     /// `.htm`, the JSON for `.json`.
     #[arg(long)]
     report: Option<PathBuf>,
-    /// Also write the frames the device sends back (a `SwingReport` per scored swing, a
-    /// `Nack` per refused message), COBS-framed exactly as on the serial link.
+    /// Also write the frames the device sends back (a `SwingReport` and a `SessionReport` per
+    /// scored swing, an `Ack` per set-up taken, a `Nack` per refused message), COBS-framed
+    /// exactly as on the serial link.
     #[arg(long)]
     wire: Option<PathBuf>,
     /// Retarget coaches with these int8 weights (.pcw from `posecoach export`) as a device
@@ -140,7 +141,7 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
                 } => (swing, Ok((report, compared))),
                 Outcome::Unscored { swing, error } => (swing, Err(error)),
                 Outcome::Refused(r) => return refused.push(r.to_string()),
-                Outcome::Accepted => return,
+                Outcome::Accepted | Outcome::Session { .. } => return,
             };
             let start_s = swing.start_us as f64 * 1e-6;
             let coach = names

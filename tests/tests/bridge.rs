@@ -371,6 +371,69 @@ fn check_reports(phone: &Phone) {
         .iter()
         .filter(|l| l["device"].get("Nack").is_some());
     assert_eq!(nacks.count(), replayed.refused.len(), "refusals");
+    let sessions: Vec<&Value> = phone
+        .seen
+        .iter()
+        .filter_map(|l| l["device"].get("SessionReport"))
+        .collect();
+    assert_eq!(
+        sessions.len(),
+        scored.len(),
+        "a session report after each swing's"
+    );
+    same_session(sessions.last().unwrap(), &replayed.to_json()["session"]);
+}
+
+/// Checks the last session report against `posecoach replay`'s session JSON: its counts, its
+/// tendencies, each phase in milliseconds and each body check in tenths of a degree or
+/// millimetres (each rounded once, so within one unit).
+fn same_session(wire: &Value, replayed: &Value) {
+    let context = format!("wire {wire}\nreplay {replayed}");
+    assert_eq!(wire["swings"], replayed["swings"], "{context}");
+    assert_eq!(wire["used"], replayed["used"], "{context}");
+    let advice = replayed["advice"].as_array().unwrap();
+    assert_eq!(
+        wire["tendencies"].as_array().unwrap().len(),
+        advice.len(),
+        "{context}"
+    );
+    let metric = |quantity: usize| {
+        wire["metrics"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|m| m["quantity"] == quantity)
+    };
+    let close = |got: &Value, want: f64| {
+        let got = got.as_f64().unwrap();
+        assert!(
+            (got - want).abs() <= 1.0 + 1e-6,
+            "{got} against {want}: {context}"
+        );
+    };
+    let phases = replayed["tempo"]["phases"].as_array().unwrap();
+    assert!(!phases.is_empty(), "{context}");
+    for (i, name) in ["backswing", "downswing", "follow_through"]
+        .iter()
+        .enumerate()
+    {
+        let Some(p) = phases.iter().find(|p| p["phase"] == *name) else {
+            continue;
+        };
+        let m = metric(i).unwrap_or_else(|| panic!("{name}: {context}"));
+        close(&m["student"], p["student_s"].as_f64().unwrap() * 1000.0);
+        close(&m["coach"], p["coach_s"].as_f64().unwrap() * 1000.0);
+    }
+    for c in replayed["body_checks"].as_array().unwrap() {
+        let i = CHECKS
+            .iter()
+            .position(|k| k.position.name() == c["position"] && k.measure.name() == c["measure"])
+            .unwrap();
+        let m = metric(4 + i).unwrap_or_else(|| panic!("{c}: {context}"));
+        for key in ["student", "coach"] {
+            close(&m[key], c[key].as_f64().unwrap() * 10.0);
+        }
+    }
 }
 
 fn messages() -> Vec<Message> {

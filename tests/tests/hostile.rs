@@ -13,8 +13,8 @@ use posecoach_core::format::Format;
 use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{
-    encode, Config, Decoder, ImuSample, Message, PoseFrame, SensorLayout, SensorPlacement,
-    StudentProfile, MAX_FRAME,
+    encode, Config, Counters, Decoder, ImuSample, Message, PoseFrame, SensorLayout,
+    SensorPlacement, SessionReport, StudentProfile, MAX_FRAME,
 };
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -188,6 +188,24 @@ fn burst(last: &PoseFrame, setup: &[Message]) -> Vec<Sent> {
         // Frames the stream cannot take: too few keypoints, another format mid-stream.
         refused(Message::PoseFrame(short)),
         refused(Message::PoseFrame(other_format)),
+        // What a device sends, sent to it: dropped as malformed (a device built without the
+        // core's `phone` feature cannot decode the report at all), answered with nothing.
+        taken(Message::Status(Counters::default())),
+        taken(Message::SessionReport(SessionReport {
+            swings: 1,
+            used: 1,
+            coach: 0,
+            metrics: Default::default(),
+            tendencies: Default::default(),
+            spatial: Default::default(),
+            set_aside: Default::default(),
+            open: None,
+        })),
+        // The range session asked for: an Ack and its report, nothing changed.
+        taken(Message::SessionRequest {
+            seq: 98,
+            reset: false,
+        }),
         // Settings outside the device's range, a coach it does not have.
         refused(config(0, 10)),
         refused(config(u16::MAX, 10)),

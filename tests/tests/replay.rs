@@ -232,7 +232,9 @@ fn inject(log: &[u8], seed: u64, flip: f64, drop: f64, duplicate: f64, keep: usi
         if hit || previous_delimiter_hit {
             damaged += 1;
         } else {
-            intact.push(decode(frame).unwrap());
+            // A frame a device sends (the hostile log sends some) is dropped whole, as the
+            // device drops it.
+            intact.extend(decode(frame));
         }
         previous_delimiter_hit = delimiter_hit;
     }

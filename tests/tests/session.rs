@@ -185,7 +185,7 @@ fn scores(coach: &io::Motion, messages: &[Message]) -> (Vec<(f32, Vec<usize>)>, 
                 report.student_events.iter().map(|(_, f)| f).collect(),
             )),
             Outcome::Refused(r) => refused.push(r),
-            Outcome::Accepted => {}
+            Outcome::Accepted | Outcome::Session { .. } => {}
             other => panic!("{other:?}"),
         });
     }
@@ -718,6 +718,57 @@ fn the_range_session_counts_every_swing_and_starts_afresh_with_a_new_coach_or_pr
             profile: taller,
         };
         session.handle(&message, |_| {});
+        assert_eq!(session.tendencies().swings(), 0);
+    })
+    .unwrap();
+}
+
+#[test]
+fn a_session_report_follows_every_swing_report_and_answers_a_request() {
+    let messages = device_log();
+    let (replies, swings) = device_replies(&messages);
+    // Each swing report is followed at once by the range session's, its swings counted.
+    let mut told = 0;
+    for pair in replies.windows(2) {
+        if let [Message::SwingReport(swing), next] = pair {
+            told += 1;
+            let Message::SessionReport(session) = next else {
+                panic!("{next:?} after swing {}", swing.swing);
+            };
+            assert_eq!((session.swings, session.coach), (told, swing.coach));
+        }
+    }
+    assert_eq!(usize::from(told), swings.len());
+    posecoach_cli::coaches::session(None, |session| {
+        for m in &messages {
+            session.handle(m, |_| {});
+        }
+        let ask = |reset| Message::SessionRequest { seq: 7, reset };
+        let answer = |session: &mut Session<'_>, m: &Message| {
+            let mut got = Vec::new();
+            session.handle(m, |o| got.extend(o.reply(m)));
+            got
+        };
+        // Asked: the last report again, and nothing changes.
+        let last = replies
+            .iter()
+            .rev()
+            .find(|m| matches!(m, Message::SessionReport(_)))
+            .cloned()
+            .unwrap();
+        assert_eq!(
+            answer(session, &ask(false)),
+            [Message::Ack { seq: 7 }, last.clone()]
+        );
+        assert_eq!(answer(session, &ask(false))[1], last);
+        // Reset: a new session, empty.
+        let got = answer(session, &ask(true));
+        let Message::SessionReport(empty) = &got[1] else {
+            panic!("{got:?}");
+        };
+        assert_eq!(got[0], Message::Ack { seq: 7 });
+        assert_eq!((empty.swings, empty.used, empty.coach), (0, 0, u16::MAX));
+        assert!(empty.metrics.is_empty() && empty.tendencies.is_empty() && empty.open.is_none());
         assert_eq!(session.tendencies().swings(), 0);
     })
     .unwrap();

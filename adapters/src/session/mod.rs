@@ -259,6 +259,20 @@ impl<'b> Session<'b> {
         self.body.as_ref().map(|b| &b.skeleton)
     }
 
+    /// Starts a new range session.
+    fn new_range_session(&mut self) {
+        self.tendencies.reset();
+        self.tendencies_coach = None;
+    }
+
+    /// The range session as an outcome.
+    fn range_session(&self) -> Outcome<'_> {
+        Outcome::Session {
+            tendencies: &self.tendencies,
+            coach: self.tendencies_coach.unwrap_or(u16::MAX),
+        }
+    }
+
     /// Whether the detector is watching a swing that may be under way: a set-up message that
     /// would change the session is then refused as busy ([`Refusal::SwingUnderWay`]).
     pub fn swing_under_way(&self) -> bool {
@@ -267,7 +281,9 @@ impl<'b> Session<'b> {
 
     /// Takes one message and calls `on` with what it led to: a set-up message taken (applied,
     /// or the same as the one in force) is [`Outcome::Accepted`], a message refused
-    /// [`Outcome::Refused`]. Messages a device sends rather than receives are ignored.
+    /// [`Outcome::Refused`]; a swing scored is followed by the range session
+    /// ([`Outcome::Session`]), and a session request is taken (a reset applied) and answered
+    /// with it. Messages a device sends rather than receives are ignored.
     pub fn handle(&mut self, message: &Message, mut on: impl FnMut(Outcome<'_>)) {
         let refusal = match message {
             Message::StudentProfile { profile, .. } => self.profile(profile).err(),
@@ -288,6 +304,13 @@ impl<'b> Session<'b> {
                 .err(),
             Message::PoseFrame(frame) => self.pose(frame, &mut on).err(),
             Message::ImuSample(sample) => self.imu(sample, &mut on).err(),
+            Message::SessionRequest { reset, .. } => {
+                if *reset {
+                    self.new_range_session();
+                }
+                on(Outcome::Accepted);
+                return on(self.range_session());
+            }
             _ => None,
         };
         match refusal {
@@ -330,8 +353,7 @@ impl<'b> Session<'b> {
         match self.restart() {
             // A change taken starts a new range session; a refused one changes nothing.
             Ok(()) => {
-                self.tendencies.reset();
-                self.tendencies_coach = None;
+                self.new_range_session();
                 Ok(())
             }
             Err(refusal) => {
@@ -728,6 +750,10 @@ impl<'b> Session<'b> {
                         swing,
                         report,
                         compared,
+                    });
+                    on(Outcome::Session {
+                        tendencies,
+                        coach: swing.coach,
                     });
                 }
                 Err(error) => on(Outcome::Unscored { swing, error }),

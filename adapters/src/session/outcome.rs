@@ -4,6 +4,7 @@
 use super::Refusal;
 use posecoach_core::frames::Frames;
 use posecoach_core::score::{Report, ScoreError};
+use posecoach_core::session::Tendencies;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::Message;
 
@@ -61,13 +62,21 @@ pub enum Outcome<'r> {
     Accepted,
     /// The message was refused (a phone gets a `Nack`).
     Refused(Refusal),
+    /// The range session, after each swing scored and when asked (a phone gets a
+    /// `SessionReport`).
+    Session {
+        /// Its tendencies.
+        tendencies: &'r Tendencies<'r>,
+        /// The coach its swings were scored against (`u16::MAX` before its first swing).
+        coach: u16,
+    },
 }
 
 impl Outcome<'_> {
     /// What a device answers to `message` when handling it led to this: a `SwingReport` for
-    /// a scored swing, an `Ack` for a set-up message taken, a `Nack` for a refusal (both of
-    /// the message's `seq`; 0 for a message without one), nothing for a swing that could not
-    /// be scored.
+    /// a scored swing, an `Ack` for a set-up message or session request taken, a `Nack` for a
+    /// refusal (both of the message's `seq`; 0 for a message without one), a `SessionReport`
+    /// for the session, nothing for a swing that could not be scored.
     pub fn reply(&self, message: &Message) -> Option<Message> {
         match self {
             Outcome::Scored { swing, report, .. } => Some(Message::SwingReport(
@@ -81,6 +90,9 @@ impl Outcome<'_> {
                 seq: message.seq().unwrap_or(0),
                 reason: why.nack_reason(),
             }),
+            Outcome::Session { tendencies, coach } => {
+                Some(Message::SessionReport(tendencies.to_wire(*coach)))
+            }
         }
     }
 }

@@ -10,14 +10,11 @@ use super::spatial::{severity, Deviation, Direction, NOISE_FACTOR};
 use super::tempo::{Phase, PhaseTempo, Verdict, TEMPO_CONFIDENCE, TEMPO_TOLERANCE};
 use crate::body::Measure;
 use crate::checks::BodyDeviation;
-use crate::config::MAX_DEVIATIONS;
+use crate::config::{MAX_ADVICE, MAX_DEVIATIONS};
 use crate::events::Side;
 use crate::joint::Joint;
 use crate::sequence::{Gap, GAP_TOLERANCE_S};
 use heapless::Vec as HVec;
-
-/// Most advice items a report holds.
-pub const MAX_ADVICE: usize = 8;
 
 /// One piece of advice; [`core::fmt::Display`] renders it as a sentence.
 #[derive(Clone, Copy, Debug, PartialEq)]

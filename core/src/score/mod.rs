@@ -39,8 +39,8 @@ mod timing;
 mod to_wire;
 mod unsure;
 
+pub use advice::Advice;
 pub(crate) use advice::{insert_sorted, ranked};
-pub use advice::{Advice, MAX_ADVICE};
 pub use align::{BRIDGE_S, HELD_ROOT_M, SPATIAL_SMOOTHING_S};
 pub use body::LEAST_NOISE_M;
 pub(crate) use cause::{may_explain, Item};
@@ -59,7 +59,9 @@ pub use unsure::Unsure;
 use crate::band::Band;
 use crate::body::Stance;
 use crate::checks::BodyDeviation;
-use crate::config::{MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS, MAX_JOINTS, MAX_SWING_FRAMES};
+use crate::config::{
+    MAX_ADVICE, MAX_CHECKS, MAX_DEVIATIONS, MAX_GAPS, MAX_JOINTS, MAX_SWING_FRAMES,
+};
 use crate::dtw::{self, DtwError};
 use crate::events::{self, Event, EventError, SwingEvents};
 use crate::frames::{Frames, Turn};

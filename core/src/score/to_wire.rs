@@ -1,9 +1,7 @@
 //! The to_wire stage: a report in the wire's compact form ([`SwingReport`]).
 
-use super::Report;
-use crate::checks::CHECKS;
+use super::{Deviation, Report};
 use crate::events::{Position, SwingEvents};
-use crate::sequence::GAPS;
 use crate::wire::{SwingReport, WireCheck, WireDeviation, WireGap};
 
 impl Report {
@@ -16,7 +14,6 @@ impl Report {
             Position::ALL.map(|p| events.frame(p).map_or(u16::MAX, |f| f as u16))
         };
         let ms = |s: f32| libm::roundf(s * 1000.0).clamp(0.0, f32::from(u16::MAX - 1)) as u16;
-        let mm = |m: f32| libm::roundf(m * 1000.0).clamp(-32767.0, 32767.0) as i16;
         SwingReport {
             swing,
             coach,
@@ -25,18 +22,7 @@ impl Report {
             coach_positions: frames(&self.coach_events),
             phases_ms: self.tempo.map(|t| [ms(t.student_s), ms(t.coach_s)]),
             verdicts: self.tempo.map(|t| t.verdict as u8),
-            deviations: self
-                .spatial
-                .iter()
-                .map(|d| WireDeviation {
-                    position: Position::from(d.event) as u8,
-                    joint: d.joint.index() as u8,
-                    direction: d.direction as u8,
-                    offset_mm: d.offset_m.map(mm),
-                    uncertainty_mm: libm::roundf(d.uncertainty_m * 1000.0)
-                        .clamp(0.0, f32::from(u16::MAX)) as u16,
-                })
-                .collect(),
+            deviations: self.spatial.iter().map(Deviation::to_wire).collect(),
             checks: self
                 .body
                 .iter()
@@ -48,7 +34,7 @@ impl Report {
                     };
                     let wide = |v: f32| libm::roundf(v * scale).clamp(-32767.0, 32767.0) as i16;
                     Some(WireCheck {
-                        check: CHECKS.iter().position(|c| *c == b.check)? as u8,
+                        check: b.check.index()? as u8,
                         student: wide(b.student),
                         coach: wide(b.coach),
                         uncertainty: libm::roundf(b.uncertainty * scale)
@@ -63,7 +49,7 @@ impl Report {
                 .filter_map(|g| {
                     let ms = |s: f32| libm::roundf(s * 1000.0).clamp(-32767.0, 32767.0) as i16;
                     Some(WireGap {
-                        gap: GAPS.iter().position(|&p| p == (g.first, g.then))? as u8,
+                        gap: g.index()? as u8,
                         student_ms: ms(g.student_s),
                         coach_ms: ms(g.coach_s),
                         uncertainty_ms: libm::roundf(g.uncertainty_s * 1000.0)
@@ -72,6 +58,23 @@ impl Report {
                     })
                 })
                 .collect(),
+        }
+    }
+}
+
+impl Deviation {
+    /// The wire form of a joint's offset: millimetres, saturating at ±32.767 m (its
+    /// uncertainty at 65.535 m).
+    pub fn to_wire(&self) -> WireDeviation {
+        WireDeviation {
+            position: Position::from(self.event) as u8,
+            joint: self.joint.index() as u8,
+            direction: self.direction as u8,
+            offset_mm: self
+                .offset_m
+                .map(|m| libm::roundf(m * 1000.0).clamp(-32767.0, 32767.0) as i16),
+            uncertainty_mm: libm::roundf(self.uncertainty_m * 1000.0)
+                .clamp(0.0, f32::from(u16::MAX)) as u16,
         }
     }
 }

@@ -3,8 +3,9 @@
 //! Its own LSM6DS3TR-C (I²C, through `embedded-hal`) is one sensor of the layout; the other
 //! sensors' samples, the student's profile, the sensor layout, settings and coach selection
 //! arrive from the phone over the UART as wire frames. Everything goes into the device's
-//! [`Session`] with the bundled coach references; each reply (a `SwingReport` per scored
-//! swing, a `Nack` per refused message) goes back over the UART.
+//! [`Session`] with the bundled coach references; each reply (a `SwingReport` and the range
+//! session's `SessionReport` per scored swing, an `Ack` per set-up taken, a `Nack` per refused
+//! message) goes back over the UART.
 //!
 //! Pins are the XIAO nRF52840 Sense's (check them against your board's schematic): IMU power
 //! P1.08, IMU SCL P0.27, SDA P0.07; UART TX P1.11 (D6), RX P1.12 (D7), 115 200 baud.

@@ -304,7 +304,7 @@ fn replay(
                     defmt::println!("swing {} not scored: {}", swing.number, error)
                 }
                 Outcome::Refused(why) => defmt::println!("refused: {}", why),
-                Outcome::Accepted => {}
+                Outcome::Accepted | Outcome::Session { .. } => {}
             }
             if let Some(reply) = outcome.reply(&message) {
                 let mut frame = [0u8; MAX_FRAME];

@@ -86,7 +86,7 @@ pub fn relay(port: &Path, baud: u32, frames: &Receiver<Vec<u8>>, to: &Loop, stop
         if !to.link(true, "serial_connected", detail) {
             return;
         }
-        let mut decoder = Decoder::new();
+        let mut decoder = Decoder::phone();
         let lost = loop {
             if stop.load(Ordering::Relaxed) {
                 return;

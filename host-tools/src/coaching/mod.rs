@@ -903,7 +903,7 @@ fn run_session(
                     scored.push((at, swing.frames, swing.coach, Err(error.to_string())));
                 }
                 Outcome::Refused(r) => refused.push(r.to_string()),
-                Outcome::Accepted => {}
+                Outcome::Accepted | Outcome::Session { .. } => {}
             });
             let after = session.stream_counters();
             // Frames the stream took (none where the profile was refused).

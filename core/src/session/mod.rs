@@ -29,26 +29,20 @@
 //! swings would settle it.
 
 use crate::checks::{BodyDeviation, CHECKS};
-use crate::config::{MAX_CHECKS, MAX_GAPS};
+use crate::config::{BODY_LEVEL, MAX_ADVICE, MAX_CHECKS, MAX_GAPS, MAX_SET_ASIDE};
 use crate::events::{Event, Side};
 use crate::joint::Joint;
 use crate::score::{
     insert_sorted, may_explain, ranked, Advice, BodyLevel, Deviation, Direction, Explains, Item,
-    Phase, PhaseTempo, Sink, Verdict, MAX_ADVICE, SPATIAL_THRESHOLD_M, TEMPO_TOLERANCE,
+    Phase, PhaseTempo, Sink, Verdict, SPATIAL_THRESHOLD_M, TEMPO_TOLERANCE,
 };
 use crate::sequence::{Gap, GAPS, GAP_TOLERANCE_S};
 use crate::tally::{t95, Estimate, Tally};
 use crate::Vec3;
 use heapless::Vec as HVec;
 
-/// Body-level quantities a session keeps: three phases, the pause, the checks and the gaps.
-pub const BODY_LEVEL: usize = 3 + 1 + MAX_CHECKS + MAX_GAPS;
-
 /// A swing unlike the session in this many body-level quantities is set aside.
 pub const UNLIKE: usize = 2;
-
-/// Set-aside swings a session remembers (the latest).
-pub const MAX_SET_ASIDE: usize = 8;
 
 /// How consistently tour players repeat their backswing's duration: within about this many
 /// seconds (one standard deviation).
@@ -115,7 +109,7 @@ impl Quantity {
     }
 
     /// Its index among the body-level quantities.
-    fn body_level(self) -> Option<usize> {
+    pub(crate) fn body_level(self) -> Option<usize> {
         match self {
             Quantity::Tempo(p) => Some(p as usize),
             Quantity::Pause => Some(3),
@@ -223,12 +217,12 @@ fn body_level_values(swing: &BodyLevel<'_>) -> [Option<(f32, f32, f32)>; BODY_LE
     // A pause is timed to a frame or so: the top's own uncertainty is in the tempo's.
     out[3] = Some((student - coach, 0.0, coach));
     for b in swing.body {
-        if let Some(i) = CHECKS.iter().position(|c| *c == b.check) {
+        if let Some(i) = b.check.index() {
             out[4 + i] = Some((b.student - b.coach, b.uncertainty, b.coach));
         }
     }
     for g in swing.gaps {
-        if let Some(i) = GAPS.iter().position(|l| *l == (g.first, g.then)) {
+        if let Some(i) = g.index() {
             out[4 + MAX_CHECKS + i] = Some((g.student_s - g.coach_s, g.uncertainty_s, g.coach_s));
         }
     }
@@ -286,6 +280,22 @@ impl<'a> Tendencies<'a> {
     /// The joint at skeleton index `k`, as the swings named it.
     pub fn joint(&self, k: usize) -> Option<Joint> {
         self.joints.get(k)?.joint
+    }
+
+    /// The length of joint `k`'s mean offset at `event`, metres, where it was measured in at
+    /// least two swings (else 0, as where none is kept: nothing can be said of it yet): the
+    /// distance [`Self::joint_offset`] gives, without the rest of its work.
+    fn offset_length(&self, event: Event, k: usize) -> f32 {
+        let Some(at) = self.joints.get(k).and_then(|j| j.at.get(event as usize)) else {
+            return 0.0;
+        };
+        if at.iter().any(|t| t.n() < 2) {
+            return 0.0;
+        }
+        let [x, y, z] = at
+            .each_ref()
+            .map(|t| t.mean(Quantity::Offset(event, k, 0).unit()));
+        crate::math::sqrt(x * x + y * y + z * z)
     }
 
     /// Joint `k`'s offset at `event` as a joint item would give it: its length, its
@@ -396,6 +406,11 @@ impl<'a> Tendencies<'a> {
         // cause that may explain them.
         for event in Event::ALL {
             for k in 0..self.joints.len() {
+                // An offset no longer than the threshold is no advice, whatever its interval,
+                // nor is one measured in fewer than two swings (its interval is unbounded).
+                if self.offset_length(event, k) <= SPATIAL_THRESHOLD_M {
+                    continue;
+                }
                 let Some((d, e, past)) = self.joint_offset(event, k) else {
                     continue;
                 };
@@ -438,7 +453,7 @@ impl<'a> Tendencies<'a> {
     /// tolerance; `None` where every quantity is settled or none has two swings.
     pub fn open(&self) -> Option<Open> {
         let mut best: Option<(f32, Open)> = None;
-        let mut consider = |quantity: Quantity, estimate: Estimate| {
+        let consider = |best: &mut Option<(f32, Open)>, quantity: Quantity, estimate: Estimate| {
             let tolerance = quantity.tolerance();
             let unsettled = estimate.n >= 2
                 && tolerance.is_finite()
@@ -450,7 +465,7 @@ impl<'a> Tendencies<'a> {
             }
             if let Some(total) = estimate.swings_to_settle(tolerance) {
                 let more_swings = total.saturating_sub(u32::from(estimate.n));
-                best = Some((
+                *best = Some((
                     nearness,
                     Open {
                         quantity,
@@ -462,14 +477,20 @@ impl<'a> Tendencies<'a> {
         };
         for q in Quantity::BODY_LEVEL {
             if let Some(e) = self.estimate(q) {
-                consider(q, e);
+                consider(&mut best, q, e);
             }
         }
         for event in Event::ALL {
             for k in 0..self.joints.len() {
+                // A joint measured in fewer than two swings is not open, and one no nearer
+                // than the nearest so far needs no estimate.
+                let nearness = self.offset_length(event, k) / SPATIAL_THRESHOLD_M;
+                if nearness == 0.0 || best.as_ref().is_some_and(|(b, _)| *b >= nearness) {
+                    continue;
+                }
                 if let Some((d, e, _)) = self.joint_offset(event, k) {
                     let axis = Vec3::from(d.offset_m).iamax();
-                    consider(Quantity::Offset(event, k, axis), e);
+                    consider(&mut best, Quantity::Offset(event, k, axis), e);
                 }
             }
         }
@@ -553,6 +574,8 @@ impl Sink for Tendencies<'_> {
         tallies.joint = Some(joint);
     }
 }
+
+mod to_wire;
 
 #[cfg(test)]
 mod tests {
@@ -744,5 +767,64 @@ mod tests {
         alone.reset();
         assert_eq!(alone.swings(), 0);
         assert!(alone.advice().is_empty());
+    }
+
+    #[test]
+    fn the_wire_form_carries_the_estimates_the_tendencies_in_order_and_the_open_question() {
+        use crate::config::BODY_LEVEL;
+        let mut joints = [JointTallies::EMPTY; 17];
+        let mut session = Tendencies::new(&mut joints);
+        let (wrist, k) = (Joint::LeftWrist, 13);
+        for w in WOBBLES {
+            swing(1.3 + 0.02 * w, (0, 0.0), w).tell(&mut session);
+            let o = Vec3::new(0.12 + 0.01 * w, 0.0, 0.0);
+            session.offset((Event::Top, k, wrist), o, Vec3::repeat(0.01));
+        }
+        let wire = session.to_wire(3);
+        assert_eq!((wire.swings, wire.used, wire.coach), (10, 10, 3));
+        // Every body-level quantity was measured, in order; the backswing 1.3 s against the
+        // coach's 1 s, slow in all ten.
+        let order: std::vec::Vec<u8> = wire.metrics.iter().map(|m| m.quantity).collect();
+        assert_eq!(order, (0..BODY_LEVEL as u8).collect::<std::vec::Vec<_>>());
+        let back = wire.metrics[0];
+        assert_eq!(
+            (back.coach, back.verdict, back.above, back.swings),
+            (1000, 1, 10, 10)
+        );
+        assert!((1295..=1305).contains(&back.student), "{back:?}");
+        // The shoulder turn: 40° in tenths, within tolerance.
+        assert_eq!((wire.metrics[4].coach, wire.metrics[4].verdict), (400, 0));
+        // The tendencies as advice ranks them: the wrist (12 cm, its own item) and the slow
+        // backswing, each pointing at what it is about.
+        let advice = session.advice();
+        assert_eq!(wire.tendencies.len(), advice.len());
+        for (t, a) in wire.tendencies.iter().zip(&advice) {
+            match a.advice {
+                Advice::Tempo(_) => assert_eq!(t.item, 0),
+                Advice::Spatial(d) => {
+                    let spatial = wire.spatial[usize::from(t.item) - BODY_LEVEL];
+                    assert_eq!(spatial.joint as usize, wrist.index());
+                    assert_eq!(spatial.position, 3, "the top, P4");
+                    assert!((115..=125).contains(&spatial.offset_mm[0]), "{spatial:?}");
+                    assert_eq!(d.joint, wrist);
+                }
+                _ => panic!("{advice:?}"),
+            }
+            assert_eq!((t.swings, t.past), (a.swings, a.past));
+        }
+        assert_eq!(wire.spatial.len(), 1);
+        assert_eq!(wire.open, None, "every quantity near advice is settled");
+        // Nothing clear: the open question, in the check's tenths of a degree.
+        let mut joints = [JointTallies::EMPTY; 17];
+        let mut open = Tendencies::new(&mut joints);
+        for by in [-4.0f32, -20.0, -12.0] {
+            swing(1.0, (0, by), 0.0).tell(&mut open);
+        }
+        let wire = open.to_wire(0);
+        assert!(wire.tendencies.is_empty());
+        let question = wire.open.expect("an open question");
+        assert_eq!(question.quantity, 4);
+        assert!((-121..=-119).contains(&question.value), "{question:?}");
+        assert!((35..=45).contains(&question.more_swings), "{question:?}");
     }
 }
