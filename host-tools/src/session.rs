@@ -183,7 +183,7 @@ pub fn to_json(session: &Tendencies<'_>) -> Value {
 fn backswing_spread(session: &Tendencies<'_>) -> Option<f32> {
     let q = Quantity::Tempo(Phase::Backswing);
     let e = session.estimate(q).filter(|e| e.n >= 2)?;
-    Some(session.coach(q)? * e.value.exp() * e.spread)
+    Reading::of(session, q)?.seconds(e.value, e.spread)
 }
 
 /// The session as readable lines: its swings, its tendencies (or its open question) and each
@@ -229,7 +229,7 @@ pub fn to_text(session: &Tendencies<'_>) -> String {
                 read.number(e.value),
                 read.amount(e.value, e.uncertainty),
                 read.coach,
-                read.spread(&e)
+                read.spread(e.value, e.spread)
             );
             if phase == Phase::Backswing {
                 let _ = write!(out, " (tour players: {TOUR_BACKSWING_SPREAD_S} s)");
@@ -360,12 +360,18 @@ impl Reading {
         }
     }
 
-    /// The golfer's swing-to-swing spread in `e`, net of the noise, with its unit: a phase's
-    /// in seconds of its duration.
-    pub fn spread(&self, e: &Estimate) -> String {
-        match self.ratio {
-            true => format!("{:.3} s", self.coach * e.value.exp() * e.spread),
-            false => self.amount(e.value, e.spread),
+    /// A phase's width `d` about `v` (`ln` of its ratio) in seconds of its duration; `None`
+    /// for another quantity.
+    pub fn seconds(&self, v: f32, d: f32) -> Option<f32> {
+        self.ratio.then(|| self.coach * v.exp() * d)
+    }
+
+    /// A spread `d` about `v` (the golfer's, or the noise's), with its unit: a phase's in
+    /// seconds of its duration.
+    pub fn spread(&self, v: f32, d: f32) -> String {
+        match self.seconds(v, d) {
+            Some(s) => format!("{s:.3} s"),
+            None => self.amount(v, d),
         }
     }
 }

@@ -171,16 +171,13 @@ fn consistency(out: &mut String, session: &Tendencies<'_>) {
     let counted = session.estimate(q).filter(|e| e.n >= 2);
     let _ = match (counted, Reading::of(session, q)) {
         (Some(e), Some(read)) => {
-            let noise = read.spread(&Estimate {
-                spread: e.noise,
-                ..e
-            });
+            let noise = read.spread(e.value, e.noise);
             match e.spread > 0.0 {
                 true => write!(
                     out,
                     "Your backswing's duration varies by {} from swing to swing, net of the \
                      measurement noise ({noise} a swing)",
-                    read.spread(&e)
+                    read.spread(e.value, e.spread)
                 ),
                 false => write!(
                     out,
@@ -313,7 +310,7 @@ impl Metric {
                 "{} &#177; {}, spread {}",
                 escape(&read.text(e.value)),
                 escape(&read.amount(e.value, e.uncertainty)),
-                escape(&read.spread(e))
+                escape(&read.spread(e.value, e.spread))
             ),
             (_, false) => escape(&read.text(e.value)),
         };
