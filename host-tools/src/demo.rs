@@ -44,6 +44,7 @@ pub fn run(args: &Args) -> Result<String> {
     let page = html::page(
         "posecoach demo: an amateur's session",
         &[PROVENANCE.to_string()],
+        replay.session.page.as_ref(),
         &replay.pages,
     );
     std::fs::write(&html_path, page).with_context(|| format!("writing {}", html_path.display()))?;

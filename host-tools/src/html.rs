@@ -8,6 +8,10 @@
 //! graph. Element ids (`score-N`, `advice-N`, `poses-N`, `body-N`, `sequence-N`,
 //! `sequence-chart-N`, `tempo-N`, `dtw-N`, `deviation-N` for swing `N` from 1) let tests and
 //! scripts find each part.
+//!
+//! A page of several swings opens with their range session ([`session`]).
+
+pub mod session;
 
 use crate::table::{input_error, peak_text, whole, with_spread, BodyRow, KEY_METRICS, PLUS_MINUS};
 use base64::Engine;
@@ -16,7 +20,7 @@ use posecoach_core::body::{self, Link, Stance};
 use posecoach_core::events::{Event, Position, SwingEvents};
 use posecoach_core::frames::Frames;
 use posecoach_core::joint::Joint;
-use posecoach_core::score::{Advice, Report, SPATIAL_THRESHOLD_M};
+use posecoach_core::score::{Advice, BodyLevel, Report, SPATIAL_THRESHOLD_M};
 use posecoach_core::sequence::{self, KinematicSequence, GAP_TOLERANCE_S};
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::Vec3;
@@ -124,6 +128,21 @@ impl Scored {
         ]
     }
 
+    /// Its body-level results, as a session hears them.
+    pub fn body_level(&self) -> BodyLevel<'_> {
+        let r = &self.report;
+        BodyLevel {
+            lead: r.student_events.lead,
+            tempo: &r.tempo,
+            pause_s: (
+                r.student_events.pause() / self.student_hz,
+                r.coach_events.pause() / self.coach_hz,
+            ),
+            body: &r.body,
+            gaps: &r.gaps,
+        }
+    }
+
     fn frame<'a>(&self, swing: &'a [Vec3], f: usize) -> &'a [Vec3] {
         let n = self.skeleton.len();
         &swing[f * n..(f + 1) * n]
@@ -164,8 +183,14 @@ pub struct Swing {
     pub outcome: Result<Scored, String>,
 }
 
-/// The whole page: `title`, a line per `notes` entry (inputs, retargeter), then each swing.
-pub fn page(title: &str, notes: &[String], swings: &[Swing]) -> String {
+/// The whole page: `title`, a line per `notes` entry (inputs, retargeter), the range session
+/// where `session` holds one ([`session::section`]), then each swing.
+pub fn page(
+    title: &str,
+    notes: &[String],
+    session: Option<&session::SessionSection>,
+    swings: &[Swing],
+) -> String {
     let mut out = String::new();
     let _ = write!(
         out,
@@ -186,6 +211,9 @@ pub fn page(title: &str, notes: &[String], swings: &[Swing]) -> String {
          stroke-width=\"2.5\" stroke-dasharray=\"{COACH_DASH}\"/></svg> <span style=\"color:{COACH}\">virtual \
          coach (the coach's swing on your body)</span></p>"
     );
+    if let Some(session) = session {
+        out.push_str(session.html());
+    }
     if swings.is_empty() {
         out.push_str("<p id=\"no-swing\">No swing found.</p>\n");
     }
@@ -217,7 +245,7 @@ svg{background:#fafafa;border:1px solid #ddd}.error{color:#b00}li{margin:4px 0}\
 text{font-family:sans-serif}.wide{overflow-x:auto}table{border-collapse:collapse;font-size:13px}\
 td,th{border-bottom:1px solid #ddd;padding:3px 6px;text-align:right;white-space:nowrap}\
 svg.key{border:none;background:none}tbody th{white-space:normal;text-align:left;min-width:9em}\
-.swamped{color:#999}";
+.swamped{color:#999}.multiples{display:flex;flex-wrap:wrap;gap:8px}";
 
 /// What a report says of a swing whose input held the root still
 /// ([`posecoach_core::score::Report::root_held`]).
@@ -988,7 +1016,7 @@ mod tests {
     #[test]
     fn text_is_escaped() {
         assert_eq!(escape("<a & \"b\">"), "&lt;a &amp; &quot;b&quot;&gt;");
-        let page = page("x<y", &["a&b".into()], &[]);
+        let page = page("x<y", &["a&b".into()], None, &[]);
         assert!(page.contains("<title>x&lt;y</title>") && page.contains("a&amp;b"));
         assert!(page.contains("id=\"no-swing\""));
     }
@@ -999,7 +1027,7 @@ mod tests {
             heading: "swing 1".into(),
             outcome: Err("no impact found".into()),
         };
-        let page = page("t", &[], &[swing]);
+        let page = page("t", &[], None, &[swing]);
         assert!(page.contains("id=\"swing-1\"") && page.contains("Not scored: no impact found"));
     }
 }

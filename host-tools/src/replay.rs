@@ -47,14 +47,24 @@ pub struct Replay {
     pub pages: Vec<html::Swing>,
     /// The frames the device sends back, in order, as on the serial link.
     pub wire: Vec<u8>,
-    /// The range session after the last swing: its JSON and its lines.
-    pub session: (Value, String),
+    /// The range session after the last swing.
+    pub session: RangeSession,
+}
+
+/// A replay's range session after its last swing, as each output tells it.
+pub struct RangeSession {
+    /// Its JSON.
+    pub json: Value,
+    /// Its lines.
+    pub text: String,
+    /// Its part of the page (none for one swing alone).
+    pub page: Option<html::session::SessionSection>,
 }
 
 impl Replay {
     /// The JSON `--json` prints.
     pub fn to_json(&self) -> Value {
-        json!({"swings": self.swings, "session": self.session.0, "refused": self.refused, "counters": self.counters})
+        json!({"swings": self.swings, "session": self.session.json, "refused": self.refused, "counters": self.counters})
     }
 }
 
@@ -75,14 +85,19 @@ pub fn run(args: &Args) -> Result<String> {
     if let Some(path) = &args.report {
         let notes = [format!("Recorded session: {}", args.log.display())];
         score::write_report(path, &json, || {
-            html::page("posecoach session report", &notes, &replay.pages)
+            html::page(
+                "posecoach session report",
+                &notes,
+                replay.session.page.as_ref(),
+                &replay.pages,
+            )
         })?;
     }
     let out = if args.json {
         format!("{json}\n")
     } else {
         let mut out = replay.text;
-        out.push_str(&replay.session.1);
+        out.push_str(&replay.session.text);
         for r in &replay.refused {
             let _ = writeln!(out, "refused: {r}");
         }
@@ -195,6 +210,11 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
         );
     }
     let tendencies = session.tendencies();
+    let session = RangeSession {
+        json: crate::session::to_json(tendencies),
+        text: crate::session::to_text(tendencies),
+        page: html::session::section(tendencies, &pages),
+    };
     Ok(Replay {
         swings,
         text,
@@ -202,9 +222,6 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
         counters,
         pages,
         wire: sent,
-        session: (
-            crate::session::to_json(tendencies),
-            crate::session::to_text(tendencies),
-        ),
+        session,
     })
 }

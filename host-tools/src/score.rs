@@ -208,8 +208,9 @@ pub fn run(args: &Args) -> Result<String> {
                 },
             })
             .collect();
+        let range = html::session::section(&session, &pages);
         write_report(path, &json, || {
-            html::page("posecoach swing report", &notes, &pages)
+            html::page("posecoach swing report", &notes, range.as_ref(), &pages)
         })?;
     }
     if args.json {

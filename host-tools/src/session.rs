@@ -47,7 +47,7 @@ fn words(session: &Tendencies<'_>, quantity: Quantity) -> String {
 }
 
 /// Why a swing was set aside, in words.
-fn reason(session: &Tendencies<'_>, s: &SetAside) -> String {
+pub fn reason(session: &Tendencies<'_>, s: &SetAside) -> String {
     format!(
         "unlike the session's other swings in {} body-level measures, most in {} ({:.1} standard deviations off)",
         s.unlike,
@@ -183,7 +183,7 @@ pub fn to_json(session: &Tendencies<'_>) -> Value {
 fn backswing_spread(session: &Tendencies<'_>) -> Option<f32> {
     let q = Quantity::Tempo(Phase::Backswing);
     let e = session.estimate(q).filter(|e| e.n >= 2)?;
-    Some(session.coach(q)? * e.value.exp() * e.spread)
+    Reading::of(session, q)?.seconds(e.value, e.spread)
 }
 
 /// The session as readable lines: its swings, its tendencies (or its open question) and each
@@ -202,15 +202,9 @@ pub fn to_text(session: &Tendencies<'_>) -> String {
     let advice = session.advice();
     if advice.is_empty() {
         let _ = write!(out, "  nothing is clear yet");
-        match session.open() {
-            Some(o) => {
-                let _ = writeln!(
-                    out,
-                    ": the nearest question is {} ({}); about {} more swings would settle it",
-                    words(session, o.quantity),
-                    open_value(&o.estimate, o.quantity),
-                    o.more_swings
-                );
+        match open_question(session) {
+            Some(open) => {
+                let _ = writeln!(out, ": {open}");
             }
             None => out.push('\n'),
         }
@@ -224,17 +218,18 @@ pub fn to_text(session: &Tendencies<'_>) -> String {
     );
     for phase in Phase::ALL {
         let q = Quantity::Tempo(phase);
-        if let (Some(e), Some(coach)) = (session.estimate(q).filter(|e| e.n > 0), session.coach(q))
-        {
-            let ratio = e.value.exp();
+        if let (Some(e), Some(read)) = (
+            session.estimate(q).filter(|e| e.n > 0),
+            Reading::of(session, q),
+        ) {
             let _ = write!(
                 out,
-                "    {:<22} x{:.2} ± {:.2} of the coach's {:.2} s, spread {:.3} s",
+                "    {:<22} x{} ± {} of the coach's {:.2} s, spread {}",
                 phase.name(),
-                ratio,
-                ratio * e.uncertainty,
-                coach,
-                coach * ratio * e.spread
+                read.number(e.value),
+                read.amount(e.value, e.uncertainty),
+                read.coach,
+                read.spread(e.value, e.spread)
             );
             if phase == Phase::Backswing {
                 let _ = write!(out, " (tour players: {TOUR_BACKSWING_SPREAD_S} s)");
@@ -242,41 +237,38 @@ pub fn to_text(session: &Tendencies<'_>) -> String {
             out.push('\n');
         }
     }
-    for (i, c) in CHECKS.iter().enumerate() {
-        let q = Quantity::Check(i);
-        if let (Some(e), Some(coach)) = (session.estimate(q).filter(|e| e.n > 0), session.coach(q))
-        {
-            let (unit, scale) = match c.measure.in_degrees() {
-                true => ("°", 1.0),
-                false => (" cm", 100.0),
-            };
+    for q in Quantity::BODY_LEVEL
+        .into_iter()
+        .filter(|q| matches!(q, Quantity::Check(_) | Quantity::Gap(_)))
+    {
+        if let (Some(e), Some(read)) = (
+            session.estimate(q).filter(|e| e.n > 0),
+            Reading::of(session, q),
+        ) {
             let _ = writeln!(
                 out,
-                "    {:<22} {:.1} ± {:.1}{unit} (coach {:.1}{unit}), spread {:.1}{unit}",
+                "    {:<22} {} ± {} (coach {}), spread {}",
                 name(session, q),
-                (coach + e.value) * scale,
-                e.uncertainty * scale,
-                coach * scale,
-                e.spread * scale
-            );
-        }
-    }
-    for i in 0..GAPS.len() {
-        let q = Quantity::Gap(i);
-        if let (Some(e), Some(coach)) = (session.estimate(q).filter(|e| e.n > 0), session.coach(q))
-        {
-            let _ = writeln!(
-                out,
-                "    {:<22} {:.0} ± {:.0} ms (coach {:.0} ms), spread {:.0} ms",
-                name(session, q),
-                (coach + e.value) * 1000.0,
-                e.uncertainty * 1000.0,
-                coach * 1000.0,
-                e.spread * 1000.0
+                read.number(e.value),
+                read.amount(e.value, e.uncertainty),
+                read.text(0.0),
+                read.amount(e.value, e.spread)
             );
         }
     }
     out
+}
+
+/// The session's open question ([`Tendencies::open`]) in words: what it is, how far it lies
+/// and about how many more swings would settle it.
+pub fn open_question(session: &Tendencies<'_>) -> Option<String> {
+    let o = session.open()?;
+    Some(format!(
+        "the nearest question is {} ({}); about {} more swings would settle it",
+        words(session, o.quantity),
+        open_value(&o.estimate, o.quantity),
+        o.more_swings
+    ))
 }
 
 /// An open question's value in words: a ratio, degrees, centimetres or milliseconds.
@@ -296,6 +288,90 @@ fn open_value(e: &Estimate, q: Quantity) -> String {
                 e.value * 100.0,
                 event.words()
             )
+        }
+    }
+}
+
+/// How a body-level quantity reads. The session keeps each against the coach's in its own unit
+/// (`ln` of a phase's ratio; seconds, degrees or metres); a reader sees the student's value:
+/// a phase's as its ratio to the coach's, the pause in seconds, a check in degrees or
+/// centimetres, a gap in milliseconds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reading {
+    /// The coach's value, in the quantity's own unit (a phase's duration, seconds).
+    pub coach: f32,
+    /// The unit after a number: `°`, ` cm`, ` ms`, ` s`; none for a ratio.
+    pub unit: &'static str,
+    /// The quantity's own unit in the unit read (1 for a ratio).
+    pub scale: f32,
+    /// Decimals read.
+    pub places: usize,
+    /// Read as a ratio to the coach's (a phase's tempo).
+    ratio: bool,
+}
+
+impl Reading {
+    /// How `quantity` reads in `session`; `None` for a joint's offset.
+    pub fn of(session: &Tendencies<'_>, quantity: Quantity) -> Option<Reading> {
+        let (unit, scale, places) = match quantity {
+            Quantity::Tempo(_) => ("", 1.0, 2),
+            Quantity::Pause => (" s", 1.0, 2),
+            Quantity::Check(i) if CHECKS.get(i)?.measure.in_degrees() => ("°", 1.0, 1),
+            Quantity::Check(_) => (" cm", 100.0, 1),
+            Quantity::Gap(_) => (" ms", 1000.0, 0),
+            Quantity::Offset(..) => return None,
+        };
+        Some(Reading {
+            coach: session.coach(quantity)?,
+            unit,
+            scale,
+            places,
+            ratio: matches!(quantity, Quantity::Tempo(_)),
+        })
+    }
+
+    /// The student's value read, for `v` against the coach's in the quantity's own unit.
+    pub fn value(&self, v: f32) -> f32 {
+        match self.ratio {
+            true => v.exp(),
+            false => (self.coach + v) * self.scale,
+        }
+    }
+
+    /// [`Reading::value`] as a bare number: `1.28`, `-52.7`.
+    pub fn number(&self, v: f32) -> String {
+        format!("{:.*}", self.places, self.value(v))
+    }
+
+    /// [`Reading::value`] with its unit: `×1.28`, `-52.7°`, `36 ms`.
+    pub fn text(&self, v: f32) -> String {
+        match self.ratio {
+            true => format!("×{}", self.number(v)),
+            false => format!("{}{}", self.number(v), self.unit),
+        }
+    }
+
+    /// A width `d` about `v` (an uncertainty, a spread; the quantity's own unit) in the unit
+    /// read, with it: a ratio's as a share of the ratio, `0.04`.
+    pub fn amount(&self, v: f32, d: f32) -> String {
+        match self.ratio {
+            true => format!("{:.*}", self.places, v.exp() * d),
+            false => format!("{:.*}{}", self.places, d * self.scale, self.unit),
+        }
+    }
+
+    /// A phase's width `d` about `v` (`ln` of its ratio) in seconds of its duration; `None`
+    /// for another quantity.
+    pub fn seconds(&self, v: f32, d: f32) -> Option<f32> {
+        self.ratio.then(|| self.coach * v.exp() * d)
+    }
+
+    /// A spread `d` about `v` (the golfer's, or the noise's), with its unit: a phase's in
+    /// seconds of its duration.
+    pub fn spread(&self, v: f32, d: f32) -> String {
+        match self.seconds(v, d) {
+            Some(s) => format!("{s:.3} s"),
+            None => self.amount(v, d),
         }
     }
 }

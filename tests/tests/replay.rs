@@ -140,7 +140,7 @@ fn check_log(log: &Path, network: Option<&Weights<'_>>, prefix: &str) -> Replay 
     check_swings(&name, &replay, &expected, BACKSWING);
     let golden = log.with_extension(format!("{prefix}replay.json"));
     // Every swing's report, and the range session they made.
-    let reports = serde_json::json!({"swings": replay.swings, "session": replay.session.0});
+    let reports = serde_json::json!({"swings": replay.swings, "session": replay.session.json});
     let got = format!("{reports:#}\n");
     if std::env::var_os("POSECOACH_BLESS").is_some() {
         std::fs::write(&golden, &got).unwrap();

@@ -1,9 +1,10 @@
 //! The HTML report: written by `score --report`, `replay --report` and `demo`, complete and
-//! self-contained, and rendered by headless Chromium into a screenshot that shows the student
-//! and the coach.
+//! self-contained, opening with the range session where it holds several swings, and rendered
+//! by headless Chromium into a screenshot that shows the student and the coach.
 
-use posecoach_cli::{demo, replay, score};
+use posecoach_cli::{demo, replay, score, synth};
 use posecoach_tests::parse;
+use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -29,6 +30,114 @@ fn scored_page(dir: &Path) -> PathBuf {
     let args: score::Args = parse(&["--coach", &coach, "--student", &student, "--report", &out]);
     score::run(&args).unwrap();
     page
+}
+
+/// The page `score --report` writes for the iron, the driver and the iron again against the
+/// driver (a range session of three swings), and the JSON `--json` prints for it.
+fn session_page(dir: &Path) -> (PathBuf, Value) {
+    let page = dir.join("session.html");
+    let (coach, iron) = (
+        fixture("golf_driver_60hz.csv"),
+        fixture("golf_iron_60hz.csv"),
+    );
+    let out = page.display().to_string();
+    let args: score::Args = parse(&[
+        "--coach",
+        &coach,
+        "--student",
+        &iron,
+        "--student",
+        &coach,
+        "--student",
+        &iron,
+        "--report",
+        &out,
+        "--json",
+    ]);
+    let json = serde_json::from_str(&score::run(&args).unwrap()).unwrap();
+    (page, json)
+}
+
+/// Each body-level metric's name (as the session's text names it) in a swing's `report` JSON.
+fn metrics(report: &Value) -> Vec<String> {
+    let names = |list: &Value, name: &dyn Fn(&Value) -> String| -> Vec<String> {
+        list.as_array().unwrap().iter().map(name).collect()
+    };
+    let text = |v: &Value| v.as_str().unwrap().to_string();
+    let mut out = names(&report["tempo"]["phases"], &|p| text(&p["phase"]));
+    out.push("pause".to_string());
+    out.extend(names(&report["body_checks"], &|c| {
+        format!(
+            "{}_{}",
+            text(&c["measure"]),
+            text(&c["position"]).to_lowercase()
+        )
+    }));
+    out.extend(names(&report["kinematic_sequence"]["gaps"], &|g| {
+        format!("{}_{}_gap", text(&g["first"]), text(&g["then"]))
+    }));
+    out
+}
+
+/// `page` opens with its range session as `json` (its command's `--json`) has it: the
+/// tendencies in order or the open question, the swings set aside, the consistency, and a
+/// small multiple for each body-level metric with a dot for each of the session's swings
+/// measured in it.
+fn check_session(page: &str, json: &Value) {
+    let at = page.find("<section id=\"session\"").expect("the session");
+    assert!(
+        at < page.find("id=\"swing-1\"").unwrap(),
+        "the session first"
+    );
+    let section = &page[at..at + page[at..].find("</section>").unwrap()];
+    let session = &json["session"];
+    let advice = session["advice"].as_array().unwrap();
+    if advice.is_empty() {
+        assert!(section.contains("<p id=\"open\">Nothing is clear yet"));
+        if let Some(more) = session["open"]["more_swings"].as_u64() {
+            assert!(section.contains(&format!("about {more} more swings")));
+        }
+    } else {
+        let list = &section[section.find("<ol id=\"tendencies\">").unwrap()..];
+        let list = &list[..list.find("</ol>").unwrap()];
+        let items: Vec<&str> = list
+            .split("<li>")
+            .skip(1)
+            .map(|i| &i[..i.find("</li>").unwrap()])
+            .collect();
+        let told: Vec<&str> = advice.iter().map(|a| a.as_str().unwrap()).collect();
+        assert_eq!(items, told);
+    }
+    let set_aside = session["set_aside"].as_array().unwrap().len();
+    assert_eq!(section.contains("id=\"set-aside\""), set_aside > 0);
+    assert!(section.contains("id=\"consistency\"") && section.contains("0.02 s"));
+    // The session's swings: the last it heard among those scored.
+    let reports: Vec<&Value> = json["swings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|s| s.get("report"))
+        .collect();
+    let heard = &reports[reports.len() - session["swings"].as_u64().unwrap() as usize..];
+    let mut charts = Vec::new();
+    for name in heard.iter().flat_map(|r| metrics(r)) {
+        if !charts.contains(&name) {
+            charts.push(name);
+        }
+    }
+    assert_eq!(
+        section.matches("<svg class=\"multiple\"").count(),
+        charts.len()
+    );
+    for name in &charts {
+        let at = section
+            .find(&format!("id=\"multiple-{name}\""))
+            .unwrap_or_else(|| panic!("{name}'s chart"));
+        let chart = &section[at..at + section[at..].find("</svg>").unwrap()];
+        let measured = heard.iter().filter(|r| metrics(r).contains(name)).count();
+        assert_eq!(chart.matches("class=\"swing").count(), measured, "{name}");
+        assert_eq!(chart.matches("class=\"coach\"").count(), 1, "{name}");
+    }
 }
 
 /// Every part of swing `n` is on `page`, with a pose drawing per event and view.
@@ -102,6 +211,8 @@ fn score_writes_a_self_contained_page_with_every_part() {
     let dir = scratch("report-score");
     let page = std::fs::read_to_string(scored_page(&dir)).unwrap();
     check_parts(&page, 1, 8);
+    // One swing alone: no session.
+    assert!(!page.contains("id=\"session\""));
     // The club is tracked here: the ball lies where its head rested, in every figure; the
     // joints the advice names are ringed at their events, in both views.
     assert_eq!(page.matches("class=\"ball\"").count(), 16);
@@ -134,6 +245,8 @@ fn replay_and_demo_pages_hold_every_swing_of_the_session() {
     let args: replay::Args = parse(&[&log, "--report", &page, "--json"]);
     let replayed: serde_json::Value = serde_json::from_str(&replay::run(&args).unwrap()).unwrap();
     let page = std::fs::read_to_string(&page).unwrap();
+    // Two swings, the session the second's alone: it has a new coach.
+    check_session(&page, &replayed);
     let swings = replayed["swings"].as_array().unwrap();
     assert!(!swings.is_empty());
     for (i, swing) in swings.iter().enumerate() {
@@ -159,6 +272,46 @@ fn replay_and_demo_pages_hold_every_swing_of_the_session() {
     let demo_page = std::fs::read_to_string(dir.join("demo/report.html")).unwrap();
     let body = |p: &str| p[p.find("<section").unwrap()..].to_string();
     assert_eq!(body(&demo_page), body(&page));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_page_of_several_swings_opens_with_their_range_session() {
+    let dir = scratch("report-session");
+    // Three students scored against one coach: nothing clear yet.
+    let (page, json) = session_page(&dir);
+    let page = std::fs::read_to_string(page).unwrap();
+    check_session(&page, &json);
+    for n in 1..=3 {
+        check_parts(&page, n, 8);
+    }
+    // A range session whose backswings are all 1.3 times the coach's: its tendency first.
+    let log = dir.join("range.pclog").display().to_string();
+    let driver = fixture("golf_driver_60hz.csv");
+    let synth: synth::Args = parse(&[
+        "--swing",
+        &driver,
+        "--swing",
+        &driver,
+        "--swing",
+        &driver,
+        "--backswing-tempo",
+        "1.3",
+        "--coach",
+        "0",
+        "--seed",
+        "3",
+        "--out",
+        &log,
+    ]);
+    synth::run(&synth).unwrap();
+    let out = dir.join("range.html").display().to_string();
+    let replayed: Value = serde_json::from_str(
+        &replay::run(&parse::<replay::Args>(&[&log, "--report", &out, "--json"])).unwrap(),
+    )
+    .unwrap();
+    assert!(!replayed["session"]["advice"].as_array().unwrap().is_empty());
+    check_session(&std::fs::read_to_string(&out).unwrap(), &replayed);
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -261,35 +414,74 @@ fn chromium_renders_the_report() {
         blue > 500 && vermillion > 500,
         "blue {blue}, vermillion {vermillion}"
     );
-    // On a phone's 390 px and a desktop's 1280 px, nothing is wider than the screen. Headless
-    // Chromium's window is at least 500 px wide, so the page (which has no scripts of its
-    // own) goes into a frame of each width, and a script beside it writes the width the page
-    // laid out to into the DOM.
-    let html = std::fs::read_to_string(&page).unwrap();
+    // On a phone's 390 px and a desktop's 1280 px, nothing is wider than the screen.
+    for width in [390, 1280] {
+        let (laid, _) = laid_out(&browser, &dir, &page, width);
+        assert!(laid <= width, "{laid} px wide in a {width} px screen");
+    }
+    // A session's page too, and its charts' text as large as a phone needs.
+    let (session, json) = session_page(&dir);
+    let dom = headless(&browser, &dir)
+        .arg("--dump-dom")
+        .arg(format!("file://{}", session.display()))
+        .output()
+        .unwrap();
+    check_session(&String::from_utf8_lossy(&dom.stdout), &json);
+    for width in [390, 1280] {
+        let (laid, least) = laid_out(&browser, &dir, &session, width);
+        assert!(
+            laid <= width,
+            "the session: {laid} px wide in a {width} px screen"
+        );
+        assert!(
+            least >= 11.0,
+            "the session's charts: {least} px text at {width} px"
+        );
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Beside the page in a frame, after it loads: the width it laid out to and its session's
+/// smallest chart text, CSS px as drawn (very large where it has no session).
+const PROBE: &str = "window.addEventListener('load', function () { \
+    var page = document.getElementById('page').contentDocument, least = 1e9; \
+    page.querySelectorAll('#session svg').forEach(function (svg) { \
+      var scale = svg.getBoundingClientRect().width / svg.viewBox.baseVal.width; \
+      svg.querySelectorAll('text, tspan').forEach(function (t) { \
+        least = Math.min(least, parseFloat(getComputedStyle(t).fontSize) * scale); }); }); \
+    document.body.setAttribute('data-laid-out', page.documentElement.scrollWidth); \
+    document.body.setAttribute('data-least-font', least); });";
+
+/// How `page` lays out on a screen `width` px wide: its width and its session's smallest chart
+/// text, px. Headless Chromium's window is at least 500 px wide, so the page (which has no
+/// scripts of its own) goes into a frame of that width, and [`PROBE`] beside it writes what it
+/// measured into the DOM.
+fn laid_out(browser: &Path, dir: &Path, page: &Path, width: u32) -> (u32, f32) {
+    let html = std::fs::read_to_string(page).unwrap();
     let quoted = html
         .replace('&', "&amp;")
         .replace('"', "&quot;")
         .replace('<', "&lt;")
         .replace('>', "&gt;");
-    for width in [390, 1280] {
-        let probe = dir.join(format!("probe-{width}.html"));
-        let wrapper = format!(
-            "<!DOCTYPE html><html><body style=\"margin:0\"><iframe id=\"page\" \
-             style=\"width:{width}px;height:2400px;border:0\" srcdoc=\"{quoted}\"></iframe>\
-             <script>window.addEventListener('load', function () {{ document.body.setAttribute(\
-             'data-laid-out', document.getElementById('page').contentDocument\
-             .documentElement.scrollWidth); }});</script></body></html>"
-        );
-        std::fs::write(&probe, wrapper).unwrap();
-        let dom = headless(&browser, &dir)
-            .arg("--dump-dom")
-            .arg(format!("file://{}", probe.display()))
-            .output()
-            .unwrap();
-        let dom = String::from_utf8_lossy(&dom.stdout);
-        let at = dom.find("data-laid-out=\"").expect("the probe ran") + 15;
-        let laid: u32 = dom[at..at + dom[at..].find('"').unwrap()].parse().unwrap();
-        assert!(laid <= width, "{laid} px wide in a {width} px screen");
-    }
-    std::fs::remove_dir_all(dir).unwrap();
+    let probe = dir.join(format!("probe-{width}.html"));
+    let wrapper = format!(
+        "<!DOCTYPE html><html><body style=\"margin:0\"><iframe id=\"page\" \
+         style=\"width:{width}px;height:2400px;border:0\" srcdoc=\"{quoted}\"></iframe>\
+         <script>{PROBE}</script></body></html>"
+    );
+    std::fs::write(&probe, wrapper).unwrap();
+    let dom = headless(browser, dir)
+        .arg("--dump-dom")
+        .arg(format!("file://{}", probe.display()))
+        .output()
+        .unwrap();
+    let dom = String::from_utf8_lossy(&dom.stdout);
+    let attribute = |name: &str| -> String {
+        let at = dom.find(&format!("{name}=\"")).expect("the probe ran") + name.len() + 2;
+        dom[at..at + dom[at..].find('"').unwrap()].to_string()
+    };
+    (
+        attribute("data-laid-out").parse().unwrap(),
+        attribute("data-least-font").parse().unwrap(),
+    )
 }

@@ -205,9 +205,10 @@ pub struct Tendencies<'a> {
     counting: bool,
 }
 
-/// A body-level quantity's value in a swing, its stated uncertainty and the coach's value,
-/// each in its own unit.
-fn body_level_values(swing: &BodyLevel<'_>) -> [Option<(f32, f32, f32)>; BODY_LEVEL] {
+/// Each body-level quantity's value in a swing (as the session counts it: a phase's `ln` ratio,
+/// the student's less the coach's otherwise), its stated uncertainty and the coach's value, each
+/// in its own unit, [`Quantity::BODY_LEVEL`] order; `None` where the swing has none.
+pub fn body_level_values(swing: &BodyLevel<'_>) -> [Option<(f32, f32, f32)>; BODY_LEVEL] {
     let mut out = [None; BODY_LEVEL];
     for t in swing.tempo {
         let relative = t.ratio_uncertainty / t.ratio;
