@@ -1055,6 +1055,13 @@ mod tests {
 
     #[test]
     fn the_largest_messages_fit_a_frame() {
+        let widest = WireDeviation {
+            position: 255,
+            joint: 255,
+            direction: 255,
+            offset_mm: [i16::MIN; 3],
+            uncertainty_mm: u16::MAX,
+        };
         let full = |v: [i16; 3]| -> HVec<[i16; 3], MAX_WIRE_JOINTS> {
             core::iter::repeat_n(v, MAX_WIRE_JOINTS).collect()
         };
@@ -1094,17 +1101,7 @@ mod tests {
                     MAX_GAPS,
                 )
                 .collect(),
-                deviations: core::iter::repeat_n(
-                    WireDeviation {
-                        position: 255,
-                        joint: 255,
-                        direction: 255,
-                        offset_mm: [i16::MIN; 3],
-                        uncertainty_mm: u16::MAX,
-                    },
-                    MAX_DEVIATIONS,
-                )
-                .collect(),
+                deviations: core::iter::repeat_n(widest, MAX_DEVIATIONS).collect(),
             }),
             Message::SessionReport(SessionReport {
                 swings: u16::MAX,
@@ -1134,17 +1131,7 @@ mod tests {
                     MAX_ADVICE,
                 )
                 .collect(),
-                spatial: core::iter::repeat_n(
-                    WireDeviation {
-                        position: 255,
-                        joint: 255,
-                        direction: 255,
-                        offset_mm: [i16::MIN; 3],
-                        uncertainty_mm: u16::MAX,
-                    },
-                    MAX_ADVICE,
-                )
-                .collect(),
+                spatial: core::iter::repeat_n(widest, MAX_ADVICE).collect(),
                 set_aside: core::iter::repeat_n(
                     WireSetAside {
                         swing: u16::MAX,
