@@ -27,10 +27,12 @@ use crate::synth::lay_out;
 use anyhow::Result;
 use posecoach_adapters::session::Outcome;
 use posecoach_core::band::Band;
+use posecoach_core::config::BODY_LEVEL;
 use posecoach_core::events::Event;
 use posecoach_core::joint::Joint;
+use posecoach_core::score::BodyLevel;
 use posecoach_core::score::{Advice, Direction, Phase};
-use posecoach_core::session::Quantity;
+use posecoach_core::session::{body_level_values, Quantity};
 use posecoach_core::tally::t95;
 use posecoach_core::wire::{Config, Message};
 use rand::{Rng, SeedableRng};
@@ -68,6 +70,10 @@ pub(super) struct Snapshot {
     pub(super) any: bool,
     /// For each body-level quantity with a known truth: its interval covers it.
     pub(super) covered: Vec<bool>,
+    /// Whether an estimator without bias, with the scatter these swings' own measurements of
+    /// the truth's quantities showed, would clear one of them past its tolerance (`None`
+    /// where the nominal flaw moves none past it): the most that recall could be.
+    pub(super) clearable: Option<bool>,
 }
 
 /// What a session made of its swings.
@@ -300,6 +306,8 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
             .any(|t| matches!(t, Truth::Body { .. } | Truth::Sequence { .. })),
         error: None,
     };
+    // Each scored swing's measurement of each body-level quantity.
+    let mut measured: Vec<Measured> = Vec::new();
     coaches::session(None, |session| {
         for m in &messages {
             // A session of one swing says what that swing's report says.
@@ -307,6 +315,13 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
             session.handle(m, |o| {
                 if let Outcome::Scored { report, .. } = o {
                     swing = Some(report.advice.first().copied());
+                    measured.push(body_level_values(&BodyLevel {
+                        lead: report.student_events.lead,
+                        tempo: &report.tempo,
+                        pause_s: (0.0, 0.0),
+                        body: &report.body,
+                        gaps: &report.gaps,
+                    }));
                 }
             });
             let Some(swing_first) = swing else {
@@ -337,10 +352,56 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
                 right_first: first.is_some_and(|a| right(&a, &nominal)),
                 any: first.is_some(),
                 covered,
+                clearable: clearable(&truths, &measured),
             });
         }
     })?;
     Ok(outcome)
+}
+
+/// One swing's value of each body-level quantity, its stated uncertainty and the coach's
+/// value ([`body_level_values`]).
+type Measured = [Option<(f32, f32, f32)>; BODY_LEVEL];
+
+/// Whether an estimator without bias, given the scatter of `measured` (each swing's value of
+/// each body-level quantity), would clear a truth past its tolerance: `|truth| − t · s / √n`
+/// past the tolerance, `s` the values' robust standard deviation, `t` the one-sided 95 %
+/// quantile for `n − 1` degrees of freedom, as the session's advice takes it. `None` where no
+/// truth is past its tolerance.
+fn clearable(truths: &[(Quantity, f32)], measured: &[Measured]) -> Option<bool> {
+    let past: Vec<(usize, f32, f32)> = truths
+        .iter()
+        .filter(|(q, truth)| truth.abs() > q.tolerance())
+        .filter_map(|&(q, truth)| {
+            let i = Quantity::BODY_LEVEL.iter().position(|b| *b == q)?;
+            Some((i, truth, q.tolerance()))
+        })
+        .collect();
+    if past.is_empty() {
+        return None;
+    }
+    Some(past.iter().any(|&(i, truth, tolerance)| {
+        let values: Vec<f32> = measured.iter().filter_map(|m| m[i].map(|v| v.0)).collect();
+        let n = values.len();
+        if n < 2 {
+            return false;
+        }
+        // The scatter, robustly: 1.4826 times the median absolute deviation from the median
+        // (a normal's standard deviation), so a mishit or a lost track does not inflate it.
+        let median = |v: &mut Vec<f32>| {
+            v.sort_by(f32::total_cmp);
+            let m = v.len() / 2;
+            match v.len() % 2 {
+                1 => v[m],
+                _ => 0.5 * (v[m - 1] + v[m]),
+            }
+        };
+        let mut sorted = values.clone();
+        let centre = median(&mut sorted);
+        let mut deviations: Vec<f32> = values.iter().map(|v| (v - centre).abs()).collect();
+        let sd = 1.4826 * median(&mut deviations);
+        truth.abs() - t95(n - 1) * sd / (n as f32).sqrt() > tolerance
+    }))
 }
 
 /// Whether `advice` names the planted truth the way the family is judged: a body flaw whose
@@ -377,6 +438,9 @@ fn family(case: &SessionCase, o: &SessionOutcome) -> Option<&'static str> {
 /// The families recall is given for.
 pub(super) const FAMILIES: [&str; 4] = ["tempo", "body", "offset_5cm", "sequence"];
 
+/// The families whose truth is a body-level quantity, for which the bound on recall is given.
+const BOUNDED: [&str; 3] = ["tempo", "body", "sequence"];
+
 /// The session figures of one input: per number of swings, recall at 1 per family, false
 /// tendencies, coverage; per family the swings needed for 90 % recall.
 pub(super) fn summary(row: &str, ns: &[usize], pairs: &[(&SessionCase, &SessionOutcome)]) -> Value {
@@ -395,6 +459,17 @@ pub(super) fn summary(row: &str, ns: &[usize], pairs: &[(&SessionCase, &SessionO
                     of.len(),
                 )
             };
+            // The most recall could be: sessions whose truth an unbiased estimator with the
+            // swings' own scatter would clear (tempo and the body-level families).
+            let bound = |f: &str| {
+                let of = of(f);
+                share(
+                    of.iter()
+                        .filter(|(_, o)| snap(o).is_some_and(|s| s.clearable == Some(true)))
+                        .count(),
+                    of.len(),
+                )
+            };
             let unflawed = of("unflawed");
             let covered: Vec<bool> = pairs
                 .iter()
@@ -406,6 +481,11 @@ pub(super) fn summary(row: &str, ns: &[usize], pairs: &[(&SessionCase, &SessionO
                 "reached": share(pairs.iter().filter(|(_, o)| snap(o).is_some()).count(), pairs.len()),
                 "set_aside": pairs.iter().filter_map(|(_, o)| snap(o)).map(|s| s.swings - usize::from(s.used)).sum::<usize>(),
                 "recall_at_1": FAMILIES.iter().map(|f| (f.to_string(), recall(f))).collect::<serde_json::Map<_, _>>(),
+                "clearable": match n {
+                    // One swing's report is judged on its own uncertainty, not a scatter.
+                    0 | 1 => Value::Null,
+                    _ => BOUNDED.iter().map(|f| (f.to_string(), bound(f))).collect::<serde_json::Map<_, _>>().into(),
+                },
                 "false_tendencies": share(unflawed.iter().filter(|(_, o)| snap(o).is_none_or(|s| s.any)).count(), unflawed.len()),
                 "coverage": share(covered.iter().filter(|c| **c).count(), covered.len()),
             })
@@ -440,6 +520,7 @@ pub(super) fn case_json(clean: &Clean, case: &SessionCase, o: &SessionOutcome) -
         "snapshots": o.snapshots.iter().map(|s| s.as_ref().map(|s| json!({
             "swings": s.swings, "used": s.used, "first": s.first, "right_first": s.right_first,
             "any": s.any, "covered": s.covered.iter().filter(|c| **c).count(), "of": s.covered.len(),
+            "clearable": s.clearable,
         }))).collect::<Vec<_>>(),
         "error": o.error,
     })
@@ -451,15 +532,17 @@ pub(super) fn table(levels: &[Value]) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "range sessions (one golfer, one flaw ×0.7-1.3 each swing): input | swings | reached | set aside | recall@1 {} | false | covered [90 %]",
-        FAMILIES.join(" / ")
+        "range sessions (one golfer, one flaw ×0.7-1.3 each swing): input | swings | reached | set aside | recall@1 {} | false | covered [90 %] | clearable without bias {}",
+        FAMILIES.join(" / "),
+        BOUNDED.join(" / ")
     );
     for l in levels {
         for a in l["by_swings"].as_array().into_iter().flatten() {
             let recall: Vec<String> = FAMILIES.iter().map(|f| pct(&a["recall_at_1"][f])).collect();
+            let bound: Vec<String> = BOUNDED.iter().map(|f| pct(&a["clearable"][f])).collect();
             let _ = writeln!(
                 out,
-                "{:>8} | {:>2} | {} | {} | {} | {} | {}",
+                "{:>8} | {:>2} | {} | {} | {} | {} | {} | {}",
                 l["input"].as_str().unwrap_or("-"),
                 a["swings"],
                 pct(&a["reached"]),
@@ -467,6 +550,7 @@ pub(super) fn table(levels: &[Value]) -> String {
                 recall.join(" / "),
                 pct(&a["false_tendencies"]),
                 pct(&a["coverage"]),
+                bound.join(" / "),
             );
         }
         let needed: Vec<String> = FAMILIES
@@ -489,7 +573,39 @@ pub(super) fn table(levels: &[Value]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{scaled, swing_flaws, PHASE_SPREAD};
+    use super::{clearable, scaled, swing_flaws, Measured, PHASE_SPREAD};
+    use posecoach_core::config::BODY_LEVEL;
+    use posecoach_core::session::Quantity;
+
+    /// Swings whose backswing (`ln` ratio) measured each of `values`.
+    fn backswings(values: &[f32]) -> Vec<Measured> {
+        values
+            .iter()
+            .map(|&v| {
+                let mut m = [None; BODY_LEVEL];
+                m[0] = Some((v, 0.0, 1.0));
+                m
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_truth_is_clearable_when_the_swings_scatter_leaves_it_past_its_tolerance() {
+        let backswing = Quantity::Tempo(Phase::Backswing);
+        // 30 % slow (ln 0.262) against a tolerance of ln 1.15 (0.140).
+        let truth = [(backswing, 1.3f32.ln())];
+        let tight = [0.25, 0.27, 0.26, 0.28, 0.24, 0.26];
+        assert_eq!(clearable(&truth, &backswings(&tight)), Some(true));
+        // A scatter of ±0.3 in six swings leaves it unclear; one wild swing among tight ones
+        // does not (the scatter is robust).
+        let wide = [0.6, -0.1, 0.5, 0.0, 0.55, -0.05];
+        assert_eq!(clearable(&truth, &backswings(&wide)), Some(false));
+        let wild = [0.25, 0.27, 0.26, 3.0, 0.24, 0.26];
+        assert_eq!(clearable(&truth, &backswings(&wild)), Some(true));
+        // A truth within its tolerance is no tendency to clear; one swing says nothing.
+        assert_eq!(clearable(&[(backswing, 0.1)], &backswings(&tight)), None);
+        assert_eq!(clearable(&truth, &backswings(&[0.26])), Some(false));
+    }
     use crate::coaching::flaws::Flaw;
     use posecoach_core::score::Phase;
     use rand::SeedableRng;
