@@ -74,6 +74,9 @@ pub(super) struct Snapshot {
     /// the truth's quantities showed, would clear one of them past its tolerance (`None`
     /// where the nominal flaw moves none past it): the most that recall could be.
     pub(super) clearable: Option<bool>,
+    /// For each truth past its tolerance, the session's estimate over the truth (1 where it
+    /// reads the planted change in full).
+    pub(super) read: Vec<f32>,
 }
 
 /// What a session made of its swings.
@@ -345,6 +348,14 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
                     Some((e.value - truth).abs() <= margin)
                 })
                 .collect();
+            let read = truths
+                .iter()
+                .filter(|(q, truth)| truth.abs() > q.tolerance())
+                .filter_map(|&(q, truth)| {
+                    let e = tendencies.estimate(q).filter(|e| e.n > 0)?;
+                    Some(e.value / truth)
+                })
+                .collect();
             outcome.snapshots[slot] = Some(Snapshot {
                 swings: heard,
                 used: tendencies.used(),
@@ -353,6 +364,7 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
                 any: first.is_some(),
                 covered,
                 clearable: clearable(&truths, &measured),
+                read,
             });
         }
     })?;
@@ -470,6 +482,16 @@ pub(super) fn summary(row: &str, ns: &[usize], pairs: &[(&SessionCase, &SessionO
                     of.len(),
                 )
             };
+            // How much of the planted change the session's estimates read, median.
+            let read = |f: &str| {
+                let mut r: Vec<f32> = of(f)
+                    .iter()
+                    .filter_map(|(_, o)| snap(o))
+                    .flat_map(|s| s.read)
+                    .collect();
+                r.sort_by(f32::total_cmp);
+                r.get(r.len() / 2).map_or(Value::Null, |m| json!((m * 100.0).round() / 100.0))
+            };
             let unflawed = of("unflawed");
             let covered: Vec<bool> = pairs
                 .iter()
@@ -481,6 +503,7 @@ pub(super) fn summary(row: &str, ns: &[usize], pairs: &[(&SessionCase, &SessionO
                 "reached": share(pairs.iter().filter(|(_, o)| snap(o).is_some()).count(), pairs.len()),
                 "set_aside": pairs.iter().filter_map(|(_, o)| snap(o)).map(|s| s.swings - usize::from(s.used)).sum::<usize>(),
                 "recall_at_1": FAMILIES.iter().map(|f| (f.to_string(), recall(f))).collect::<serde_json::Map<_, _>>(),
+                "read": BOUNDED.iter().map(|f| (f.to_string(), read(f))).collect::<serde_json::Map<_, _>>(),
                 "clearable": match n {
                     // One swing's report is judged on its own uncertainty, not a scatter.
                     0 | 1 => Value::Null,
@@ -520,7 +543,7 @@ pub(super) fn case_json(clean: &Clean, case: &SessionCase, o: &SessionOutcome) -
         "snapshots": o.snapshots.iter().map(|s| s.as_ref().map(|s| json!({
             "swings": s.swings, "used": s.used, "first": s.first, "right_first": s.right_first,
             "any": s.any, "covered": s.covered.iter().filter(|c| **c).count(), "of": s.covered.len(),
-            "clearable": s.clearable,
+            "clearable": s.clearable, "read": s.read,
         }))).collect::<Vec<_>>(),
         "error": o.error,
     })
@@ -532,17 +555,26 @@ pub(super) fn table(levels: &[Value]) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "range sessions (one golfer, one flaw ×0.7-1.3 each swing): input | swings | reached | set aside | recall@1 {} | false | covered [90 %] | clearable without bias {}",
+        "range sessions (one golfer, one flaw ×0.7-1.3 each swing): input | swings | reached | set aside | recall@1 {} | false | covered [90 %] | clearable without bias {} | read of the planted change, median, {}",
         FAMILIES.join(" / "),
+        BOUNDED.join(" / "),
         BOUNDED.join(" / ")
     );
     for l in levels {
         for a in l["by_swings"].as_array().into_iter().flatten() {
             let recall: Vec<String> = FAMILIES.iter().map(|f| pct(&a["recall_at_1"][f])).collect();
             let bound: Vec<String> = BOUNDED.iter().map(|f| pct(&a["clearable"][f])).collect();
+            let read: Vec<String> = BOUNDED
+                .iter()
+                .map(|f| {
+                    a["read"][f]
+                        .as_f64()
+                        .map_or("-".into(), |r| format!("×{r:.2}"))
+                })
+                .collect();
             let _ = writeln!(
                 out,
-                "{:>8} | {:>2} | {} | {} | {} | {} | {} | {}",
+                "{:>8} | {:>2} | {} | {} | {} | {} | {} | {} | {}",
                 l["input"].as_str().unwrap_or("-"),
                 a["swings"],
                 pct(&a["reached"]),
@@ -551,6 +583,7 @@ pub(super) fn table(levels: &[Value]) -> String {
                 pct(&a["false_tendencies"]),
                 pct(&a["coverage"]),
                 bound.join(" / "),
+                read.join(" / "),
             );
         }
         let needed: Vec<String> = FAMILIES
