@@ -198,11 +198,9 @@ pub struct Tendencies<'a> {
     /// The body-level quantities' tallies, [`Quantity::BODY_LEVEL`] order.
     body: [Tally; BODY_LEVEL],
     /// The coach's value of each body-level quantity (a phase's duration and the pause in
-    /// seconds, a check's change, a gap), as the last swing counted had it.
-    coach: [f32; BODY_LEVEL],
-    /// How fast the coach's value of each check moves at its position ([`CHECKS`] order, its
-    /// unit per second), as the last swing counted had it.
-    coach_rate: [f32; MAX_CHECKS],
+    /// seconds, a check's change, a gap) and, for a check, how fast it moves at its position
+    /// (its unit per second; 0 for the others), as the last swing counted had them.
+    coach: [(f32, f32); BODY_LEVEL],
     /// Each joint's tallies, the skeleton's order (joints past its length are not kept).
     joints: &'a mut [JointTallies],
     /// The golfer's lead side, as the last swing counted had it.
@@ -217,25 +215,29 @@ pub struct Tendencies<'a> {
     counting: bool,
 }
 
-/// A body-level quantity's value in a swing, its stated uncertainty and the coach's value,
-/// each in its own unit.
-fn body_level_values(swing: &BodyLevel<'_>) -> [Option<(f32, f32, f32)>; BODY_LEVEL] {
+/// A body-level quantity's value in a swing, its stated uncertainty, and the coach's value and
+/// rate (a check's; 0 for the others), each in its own unit.
+type Values = (f32, f32, (f32, f32));
+
+/// Each body-level quantity's [`Values`] in `swing`, [`Quantity::BODY_LEVEL`] order.
+fn body_level_values(swing: &BodyLevel<'_>) -> [Option<Values>; BODY_LEVEL] {
     let mut out = [None; BODY_LEVEL];
     for t in swing.tempo {
         let relative = t.ratio_uncertainty / t.ratio;
-        out[t.phase as usize] = Some((libm::logf(t.ratio), relative, t.coach_s));
+        out[t.phase as usize] = Some((libm::logf(t.ratio), relative, (t.coach_s, 0.0)));
     }
     let (student, coach) = swing.pause_s;
     // A pause is timed to a frame or so: the top's own uncertainty is in the tempo's.
-    out[3] = Some((student - coach, 0.0, coach));
-    for b in swing.body {
+    out[3] = Some((student - coach, 0.0, (coach, 0.0)));
+    for (b, &rate) in swing.body.iter().zip(swing.coach_rate) {
         if let Some(i) = CHECKS.iter().position(|c| *c == b.check) {
-            out[4 + i] = Some((b.student - b.coach, b.uncertainty, b.coach));
+            out[4 + i] = Some((b.student - b.coach, b.uncertainty, (b.coach, rate)));
         }
     }
     for g in swing.gaps {
         if let Some(i) = GAPS.iter().position(|l| *l == (g.first, g.then)) {
-            out[4 + MAX_CHECKS + i] = Some((g.student_s - g.coach_s, g.uncertainty_s, g.coach_s));
+            out[4 + MAX_CHECKS + i] =
+                Some((g.student_s - g.coach_s, g.uncertainty_s, (g.coach_s, 0.0)));
         }
     }
     out
@@ -248,8 +250,7 @@ impl<'a> Tendencies<'a> {
         joints.fill(JointTallies::EMPTY);
         Tendencies {
             body: [Tally::EMPTY; BODY_LEVEL],
-            coach: [0.0; BODY_LEVEL],
-            coach_rate: [0.0; MAX_CHECKS],
+            coach: [(0.0, 0.0); BODY_LEVEL],
             joints,
             lead: Side::Left,
             swings: 0,
@@ -287,7 +288,7 @@ impl<'a> Tendencies<'a> {
     /// The coach's value of a body-level `quantity`, in its own unit (a phase's duration in
     /// seconds), as the last swing counted had it.
     pub fn coach(&self, quantity: Quantity) -> Option<f32> {
-        quantity.body_level().map(|i| self.coach[i])
+        quantity.body_level().map(|i| self.coach[i].0)
     }
 
     /// The joint at skeleton index `k`, as the swings named it.
@@ -408,7 +409,9 @@ impl<'a> Tendencies<'a> {
             let Some(k) = CHECKS.iter().position(|x| *x == b.check) else {
                 continue;
             };
-            let (Some(e), rate) = (self.estimate(Quantity::Check(k)), self.coach_rate[k]) else {
+            let q = Quantity::Check(k);
+            let coach = q.body_level().and_then(|i| self.coach.get(i));
+            let (Some(e), Some(&(_, rate))) = (self.estimate(q), coach) else {
                 continue;
             };
             under[i] = causes.iter().position(|(g, _)| {
@@ -430,11 +433,11 @@ impl<'a> Tendencies<'a> {
                     uncertainty: libm::hypotf(e.uncertainty, rate * eg.uncertainty),
                     ..e
                 };
-                !residual.clears(Quantity::Check(k).tolerance())
+                !residual.clears(q.tolerance())
             });
         }
         // Joints: those whose interval along the offset clears the threshold, folded under a
-        // cause that may explain them.
+        // cause that may explain them (under the gap that explains it, for a check).
         for event in Event::ALL {
             for k in 0..self.joints.len() {
                 let Some((d, e, past)) = self.joint_offset(event, k) else {
@@ -444,12 +447,12 @@ impl<'a> Tendencies<'a> {
                 if d.distance_m - margin <= SPATIAL_THRESHOLD_M {
                     continue;
                 }
-                let folding = causes.iter_mut().find(|(c, _)| match c.advice {
+                let folding = causes.iter().position(|(c, _)| match c.advice {
                     Advice::Body(b, _) => may_explain(&Item::Check(b), &d, self.lead),
                     Advice::Sequence(g, _) => may_explain(&Item::Gap(g), &d, self.lead),
                     _ => false,
                 });
-                match folding {
+                match folding.and_then(|i| causes.get_mut(under[i].unwrap_or(i))) {
                     Some((_, explains)) => explains.add(&d),
                     None => insert_sorted(
                         &mut out,
@@ -464,9 +467,9 @@ impl<'a> Tendencies<'a> {
             }
         }
         for i in 0..causes.len() {
-            if let (Some(j), (c, explains)) = (under[i], causes[i]) {
-                if let (Advice::Body(b, _), Some((_, gap))) = (c.advice, causes.get_mut(j)) {
-                    gap.add_check(&b, Advice::severity_of_check(&b), &explains);
+            if let (Some(j), Advice::Body(b, _)) = (under[i], causes[i].0.advice) {
+                if let Some((_, gap)) = causes.get_mut(j) {
+                    gap.add_check(&b, Advice::severity_of_check(&b));
                 }
             }
         }
@@ -585,11 +588,6 @@ impl Sink for Tendencies<'_> {
             if let Some((v, u, c)) = value {
                 tally.add(v / q.unit(), u / q.unit(), q.tolerance() / q.unit());
                 *coach = *c;
-            }
-        }
-        for (b, &rate) in swing.body.iter().zip(swing.coach_rate) {
-            if let Some(i) = CHECKS.iter().position(|c| *c == b.check) {
-                self.coach_rate[i] = rate;
             }
         }
         self.lead = swing.lead;

@@ -3,8 +3,8 @@
 //! Tempo verdicts, the sequence's gaps whose interval is wholly past their tolerance, body
 //! checks past theirs and joint deviations, each ranked by its severity (how far past its
 //! threshold it is, as a multiple of it); a joint item that states what a body item given at
-//! its event states is left out, and a check at impact that a gap explains goes under the gap
-//! (the `cause` stage).
+//! its event states is left out (a check at impact that a gap explains is already under the
+//! gap: the `cause` stage).
 
 use super::cause::{Cause, Explains, Item, Symptom};
 use super::spatial::{severity, Deviation, Direction, NOISE_FACTOR};
@@ -167,9 +167,8 @@ impl core::fmt::Display for Advice {
 }
 
 /// The advice of one swing whose lead side is `lead`: its tempo verdicts, its `causes` (a
-/// joint item that states what a body item at its event states folded under it, a check a gap
-/// explains under the gap with what it explains) and the joint deviations no cause explains,
-/// each ranked by [`Advice::severity`].
+/// joint item that states what a body item at its event states folded under it) and the joint
+/// deviations no cause explains, each ranked by [`Advice::severity`].
 pub(super) fn advise(
     tempo: &[PhaseTempo; 3],
     causes: &mut [Cause],
@@ -190,16 +189,7 @@ pub(super) fn advise(
             None => insert_sorted(&mut advice, Advice::Spatial(*d), Advice::severity),
         }
     }
-    // A check a gap explains goes under it, with what it explains.
-    for i in 0..causes.len() {
-        if let (Item::Check(b), Some(j)) = (causes[i].item, causes[i].under) {
-            let (severity, explains) = (causes[i].severity, causes[i].explains);
-            if let Some(gap) = causes.get_mut(usize::from(j)) {
-                gap.explains.add_check(&b, severity, &explains);
-            }
-        }
-    }
-    for c in causes.iter().filter(|c| c.under.is_none()) {
+    for c in causes.iter() {
         let item = match c.item {
             Item::Check(b) => Advice::Body(b, c.explains),
             Item::Gap(g) => Advice::Sequence(g, c.explains),
@@ -405,6 +395,14 @@ mod tests {
         assert!(matches!(advice[1], Advice::Sequence(_, e) if e.check.is_none()));
         // Where the coach's hips stood still at impact the gap explains nothing of them.
         let advice = advise_on(&[check(7, -38.0, -53.0)], &[0.0]);
-        assert!(matches!(advice[0], Advice::Body(..)), "{advice:?}");
+        assert!(
+            advice
+                .iter()
+                .any(|a| matches!(a, Advice::Body(b, _) if b.check == CHECKS[7]))
+                && advice
+                    .iter()
+                    .all(|a| !matches!(a, Advice::Sequence(_, e) if e.check.is_some())),
+            "{advice:?}"
+        );
     }
 }

@@ -45,8 +45,8 @@ pub(super) struct Checks {
     /// The checks, in [`CHECKS`] order.
     pub found: HVec<BodyDeviation, MAX_CHECKS>,
     /// For each check found, in its order: the rate of change of the coach's value at its
-    /// position, its unit per second, over the window the sequence's speeds are read across
-    /// ([`Body::window`]).
+    /// position, its unit per second, across the event's timing uncertainty (at least half a
+    /// frame each way).
     pub coach_rate: HVec<f32, MAX_CHECKS>,
 }
 
@@ -153,24 +153,18 @@ pub(super) fn checks(
                 variance += d * d * (spread(&errors[0]) + spread(&errors[1]));
             }
         }
-        // The coach's change within the event's timing uncertainty, and its rate.
-        let across = |coach_at: &mut dyn FnMut(f32) -> Option<f32>, h: f32| match (
-            coach_at(c + h),
-            coach_at(c - h),
-        ) {
+        // The coach's change within the event's timing uncertainty, and so its rate.
+        let along = match (coach_at(c + h), coach_at(c - h)) {
             (Some(l), Some(e)) => 0.5 * (l - e),
             _ => 0.0,
         };
-        let along = across(&mut coach_at, h);
-        let half = (body_c.window(coach_hz) / 2) as f32;
-        let rate = across(&mut coach_at, half) / half * coach_hz;
         let _ = out.found.push(BodyDeviation {
             check,
             student: here_s - zero_s,
             coach: here_c - zero_c,
             uncertainty: libm::sqrtf(variance + along * along),
         });
-        let _ = out.coach_rate.push(rate);
+        let _ = out.coach_rate.push(along / h * coach_hz);
     }
     out
 }

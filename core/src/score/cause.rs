@@ -21,8 +21,9 @@
 //! the hips to the chest; the chest's too for the chest to the lead arm) is **explained by
 //! the gap** where it differs from the coach's by about what the coach's own motion makes of
 //! the gap's change (the coach's rate of change at impact times it): what is left, the
-//! residual, within the check's threshold. It is then folded under the gap, with the joint
-//! offsets it explains, and the gap ranked by it.
+//! residual, within the check's threshold. The gap then takes the check's place: it reaches
+//! the check's events and carries its segment, so the joint offsets the check would explain
+//! fold under the gap, which names the check and is ranked by it.
 //!
 //! A cause reaches the events of the swing it shapes: a check at the top (P4) the toe-up,
 //! halfway back and the top; a check at impact (P7) halfway down, impact and what follows it
@@ -131,7 +132,7 @@ pub struct Explains {
     pub check: Option<Check>,
     /// That check's student less coach, whole degrees or centimetres (saturating).
     pub by: i8,
-    /// That check's severity ([`Advice::severity_of_check`]).
+    /// That check's severity ([`Advice::severity_of_check`]; 0 without one).
     pub check_severity: f32,
 }
 
@@ -145,33 +146,25 @@ impl Explains {
         }
     }
 
-    /// Adds check `b` of severity `severity`, and what it explains.
-    pub(crate) fn add_check(&mut self, b: &BodyDeviation, severity: f32, explains: &Explains) {
-        if self.check.is_none() || severity > self.check_severity {
+    /// Adds check `b` of severity `severity`: the most severe check is named.
+    pub(crate) fn add_check(&mut self, b: &BodyDeviation, severity: f32) {
+        if severity > self.check_severity {
             let scale = if b.check.measure.in_degrees() {
                 1.0
             } else {
                 100.0
             };
             self.check = Some(b.check);
-            self.by = libm::roundf((b.student - b.coach) * scale).clamp(-127.0, 127.0) as i8;
+            self.by = libm::roundf((b.student - b.coach) * scale) as i8;
             self.check_severity = severity;
-        }
-        self.joints = self.joints.saturating_add(explains.joints);
-        if let Some(w) = explains.worst {
-            if self.worst.is_none_or(|mine| w.severity() > mine.severity()) {
-                self.worst = Some(w);
-            }
         }
     }
 
     /// The severity of the most severe thing it explains (0 for nothing).
     pub fn severity(&self) -> f32 {
-        let joint = self.worst.map_or(0.0, |w| w.severity());
-        match self.check {
-            Some(_) => joint.max(self.check_severity),
-            None => joint,
-        }
+        self.worst
+            .map_or(0.0, |w| w.severity())
+            .max(self.check_severity)
     }
 }
 
@@ -181,27 +174,21 @@ impl Explains {
 /// position or the check is not of a segment peaking before the gap's later link (see the
 /// module documentation).
 pub(crate) fn predicted_by(gap: &Gap, check: Check, coach_rate: f32) -> Option<f32> {
+    let link = match check.measure {
+        Measure::PelvisTurn | Measure::PelvisSway | Measure::PelvisThrust => Link::Pelvis,
+        Measure::ThoraxTurn => Link::Thorax,
+        Measure::HeadLift | Measure::LeadElbow => return None,
+    };
     let reaches = check
         .position
         .event()
-        .is_some_and(|e| Cause::gap(*gap, 0.0).events & (1 << e as u8) != 0);
-    let link = match Cause::check(
-        BodyDeviation {
-            check,
-            student: 0.0,
-            coach: 0.0,
-            uncertainty: 0.0,
-        },
-        0.0,
-    )
-    .segment?
-    {
-        Segment::Pelvis => Link::Pelvis,
-        Segment::Thorax => Link::Thorax,
-    };
+        .is_some_and(|e| GAP_REACH & (1 << e as u8) != 0);
     (reaches && (link as u8) < (gap.then as u8))
         .then_some(coach_rate * (gap.student_s - gap.coach_s))
 }
+
+/// The events a gap reaches (bit `e` for event `e`): halfway down and impact.
+const GAP_REACH: u8 = (1 << Event::MidDownswing as u8) | (1 << Event::Impact as u8);
 
 /// A body-level item past its threshold.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -225,8 +212,6 @@ pub(super) struct Cause {
     events: u8,
     /// What it explains.
     pub explains: Explains,
-    /// For a check, the gap among the causes (its index) that explains it.
-    pub under: Option<u8>,
 }
 
 /// The events a check at `position` reaches (see the module documentation).
@@ -260,7 +245,6 @@ impl Cause {
             segment,
             events: reach(check.check.position),
             explains: Explains::default(),
-            under: None,
         }
     }
 
@@ -271,9 +255,8 @@ impl Cause {
             item: Item::Gap(gap),
             severity,
             segment: (gap.first == Link::Pelvis).then_some(Segment::Thorax),
-            events: (1 << Event::MidDownswing as u8) | (1 << Event::Impact as u8),
+            events: GAP_REACH,
             explains: Explains::default(),
-            under: None,
         }
     }
 }
@@ -302,39 +285,58 @@ pub(crate) fn may_explain(item: &Item, d: &Deviation, lead: crate::events::Side)
     (reaches && carries) || states
 }
 
-/// The causes of a swing: its body checks past their thresholds (`coach_rate` the rate of
-/// change of the coach's value of each, in `body`'s order) and its sequence's gaps wholly past
-/// theirs; a check a gap explains (its residual within the check's threshold) marked under it.
+/// The causes of a swing: its sequence's gaps wholly past their tolerance and its body checks
+/// past their thresholds (`coach_rate` the rate of change of the coach's value of each, in
+/// `body`'s order), but a check a gap explains (its residual within the check's threshold):
+/// that gap takes its place.
 pub(super) fn causes(
     body: &[BodyDeviation],
     coach_rate: &[f32],
     gaps: &[Gap],
 ) -> HVec<Cause, MAX_CAUSES> {
-    let mut out: HVec<Cause, MAX_CAUSES> = HVec::new();
-    let mut rates = [0.0f32; MAX_CAUSES];
+    let mut out: HVec<Cause, MAX_CAUSES> = gaps
+        .iter()
+        .filter(|g| Advice::is_clear(g))
+        .map(|g| Cause::gap(*g, Advice::severity_of_gap(g)))
+        .collect();
+    let clear = out.len();
     for (b, &rate) in body.iter().zip(coach_rate) {
         let severity = Advice::severity_of_check(b);
-        if severity > 1.0 && out.push(Cause::check(*b, severity)).is_ok() {
-            rates[out.len() - 1] = rate;
+        if severity <= 1.0 {
+            continue;
+        }
+        // What the gap leaves of the difference, within the difference the check is advice
+        // past (the difference over its severity).
+        let difference = b.student - b.coach;
+        let explaining = out[..clear].iter_mut().find(|c| match c.item {
+            Item::Gap(g) => predicted_by(&g, b.check, rate)
+                .is_some_and(|p| libm::fabsf(difference - p) * severity <= libm::fabsf(difference)),
+            Item::Check(_) => false,
+        });
+        let check = Cause::check(*b, severity);
+        match explaining {
+            Some(gap) => gap.take(&check),
+            None => {
+                let _ = out.push(check);
+            }
         }
     }
-    for g in gaps.iter().filter(|g| Advice::is_clear(g)) {
-        let _ = out.push(Cause::gap(*g, Advice::severity_of_gap(g)));
-    }
-    for i in 0..out.len() {
-        let Item::Check(b) = out[i].item else {
-            continue;
-        };
-        // The difference the check is advice past.
-        let threshold = libm::fabsf(b.student - b.coach) / out[i].severity;
-        let explains = |c: &Cause| match c.item {
-            Item::Gap(g) => predicted_by(&g, b.check, rates[i])
-                .is_some_and(|p| libm::fabsf(b.student - b.coach - p) <= threshold),
-            Item::Check(_) => false,
-        };
-        out[i].under = out.iter().position(explains).map(|j| j as u8);
-    }
     out
+}
+
+impl Cause {
+    /// This gap explaining `check` (a cause of a check): it reaches the check's events too and
+    /// carries its segment where that carries more (the pelvis the thorax), so the joints the
+    /// check would explain fold under the gap, and the gap names it and is ranked by it.
+    fn take(&mut self, check: &Cause) {
+        self.events |= check.events;
+        if check.segment == Some(Segment::Pelvis) || self.segment.is_none() {
+            self.segment = check.segment;
+        }
+        if let Item::Check(b) = check.item {
+            self.explains.add_check(&b, check.severity);
+        }
+    }
 }
 
 /// A segment's rigid motion from the coach's pose to the student's.
