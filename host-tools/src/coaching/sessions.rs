@@ -20,7 +20,7 @@
 //! intervals (one-sided 95 % each way: 90 % when honest) and the **swings needed** for 90 %
 //! recall per family.
 
-use super::flaws::{self, Body, Flaw, Planted, Truth};
+use super::flaws::{self, Body, Flaw, Planted};
 use super::{imu_messages, pct, phone_messages, share, states, Clean, Input, PhoneView, MODEL_HZ};
 use crate::coaches;
 use crate::synth::lay_out;
@@ -294,10 +294,7 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
     let mut outcome = SessionOutcome {
         snapshots: vec![None; ns.len()],
         shown_m: nominal.shown_m,
-        body_truth: nominal
-            .truths
-            .iter()
-            .any(|t| matches!(t, Truth::Body { .. } | Truth::Sequence { .. })),
+        body_truth: !nominal.causes.is_empty(),
         error: None,
     };
     coaches::session(None, |session| {
@@ -347,15 +344,12 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
 /// truth is a check or a gap by that body-level item (its cause first), any other by a
 /// statement of a truth.
 fn right(advice: &Advice, planted: &Planted) -> bool {
-    let body_level = planted
-        .truths
-        .iter()
-        .any(|t| matches!(t, Truth::Body { .. } | Truth::Sequence { .. }));
-    match body_level {
-        true => {
-            matches!(advice, Advice::Body(..) | Advice::Sequence(..)) && states(advice, planted)
+    match planted.causes.is_empty() {
+        false => {
+            matches!(advice, Advice::Body(..) | Advice::Sequence(..))
+                && states(advice, &planted.causes)
         }
-        false => states(advice, planted),
+        true => states(advice, &planted.truths),
     }
 }
 
