@@ -72,6 +72,20 @@ impl Measure {
     }
 }
 
+impl Measure {
+    /// The words for a student's value past the coach's, more and less: what a difference of
+    /// this measure is called.
+    const fn compared(self) -> [&'static str; 2] {
+        match self {
+            Measure::ThoraxTurn | Measure::PelvisTurn => ["more closed", "more open"],
+            Measure::PelvisSway => ["farther toward the target", "farther from the target"],
+            Measure::PelvisThrust => ["closer to the ball", "farther from the ball"],
+            Measure::HeadLift => ["higher", "lower"],
+            Measure::LeadElbow => ["more bent", "straighter"],
+        }
+    }
+}
+
 /// One measure at one position.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -150,6 +164,46 @@ pub struct BodyDeviation {
     pub uncertainty: f32,
 }
 
+impl Check {
+    /// The words at its position: "the top (P4)", "impact (P7)".
+    fn moment(self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let moment = match self.position {
+            Position::P1 => "address",
+            Position::P4 => "the top",
+            Position::P7 => "impact",
+            Position::P10 => "the finish",
+            other => other.moment(),
+        };
+        write!(f, "{moment} ({})", self.position.name())
+    }
+
+    /// "at impact (P7) your hips are 20° more closed than the coach's": the student's value
+    /// `by` past the coach's (whole degrees or centimetres, as [`Measure::in_degrees`] says),
+    /// as a clause of another sentence.
+    pub fn difference(self, f: &mut core::fmt::Formatter<'_>, by: i8) -> core::fmt::Result {
+        let (whose, verb, _, _) = self.measure.words();
+        let [more, less] = self.measure.compared();
+        let unit = if self.measure.in_degrees() {
+            "°"
+        } else {
+            " cm"
+        };
+        let is = if verb.starts_with("have") {
+            "are"
+        } else {
+            "is"
+        };
+        f.write_str("at ")?;
+        self.moment(f)?;
+        let way = if by > 0 { more } else { less };
+        write!(
+            f,
+            " your {whose} {is} {}{unit} {way} than the coach's",
+            by.unsigned_abs()
+        )
+    }
+}
+
 impl BodyDeviation {
     /// Its sentence without the full stop, for advice to go on from.
     pub fn sentence(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -172,15 +226,9 @@ impl BodyDeviation {
                 (_, false) => write!(f, " {less}"),
             }
         };
-        let position = self.check.position;
-        let moment = match position {
-            Position::P1 => "address",
-            Position::P4 => "the top",
-            Position::P7 => "impact",
-            Position::P10 => "the finish",
-            other => other.moment(),
-        };
-        write!(f, "At {moment} ({}) your {whose} {verb} ", position.name())?;
+        f.write_str("At ")?;
+        self.check.moment(f)?;
+        write!(f, " your {whose} {verb} ")?;
         amount(f, self.student, Some(self.uncertainty))?;
         write!(f, " {from}, against the coach's ")?;
         amount(f, self.coach, None)?;

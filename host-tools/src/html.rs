@@ -139,6 +139,7 @@ impl Scored {
                 r.coach_events.pause() / self.coach_hz,
             ),
             body: &r.body,
+            coach_rate: &[],
             gaps: &r.gaps,
         }
     }

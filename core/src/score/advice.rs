@@ -3,7 +3,8 @@
 //! Tempo verdicts, the sequence's gaps whose interval is wholly past their tolerance, body
 //! checks past theirs and joint deviations, each ranked by its severity (how far past its
 //! threshold it is, as a multiple of it); a joint item that states what a body item given at
-//! its event states is left out.
+//! its event states is left out (a check at impact that a gap explains is already under the
+//! gap: the `cause` stage).
 
 use super::cause::{Cause, Explains, Item, Symptom};
 use super::spatial::{severity, Deviation, Direction, NOISE_FACTOR};
@@ -76,9 +77,10 @@ impl Advice {
     }
 }
 
-/// A cause's own severity `own`, or that of the largest offset it `explains` where higher.
+/// A cause's own severity `own`, or that of the most severe offset or check it `explains`
+/// where higher.
 pub(crate) fn ranked(own: f32, explains: &Explains) -> f32 {
-    explains.worst.map_or(own, |w| own.max(w.severity()))
+    own.max(explains.severity())
 }
 
 /// Writes "{at event} your {joint} is {cm} ± {u} cm {which way} than the coach's", the
@@ -105,10 +107,16 @@ fn joint_clause(f: &mut core::fmt::Formatter<'_>, d: &Symptom, capital: bool) ->
 
 /// Writes what a cause explains, if anything: ", which is why ...".
 fn explained(f: &mut core::fmt::Formatter<'_>, explains: &Explains) -> core::fmt::Result {
+    let mut then = ", which is why ";
+    if let Some(check) = explains.check {
+        f.write_str(then)?;
+        check.difference(f, explains.by)?;
+        then = ", and ";
+    }
     let Some(worst) = &explains.worst else {
         return Ok(());
     };
-    f.write_str(", which is why ")?;
+    f.write_str(then)?;
     joint_clause(f, worst, false)?;
     match explains.joints.saturating_sub(1) {
         0 => Ok(()),
@@ -275,7 +283,7 @@ mod tests {
             coach: 95.0,
             uncertainty: 1.0,
         }];
-        let mut causes = causes(&body, &[]);
+        let mut causes = causes(&body, &[0.0], &[]);
         let joint = |event, joint, direction, distance_m| Deviation {
             event,
             joint,
@@ -319,6 +327,79 @@ mod tests {
             ),
             "{}",
             advice[0]
+        );
+    }
+
+    #[test]
+    fn a_clear_gap_folds_the_hips_turn_at_impact_it_moves_and_ranks_by_it() {
+        use super::{advise, Advice};
+        use crate::body::Link;
+        use crate::events::Side;
+        use crate::score::cause::causes;
+        use crate::score::{Phase, PhaseTempo, Verdict};
+        use crate::sequence::Gap;
+        // The hips peak 5 ms after the chest against the coach's 40 ms before (45 ms less,
+        // severity 1.5), and at impact (CHECKS[7]) are 20° less open than the coach's (severity
+        // 2) while the coach's open at 400°/s: the gap accounts for 18°. A lead elbow 20° more
+        // bent at the top (CHECKS[4]) is not the gap's.
+        let gap = Gap {
+            first: Link::Pelvis,
+            then: Link::Thorax,
+            student_s: -0.005,
+            coach_s: 0.04,
+            uncertainty_s: 0.004,
+        };
+        let check = |i: usize, student: f32, coach: f32| BodyDeviation {
+            check: CHECKS[i],
+            student,
+            coach,
+            uncertainty: 1.0,
+        };
+        let tempo = Phase::ALL.map(|phase| PhaseTempo {
+            phase,
+            student_s: 1.0,
+            coach_s: 1.0,
+            ratio: 1.0,
+            ratio_uncertainty: 0.01,
+            verdict: Verdict::Ok,
+        });
+        let advise_on = |body: &[BodyDeviation], rates: &[f32]| {
+            let mut causes = causes(body, rates, &[gap]);
+            advise(&tempo, &mut causes, &Default::default(), Side::Left)
+        };
+        let body = [check(4, 40.0, 20.0), check(7, -33.0, -53.0)];
+        let advice = advise_on(&body, &[0.0, -400.0]);
+        assert_eq!(advice.len(), 2, "{advice:?}");
+        let Advice::Sequence(g, explains) = advice[0] else {
+            panic!("{advice:?}");
+        };
+        assert_eq!((g, explains.check, explains.by), (gap, Some(CHECKS[7]), 20));
+        assert!((advice[0].severity() - 2.0).abs() < 1e-5, "{advice:?}");
+        assert!(matches!(advice[1], Advice::Body(b, _) if b.check == CHECKS[4]));
+        assert_eq!(
+            advice[0].to_string(),
+            "In the downswing your hips peak 5 ± 4 ms after your chest, against the coach's 40 \
+             ms before: the upper body starts the downswing, which is why at impact (P7) your \
+             hips are 20° more closed than the coach's."
+        );
+        // Turned 30° less open, the hips are more than the gap explains: a cause of their own.
+        let body = [check(7, -23.0, -53.0)];
+        let advice = advise_on(&body, &[-400.0]);
+        assert!(
+            matches!(advice[0], Advice::Body(b, _) if b.check == CHECKS[7]),
+            "{advice:?}"
+        );
+        assert!(matches!(advice[1], Advice::Sequence(_, e) if e.check.is_none()));
+        // Where the coach's hips stood still at impact the gap explains nothing of them.
+        let advice = advise_on(&[check(7, -38.0, -53.0)], &[0.0]);
+        assert!(
+            advice
+                .iter()
+                .any(|a| matches!(a, Advice::Body(b, _) if b.check == CHECKS[7]))
+                && advice
+                    .iter()
+                    .all(|a| !matches!(a, Advice::Sequence(_, e) if e.check.is_some())),
+            "{advice:?}"
         );
     }
 }

@@ -38,6 +38,18 @@ fn pose(pair: &Pair<'_>, student: bool, joints: usize, x: f32, out: &mut [Vec3; 
     }
 }
 
+/// The body checks a swing could be measured at, and how fast the coach's value of each moves
+/// there.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct Checks {
+    /// The checks, in [`CHECKS`] order.
+    pub found: HVec<BodyDeviation, MAX_CHECKS>,
+    /// For each check found, in its order: the rate of change of the coach's value at its
+    /// position, its unit per second, across the event's timing uncertainty (at least half a
+    /// frame each way).
+    pub coach_rate: HVec<f32, MAX_CHECKS>,
+}
+
 /// The body checks of `pair`'s student (events `events.0`) against its coach (events
 /// `events.1`, at `coach_hz`), with the noise and timing the earlier stages found: those both
 /// swings could be measured at, in [`CHECKS`] order. None for a skeleton that lacks a joint the
@@ -49,9 +61,9 @@ pub(super) fn checks(
     (events, hz): ((&SwingEvents, &SwingEvents), (f32, f32)),
     noise: &Noise,
     timing: &Timing,
-) -> HVec<BodyDeviation, MAX_CHECKS> {
+) -> Checks {
     let coach_hz = hz.1;
-    let mut out = HVec::new();
+    let mut out = Checks::default();
     let joints = skeleton.len();
     let (events_s, events_c) = events;
     let (Ok(body_s), Ok(body_c)) = (
@@ -141,17 +153,18 @@ pub(super) fn checks(
                 variance += d * d * (spread(&errors[0]) + spread(&errors[1]));
             }
         }
-        // The coach's change within the event's timing uncertainty.
+        // The coach's change within the event's timing uncertainty, and so its rate.
         let along = match (coach_at(c + h), coach_at(c - h)) {
             (Some(l), Some(e)) => 0.5 * (l - e),
             _ => 0.0,
         };
-        let _ = out.push(BodyDeviation {
+        let _ = out.found.push(BodyDeviation {
             check,
             student: here_s - zero_s,
             coach: here_c - zero_c,
             uncertainty: crate::math::sqrt(variance + along * along),
         });
+        let _ = out.coach_rate.push(along / h * coach_hz);
     }
     out
 }
@@ -257,6 +270,63 @@ mod tests {
     }
 
     #[test]
+    fn the_coachs_rate_is_how_fast_its_value_moves_at_the_position() {
+        // The coach's whole body turning 2° a frame at 30 Hz from frame 30 on (the student
+        // still): its hips' turn moves at 60°/s at impact, its head's lift not at all.
+        let skeleton = Skeleton::standard(Format::H36m17).unwrap();
+        let mut rest = [Vec3::zeros(); 17];
+        skeleton.rest_positions(&mut rest);
+        let mut coach = std::vec::Vec::new();
+        for f in 0..100 {
+            let (sin, cos) = (2.0 * f.max(30) as f32 - 60.0).to_radians().sin_cos();
+            coach.extend(
+                rest.iter()
+                    .map(|d| Vec3::new(cos * d.x + sin * d.z, d.y, -sin * d.x + cos * d.z)),
+            );
+        }
+        let student = swing(&skeleton, 0.0);
+        let frames = events([10, 20, 30, 40, 50, 60, 70, 90]);
+        let detected = |positions| Detected {
+            positions: crate::frames::Frames::metres(positions, 17),
+            hz: 30.0,
+            events: frames,
+            unsure: Unsure::default(),
+        };
+        let (student, coach) = (detected(&student), detected(&coach));
+        let pair = Pair::new(&skeleton, (&student, &frames), &coach);
+        let noise = Noise {
+            usual: [Vec3::zeros(); 40],
+            wander: [Vec3::zeros(); 40],
+            input: Vec3::repeat(0.01),
+        };
+        let timing = Timing {
+            event: [0.01; Event::COUNT],
+            top_gain: 0.0,
+            paused: false,
+        };
+        let found = checks(
+            &skeleton,
+            &pair,
+            ((&frames, &frames), (30.0, 30.0)),
+            &noise,
+            &timing,
+        );
+        let rate = |measure| {
+            let i = found
+                .found
+                .iter()
+                .position(|b| b.check.position == Position::P7 && b.check.measure == measure)
+                .unwrap();
+            found.coach_rate[i]
+        };
+        assert!(
+            (rate(Measure::PelvisTurn).abs() - 60.0).abs() < 0.5,
+            "{found:?}"
+        );
+        assert!(rate(Measure::HeadLift).abs() < 1e-3, "{found:?}");
+    }
+
+    #[test]
     fn a_turned_chest_reads_as_the_thorax_turn_alone_within_its_uncertainty() {
         let skeleton = Skeleton::standard(Format::H36m17).unwrap();
         let (student, coach) = (swing(&skeleton, 25.0), swing(&skeleton, 0.0));
@@ -288,6 +358,7 @@ mod tests {
         );
         let at = |measure| {
             found
+                .found
                 .iter()
                 .find(|b| b.check.position == Position::P4 && b.check.measure == measure)
                 .unwrap()

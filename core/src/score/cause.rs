@@ -14,6 +14,17 @@
 //!    less the moved coach's) is within it is explained: it is folded under the cause, not
 //!    given as an item of its own. A joint whose residual is past its threshold stays an item.
 //!
+//! A gap of the sequence moves the impact against the segments that peak before its later
+//! link: that link carries the club to the ball, so where the chest peaks 40 ms early the
+//! club meets the ball 40 ms early and the hips at impact are where the coach's were 40 ms
+//! before its impact. A check at impact of such a segment (the hips' turn, sway or thrust for
+//! the hips to the chest; the chest's too for the chest to the lead arm) is **explained by
+//! the gap** where it differs from the coach's by about what the coach's own motion makes of
+//! the gap's change (the coach's rate of change at impact times it): what is left, the
+//! residual, within the check's threshold. The gap then takes the check's place: it reaches
+//! the check's events and carries its segment, so the joint offsets the check would explain
+//! fold under the gap, which names the check and is ranked by it.
+//!
 //! A cause reaches the events of the swing it shapes: a check at the top (P4) the toe-up,
 //! halfway back and the top; a check at impact (P7) halfway down, impact and what follows it
 //! (a body out of place at impact stays so through the finish); the sequence's gaps, halfway
@@ -31,7 +42,7 @@ use super::align::Pair;
 use super::noise::Noise;
 use super::spatial::{severity, Deviation, Direction};
 use crate::body::{Body, Link, Measure};
-use crate::checks::BodyDeviation;
+use crate::checks::{BodyDeviation, Check};
 use crate::config::{MAX_CHECKS, MAX_GAPS, MAX_JOINTS};
 use crate::events::{Event, Position};
 use crate::joint::Joint;
@@ -107,7 +118,8 @@ impl From<&Deviation> for Symptom {
     }
 }
 
-/// What a cause explains: the joint offsets folded under it.
+/// What a cause explains: the joint offsets folded under it, and for a gap the check at impact
+/// it explains.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -116,6 +128,12 @@ pub struct Explains {
     pub worst: Option<Symptom>,
     /// How many offsets it explains.
     pub joints: u8,
+    /// The most severe check it explains.
+    pub check: Option<Check>,
+    /// That check's student less coach, whole degrees or centimetres (saturating).
+    pub by: i8,
+    /// That check's severity ([`Advice::severity_of_check`]; 0 without one).
+    pub check_severity: f32,
 }
 
 impl Explains {
@@ -127,7 +145,50 @@ impl Explains {
             self.worst = Some(d);
         }
     }
+
+    /// Adds check `b` of severity `severity`: the most severe check is named.
+    pub(crate) fn add_check(&mut self, b: &BodyDeviation, severity: f32) {
+        if severity > self.check_severity {
+            let scale = if b.check.measure.in_degrees() {
+                1.0
+            } else {
+                100.0
+            };
+            self.check = Some(b.check);
+            self.by = libm::roundf((b.student - b.coach) * scale) as i8;
+            self.check_severity = severity;
+        }
+    }
+
+    /// The severity of the most severe thing it explains (0 for nothing).
+    pub fn severity(&self) -> f32 {
+        self.worst
+            .map_or(0.0, |w| w.severity())
+            .max(self.check_severity)
+    }
 }
+
+/// What `gap` makes of check `check` at the student's impact, where the coach's value moves
+/// at `coach_rate` (its unit per second) there: the change it predicts (student less coach,
+/// the coach's rate times the gap's change), `None` where the gap does not reach the check's
+/// position or the check is not of a segment peaking before the gap's later link (see the
+/// module documentation).
+pub(crate) fn predicted_by(gap: &Gap, check: Check, coach_rate: f32) -> Option<f32> {
+    let link = match check.measure {
+        Measure::PelvisTurn | Measure::PelvisSway | Measure::PelvisThrust => Link::Pelvis,
+        Measure::ThoraxTurn => Link::Thorax,
+        Measure::HeadLift | Measure::LeadElbow => return None,
+    };
+    let reaches = check
+        .position
+        .event()
+        .is_some_and(|e| GAP_REACH & (1 << e as u8) != 0);
+    (reaches && (link as u8) < (gap.then as u8))
+        .then_some(coach_rate * (gap.student_s - gap.coach_s))
+}
+
+/// The events a gap reaches (bit `e` for event `e`): halfway down and impact.
+const GAP_REACH: u8 = (1 << Event::MidDownswing as u8) | (1 << Event::Impact as u8);
 
 /// A body-level item past its threshold.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -194,7 +255,7 @@ impl Cause {
             item: Item::Gap(gap),
             severity,
             segment: (gap.first == Link::Pelvis).then_some(Segment::Thorax),
-            events: (1 << Event::MidDownswing as u8) | (1 << Event::Impact as u8),
+            events: GAP_REACH,
             explains: Explains::default(),
         }
     }
@@ -224,20 +285,58 @@ pub(crate) fn may_explain(item: &Item, d: &Deviation, lead: crate::events::Side)
     (reaches && carries) || states
 }
 
-/// The causes of a swing: its body checks past their thresholds and its sequence's gaps
-/// wholly past theirs.
-pub(super) fn causes(body: &[BodyDeviation], gaps: &[Gap]) -> HVec<Cause, MAX_CAUSES> {
-    let mut out = HVec::new();
-    for b in body {
+/// The causes of a swing: its sequence's gaps wholly past their tolerance and its body checks
+/// past their thresholds (`coach_rate` the rate of change of the coach's value of each, in
+/// `body`'s order), but a check a gap explains (its residual within the check's threshold):
+/// that gap takes its place.
+pub(super) fn causes(
+    body: &[BodyDeviation],
+    coach_rate: &[f32],
+    gaps: &[Gap],
+) -> HVec<Cause, MAX_CAUSES> {
+    let mut out: HVec<Cause, MAX_CAUSES> = gaps
+        .iter()
+        .filter(|g| Advice::is_clear(g))
+        .map(|g| Cause::gap(*g, Advice::severity_of_gap(g)))
+        .collect();
+    let clear = out.len();
+    for (b, &rate) in body.iter().zip(coach_rate) {
         let severity = Advice::severity_of_check(b);
-        if severity > 1.0 {
-            let _ = out.push(Cause::check(*b, severity));
+        if severity <= 1.0 {
+            continue;
+        }
+        // What the gap leaves of the difference, within the difference the check is advice
+        // past (the difference over its severity).
+        let difference = b.student - b.coach;
+        let explaining = out[..clear].iter_mut().find(|c| match c.item {
+            Item::Gap(g) => predicted_by(&g, b.check, rate)
+                .is_some_and(|p| libm::fabsf(difference - p) * severity <= libm::fabsf(difference)),
+            Item::Check(_) => false,
+        });
+        let check = Cause::check(*b, severity);
+        match explaining {
+            Some(gap) => gap.take(&check),
+            None => {
+                let _ = out.push(check);
+            }
         }
     }
-    for g in gaps.iter().filter(|g| Advice::is_clear(g)) {
-        let _ = out.push(Cause::gap(*g, Advice::severity_of_gap(g)));
-    }
     out
+}
+
+impl Cause {
+    /// This gap explaining `check` (a cause of a check): it reaches the check's events too and
+    /// carries its segment where that carries more (the pelvis the thorax), so the joints the
+    /// check would explain fold under the gap, and the gap names it and is ranked by it.
+    fn take(&mut self, check: &Cause) {
+        self.events |= check.events;
+        if check.segment == Some(Segment::Pelvis) || self.segment.is_none() {
+            self.segment = check.segment;
+        }
+        if let Item::Check(b) = check.item {
+            self.explains.add_check(&b, check.severity);
+        }
+    }
 }
 
 /// A segment's rigid motion from the coach's pose to the student's.
@@ -356,6 +455,39 @@ mod tests {
         // A pelvis cause explains the thorax's joints too; a thorax cause not the hips.
         assert!(Segment::Pelvis.explains(Segment::Thorax));
         assert!(!Segment::Thorax.explains(Segment::Pelvis));
+    }
+
+    #[test]
+    fn a_gap_predicts_the_checks_at_impact_of_the_segments_peaking_before_its_later_link() {
+        use super::predicted_by;
+        use crate::body::{Link, Measure};
+        use crate::checks::Check;
+        use crate::sequence::Gap;
+        let gap = |first, then| Gap {
+            first,
+            then,
+            student_s: 0.0,
+            coach_s: 0.04,
+            uncertainty_s: 0.001,
+        };
+        let at = |position, measure| Check { position, measure };
+        let hips_turn = at(Position::P7, Measure::PelvisTurn);
+        let hips_chest = gap(Link::Pelvis, Link::Thorax);
+        // 40 ms less between the hips' and the chest's peaks: the club arrives 40 ms early, and
+        // the hips at impact are where the coach's were 40 ms before: 16° less open at 400°/s.
+        assert_eq!(predicted_by(&hips_chest, hips_turn, -400.0), Some(16.0));
+        // Not the head, which rides the chest, nor the top, which the gap does not reach.
+        assert_eq!(
+            predicted_by(&hips_chest, at(Position::P7, Measure::HeadLift), 1.0),
+            None
+        );
+        assert_eq!(
+            predicted_by(&hips_chest, at(Position::P4, Measure::PelvisTurn), 1.0),
+            None
+        );
+        // The chest to the lead arm moves the club against the hips too.
+        let chest_arm = gap(Link::Thorax, Link::LeadArm);
+        assert_eq!(predicted_by(&chest_arm, hips_turn, 100.0), Some(-4.0));
     }
 
     #[test]

@@ -12,7 +12,7 @@
 //! | `tempo` | each phase's duration against the coach's, with its uncertainty and verdict |
 //! | `spatial` | the joints off the coach's position at each event, with their uncertainty; every judged joint's offset to a [`Sink`] that asks |
 //! | `body` | the body checks ([`crate::checks`]) and the kinematic sequence's gaps ([`crate::sequence`]) |
-//! | `cause` | the checks and gaps past their thresholds, and the joint offsets each explains: the body-level difference at each event applied to the coach's pose, a joint within its threshold of it folded under the cause |
+//! | `cause` | the checks and gaps past their thresholds, and the joint offsets each explains: the body-level difference at each event applied to the coach's pose, a joint within its threshold of it folded under the cause; a check at impact that a gap's change accounts for (the coach's rate of change there times it) folded under the gap |
 //! | `advice` | the items a golfer reads, most important first |
 //! | `to_wire` | the report's compact wire form ([`Report::to_wire`]) |
 //!
@@ -43,7 +43,7 @@ pub use advice::Advice;
 pub(crate) use advice::{insert_sorted, ranked};
 pub use align::{BRIDGE_S, HELD_ROOT_M, SPATIAL_SMOOTHING_S};
 pub use body::LEAST_NOISE_M;
-pub(crate) use cause::{may_explain, Item};
+pub(crate) use cause::{may_explain, predicted_by, Item};
 pub use cause::{Explains, MAX_CAUSES};
 pub use noise::WANDER_SAMPLES;
 pub use sink::{BodyLevel, Sink};
@@ -438,12 +438,13 @@ pub fn compare(
         &timing,
     );
     let gaps = body::gaps(skeleton, &pair, (&events_s, events_c), hz);
-    let mut causes = cause::causes(&body, &gaps);
+    let mut causes = cause::causes(&body.found, &body.coach_rate, &gaps);
     let offsets = sink.body(&BodyLevel {
         lead: events_s.lead,
         tempo: &tempo,
         pause_s: (events_s.pause() / hz.0, events_c.pause() / hz.1),
-        body: &body,
+        body: &body.found,
+        coach_rate: &body.coach_rate,
         gaps: &gaps,
     });
     let spatial = spatial::spatial(
@@ -470,7 +471,7 @@ pub fn compare(
         student_tempo_ratio: tempo::ratio(&events_s, hz.0),
         coach_tempo_ratio: tempo::ratio(events_c, hz.1),
         spatial: spatial.deviations,
-        body,
+        body: body.found,
         gaps,
         advice,
         root_held: pair.root_held,

@@ -20,6 +20,9 @@ pub struct BodyLevel<'a> {
     pub pause_s: (f32, f32),
     /// The body checks both swings could be measured at.
     pub body: &'a [BodyDeviation],
+    /// For each of them, in their order, how fast the coach's value moves at its position,
+    /// its unit per second (empty where the teller knows none: a report keeps none).
+    pub coach_rate: &'a [f32],
     /// The sequence's gaps both swings could be measured at.
     pub gaps: &'a [Gap],
 }

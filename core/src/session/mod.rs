@@ -23,7 +23,9 @@
 //! **Advice** ([`Tendencies::advice`]) follows a swing's rules with the session's estimates: an
 //! item only where the estimate's one-sided 95 % interval lies wholly past the tolerance a
 //! swing's advice uses (15 % of tempo, each check's, 30 ms of a gap, 5 cm of a joint), a cause
-//! before the joint offsets it may explain (folded under it), each with its evidence: in how
+//! before the joint offsets it may explain (folded under it), a check at impact under the gap
+//! that accounts for it (the residual of the coach's rate times the gap's estimate not a
+//! tendency itself, as [`crate::score`]'s cause stage folds it), each with its evidence: in how
 //! many of the session's swings the quantity was past its tolerance that way. Where nothing is
 //! clear, [`Tendencies::open`] names the quantity nearest to being advice and about how many
 //! swings would settle it.
@@ -33,8 +35,8 @@ use crate::config::{BODY_LEVEL, MAX_ADVICE, MAX_CHECKS, MAX_GAPS, MAX_SET_ASIDE}
 use crate::events::{Event, Side};
 use crate::joint::Joint;
 use crate::score::{
-    insert_sorted, may_explain, ranked, Advice, BodyLevel, Deviation, Direction, Explains, Item,
-    Phase, PhaseTempo, Sink, Verdict, SPATIAL_THRESHOLD_M, TEMPO_TOLERANCE,
+    insert_sorted, may_explain, predicted_by, ranked, Advice, BodyLevel, Deviation, Direction,
+    Explains, Item, Phase, PhaseTempo, Sink, Verdict, SPATIAL_THRESHOLD_M, TEMPO_TOLERANCE,
 };
 use crate::sequence::{Gap, GAPS, GAP_TOLERANCE_S};
 use crate::tally::{t95, Estimate, Tally};
@@ -189,8 +191,9 @@ pub struct Tendencies<'a> {
     /// The body-level quantities' tallies, [`Quantity::BODY_LEVEL`] order.
     body: [Tally; BODY_LEVEL],
     /// The coach's value of each body-level quantity (a phase's duration and the pause in
-    /// seconds, a check's change, a gap), as the last swing counted had it.
-    coach: [f32; BODY_LEVEL],
+    /// seconds, a check's change, a gap) and, for a check, how fast it moves at its position
+    /// (its unit per second; 0 for the others), as the last swing counted had them.
+    coach: [(f32, f32); BODY_LEVEL],
     /// Each joint's tallies, the skeleton's order (joints past its length are not kept).
     joints: &'a mut [JointTallies],
     /// The golfer's lead side, as the last swing counted had it.
@@ -205,26 +208,33 @@ pub struct Tendencies<'a> {
     counting: bool,
 }
 
-/// Each body-level quantity's value in a swing (as the session counts it: a phase's `ln` ratio,
-/// the student's less the coach's otherwise), its stated uncertainty and the coach's value, each
-/// in its own unit, [`Quantity::BODY_LEVEL`] order; `None` where the swing has none.
-pub fn body_level_values(swing: &BodyLevel<'_>) -> [Option<(f32, f32, f32)>; BODY_LEVEL] {
+/// A body-level quantity's value in a swing (as the session counts it: a phase's `ln` ratio,
+/// the student's less the coach's otherwise), its stated uncertainty, and the coach's value and
+/// rate (a check's; 0 for the others), each in its own unit.
+pub type Values = (f32, f32, (f32, f32));
+
+/// Each body-level quantity's [`Values`] in `swing`, [`Quantity::BODY_LEVEL`] order; `None`
+/// where the swing has none.
+pub fn body_level_values(swing: &BodyLevel<'_>) -> [Option<Values>; BODY_LEVEL] {
     let mut out = [None; BODY_LEVEL];
     for t in swing.tempo {
         let relative = t.ratio_uncertainty / t.ratio;
-        out[t.phase as usize] = Some((libm::logf(t.ratio), relative, t.coach_s));
+        out[t.phase as usize] = Some((libm::logf(t.ratio), relative, (t.coach_s, 0.0)));
     }
     let (student, coach) = swing.pause_s;
     // A pause is timed to a frame or so: the top's own uncertainty is in the tempo's.
-    out[3] = Some((student - coach, 0.0, coach));
-    for b in swing.body {
+    out[3] = Some((student - coach, 0.0, (coach, 0.0)));
+    for (k, b) in swing.body.iter().enumerate() {
+        // No rate where the teller knows none (a report keeps none): no gap explains it then.
+        let rate = swing.coach_rate.get(k).copied().unwrap_or(0.0);
         if let Some(i) = b.check.index() {
-            out[4 + i] = Some((b.student - b.coach, b.uncertainty, b.coach));
+            out[4 + i] = Some((b.student - b.coach, b.uncertainty, (b.coach, rate)));
         }
     }
     for g in swing.gaps {
         if let Some(i) = g.index() {
-            out[4 + MAX_CHECKS + i] = Some((g.student_s - g.coach_s, g.uncertainty_s, g.coach_s));
+            out[4 + MAX_CHECKS + i] =
+                Some((g.student_s - g.coach_s, g.uncertainty_s, (g.coach_s, 0.0)));
         }
     }
     out
@@ -237,7 +247,7 @@ impl<'a> Tendencies<'a> {
         joints.fill(JointTallies::EMPTY);
         Tendencies {
             body: [Tally::EMPTY; BODY_LEVEL],
-            coach: [0.0; BODY_LEVEL],
+            coach: [(0.0, 0.0); BODY_LEVEL],
             joints,
             lead: Side::Left,
             swings: 0,
@@ -275,7 +285,7 @@ impl<'a> Tendencies<'a> {
     /// The coach's value of a body-level `quantity`, in its own unit (a phase's duration in
     /// seconds), as the last swing counted had it.
     pub fn coach(&self, quantity: Quantity) -> Option<f32> {
-        quantity.body_level().map(|i| self.coach[i])
+        quantity.body_level().map(|i| self.coach[i].0)
     }
 
     /// The joint at skeleton index `k`, as the swings named it.
@@ -403,8 +413,44 @@ impl<'a> Tendencies<'a> {
                 }
             }
         }
+        // A check a gap explains: the residual of what the gap predicts not a tendency itself.
+        let mut under = [None::<usize>; MAX_CHECKS + MAX_GAPS];
+        for (i, (c, _)) in causes.iter().enumerate() {
+            let Advice::Body(b, _) = c.advice else {
+                continue;
+            };
+            let Some(k) = b.check.index() else {
+                continue;
+            };
+            let q = Quantity::Check(k);
+            let coach = q.body_level().and_then(|i| self.coach.get(i));
+            let (Some(e), Some(&(_, rate))) = (self.estimate(q), coach) else {
+                continue;
+            };
+            under[i] = causes.iter().position(|(g, _)| {
+                let Advice::Sequence(gap, _) = g.advice else {
+                    return false;
+                };
+                let Some(i) = gap.index() else {
+                    return false;
+                };
+                let (Some(p), Some(eg)) = (
+                    predicted_by(&gap, b.check, rate),
+                    self.estimate(Quantity::Gap(i)),
+                ) else {
+                    return false;
+                };
+                let residual = Estimate {
+                    n: e.n.min(eg.n),
+                    value: e.value - p,
+                    uncertainty: libm::hypotf(e.uncertainty, rate * eg.uncertainty),
+                    ..e
+                };
+                !residual.clears(q.tolerance())
+            });
+        }
         // Joints: those whose interval along the offset clears the threshold, folded under a
-        // cause that may explain them.
+        // cause that may explain them (under the gap that explains it, for a check).
         for event in Event::ALL {
             for k in 0..self.joints.len() {
                 // An offset no longer than the threshold is no advice, whatever its interval,
@@ -419,12 +465,12 @@ impl<'a> Tendencies<'a> {
                 if d.distance_m - margin <= SPATIAL_THRESHOLD_M {
                     continue;
                 }
-                let folding = causes.iter_mut().find(|(c, _)| match c.advice {
+                let folding = causes.iter().position(|(c, _)| match c.advice {
                     Advice::Body(b, _) => may_explain(&Item::Check(b), &d, self.lead),
                     Advice::Sequence(g, _) => may_explain(&Item::Gap(g), &d, self.lead),
                     _ => false,
                 });
-                match folding {
+                match folding.and_then(|i| causes.get_mut(under[i].unwrap_or(i))) {
                     Some((_, explains)) => explains.add(&d),
                     None => insert_sorted(
                         &mut out,
@@ -438,7 +484,17 @@ impl<'a> Tendencies<'a> {
                 }
             }
         }
-        for (mut c, explains) in causes {
+        for i in 0..causes.len() {
+            if let (Some(j), Advice::Body(b, _)) = (under[i], causes[i].0.advice) {
+                if let Some((_, gap)) = causes.get_mut(j) {
+                    gap.add_check(&b, Advice::severity_of_check(&b));
+                }
+            }
+        }
+        for (i, (mut c, explains)) in causes.into_iter().enumerate() {
+            if under[i].is_some() {
+                continue;
+            }
             c.advice = match c.advice {
                 Advice::Body(b, _) => Advice::Body(b, explains),
                 Advice::Sequence(g, _) => Advice::Sequence(g, explains),
@@ -589,10 +645,13 @@ mod tests {
     use crate::Vec3;
 
     /// A swing's body-level results: the phases' ratios, the checks' differences from the
-    /// coach's (degrees or metres), each with a small stated uncertainty.
+    /// coach's (degrees or metres), the hips to chest gap's (seconds), each with a small stated
+    /// uncertainty; how fast the coach's checks move (their unit per second).
     struct Swing {
         ratios: [f32; 3],
         checks: [f32; 9],
+        gap: f32,
+        rate: f32,
     }
 
     impl Swing {
@@ -625,7 +684,7 @@ mod tests {
             let gaps = GAPS.map(|(first, then)| Gap {
                 first,
                 then,
-                student_s: 0.03,
+                student_s: 0.03 + if first == GAPS[0].0 { self.gap } else { 0.0 },
                 coach_s: 0.03,
                 uncertainty_s: 0.005,
             });
@@ -634,6 +693,7 @@ mod tests {
                 tempo: &tempo,
                 pause_s: (0.0, 0.0),
                 body: &body,
+                coach_rate: &[self.rate; 9],
                 gaps: &gaps,
             })
         }
@@ -647,6 +707,8 @@ mod tests {
         Swing {
             ratios: [ratio, 1.0 + 0.02 * wobble, 1.0 - 0.02 * wobble],
             checks,
+            gap: 0.0,
+            rate: 0.0,
         }
     }
 
@@ -724,6 +786,45 @@ mod tests {
         assert!((open.estimate.value + 12.0).abs() < 0.1, "{open:?}");
         // (1.645 · 8 / 2)² ≈ 43 swings in all.
         assert!((35..=45).contains(&open.more_swings), "{open:?}");
+    }
+
+    #[test]
+    fn the_hips_turn_at_impact_is_folded_under_the_gap_that_moves_it() {
+        // The hips peak 45 ms less before the chest than the coach's, and at impact are 17°
+        // less open (CHECKS[7]) where the coach's open at 400°/s: the gap accounts for 18°.
+        let session = |rate: f32, joints: &mut [JointTallies]| {
+            let mut session = Tendencies::new(joints);
+            for w in WOBBLES {
+                let mut s = swing(1.0, (7, 17.0 + 2.0 * w), w);
+                (s.gap, s.rate) = (-0.045 + 0.004 * w, rate);
+                s.tell(&mut session);
+            }
+            let advice = session.advice();
+            (advice, session.estimate(Quantity::Gap(0)))
+        };
+        let mut joints = [JointTallies::EMPTY; 17];
+        let (advice, gap) = session(-400.0, &mut joints);
+        assert!(gap.is_some_and(|g| g.clears(0.03)), "{gap:?}");
+        assert_eq!(advice.len(), 1, "{advice:?}");
+        let Advice::Sequence(g, explains) = advice[0].advice else {
+            panic!("{advice:?}");
+        };
+        assert_eq!((g.first, explains.check), (GAPS[0].0, Some(CHECKS[7])));
+        let text = std::format!("{}", advice[0]);
+        assert!(
+            text.ends_with(
+                "which is why at impact (P7) your hips are 17° more closed than the coach's (in \
+                 10 of 10 swings)."
+            ),
+            "{text}"
+        );
+        // Where the coach's hips stood still at impact, the gap explains nothing of theirs.
+        let (advice, _) = session(0.0, &mut joints);
+        assert_eq!(advice.len(), 2, "{advice:?}");
+        assert!(
+            matches!(advice[0].advice, Advice::Body(b, _) if b.check == CHECKS[7]),
+            "{advice:?}"
+        );
     }
 
     #[test]

@@ -156,16 +156,24 @@ pub const SHOWN_M: f32 = 0.01;
 pub struct Planted {
     /// The swing, at the clean swing's rate, from the takeaway.
     pub swing: Motion,
-    /// Its events, seconds from the takeaway.
+    /// Its own events, seconds from the takeaway: where its club is where the clean swing's
+    /// was at its events (the upper body first brings them early).
     pub times: Times,
     /// Backswing over downswing.
     pub tempo_ratio: f32,
-    /// Every statement that names a planted flaw rightly.
+    /// Every statement true of the flawed swing as a report measures it (each swing at its own
+    /// events) that the flaws make.
     pub truths: Vec<Truth>,
+    /// Of its body-level truths, those that are the flaws themselves: a check they move past its
+    /// tolerance with the moment held (the same time in both swings), a gap. The others are
+    /// consequences: a check that differs only because a flaw moved the events it is read
+    /// at, as the upper body first moves impact against the hips.
+    pub causes: Vec<Truth>,
     /// The largest displacement the flaws leave at an event, metres (an offset on a body that
     /// keeps its bones' lengths shows less than was planted).
     pub shown_m: f32,
-    /// Each body check's change since address less the clean swing's ([`CHECKS`] order).
+    /// Each body check's change since address less the clean swing's, each at its own events
+    /// ([`CHECKS`] order).
     pub checks: [Option<f32>; CHECKS.len()],
     /// Each gap of the sequence less the clean swing's, seconds ([`GAPS`] order).
     pub gaps: [Option<f32>; GAPS.len()],
@@ -175,6 +183,7 @@ pub struct Planted {
 /// `times` and whose lead side is `lead`.
 pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Planted {
     let (warped, warped_times) = warp(clean, times, flaws);
+    let own = own_times(&warped_times, flaws);
     let skeleton = &clean.skeleton;
     let joints = skeleton.len();
     let mut moved = warped.clone();
@@ -204,14 +213,14 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
         let j = (i + 1).min(m.frames() - 1);
         m.positions[i * joints + k] * (1.0 - w) + m.positions[j * joints + k] * w
     };
-    // Displacements at each event, in the stance frame.
+    // Displacements at each event, in the stance frame, each swing at its own.
     let mut moved = Vec::new();
-    for (e, &t) in Event::ALL.iter().zip(&warped_times) {
+    for ((e, &t), &u) in Event::ALL.iter().zip(&warped_times).zip(&own) {
         for k in 0..joints {
             let Some(joint) = skeleton.joint(k) else {
                 continue;
             };
-            let d = stance_flawed.local(at(&swing, t, k)) - stance_clean.local(at(&warped, t, k));
+            let d = stance_flawed.local(at(&swing, u, k)) - stance_clean.local(at(&warped, t, k));
             moved.push((*e, joint, d));
         }
     }
@@ -236,48 +245,98 @@ pub fn plant(clean: &Motion, times: &Times, lead: Side, flaws: &[Flaw]) -> Plant
             verdict: if slow { Verdict::Slow } else { Verdict::Fast },
         });
     }
-    // The body checks and gaps the flaws move past their tolerances.
-    let checks = check_differences(&swing, &warped, &warped_times, lead);
-    let gaps = gap_differences(&swing, &warped, &warped_times, lead);
-    for (check, d) in CHECKS.iter().zip(&checks) {
-        if let Some(d) = d.filter(|d| d.abs() > check.measure.tolerance()) {
-            truths.push(Truth::Body {
+    // The body checks and gaps the flaws move past their tolerances: each swing at its own
+    // events, and with the moment held for the flaw itself.
+    let checks = check_differences((&swing, &own), (&warped, &warped_times), lead);
+    let held = check_differences((&swing, &warped_times), (&warped, &warped_times), lead);
+    let gaps = gap_differences((&swing, &own), (&warped, &warped_times), lead);
+    let mut causes = Vec::new();
+    for ((check, d), d_held) in CHECKS.iter().zip(&checks).zip(&held) {
+        let past = |d: &f32| d.abs() > check.measure.tolerance();
+        if let Some(d) = d.filter(past) {
+            let truth = Truth::Body {
                 check: *check,
                 more: d > 0.0,
-            });
+            };
+            truths.push(truth);
+            if d_held.is_some_and(|h| past(&h) && (h > 0.0) == (d > 0.0)) {
+                causes.push(truth);
+            }
         }
     }
     for ((first, then), d) in GAPS.iter().zip(&gaps) {
         if let Some(d) = d.filter(|d| d.abs() > GAP_TOLERANCE_S) {
-            truths.push(Truth::Sequence {
+            let truth = Truth::Sequence {
                 first: *first,
                 then: *then,
                 more: d > 0.0,
-            });
+            };
+            truths.push(truth);
+            causes.push(truth);
         }
     }
-    let t = &warped_times;
     let (top, impact) = (Event::Top as usize, Event::Impact as usize);
     Planted {
         swing,
-        tempo_ratio: t[top] / (t[impact] - t[top]),
-        times: warped_times,
+        tempo_ratio: own[top] / (own[impact] - own[top]),
+        times: own,
         truths,
+        causes,
         shown_m: largest,
         checks,
         gaps,
     }
 }
 
-/// Each body check's change since address, `flawed`'s less `clean`'s (both at the same events,
-/// `times`, each in its own stance frame), [`CHECKS`] order; `None` where one cannot be
-/// measured.
+/// The events of a swing with `flaws` planted at events `times` (seconds from the takeaway):
+/// where its club is where the clean swing's was at its events. Events are read from the club
+/// and the arms, which the upper body carries: the upper body first brings each event as much
+/// early as it is ahead of time there ([`ahead`]); no other flaw moves them.
+fn own_times(times: &Times, flaws: &[Flaw]) -> Times {
+    let Some(size) = flaws.iter().find_map(|f| match *f {
+        Flaw::Body {
+            body: Body::UpperBodyFirst,
+            size,
+        } => Some(size),
+        _ => None,
+    }) else {
+        return *times;
+    };
+    // `u + ahead(u)` grows with `u` (the lead fades over much longer than it lasts): the
+    // moment it reaches the clean event, by bisection.
+    times.map(|t| {
+        let (mut lo, mut hi) = (t - size / 1000.0, t);
+        for _ in 0..32 {
+            let mid = 0.5 * (lo + hi);
+            if mid + ahead(mid, times, size) < t {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    })
+}
+
+/// How far ahead of its time the upper body first of `size` ms has the upper body at time `u`
+/// of a swing whose events are at `times` (seconds from the takeaway): the lead grows from
+/// halfway back to the top and fades from impact to the finish, seconds.
+fn ahead(u: f32, times: &Times, size: f32) -> f32 {
+    let t = |e: Event| times[e as usize];
+    size / 1000.0
+        * bump(u, t(Event::MidBackswing), t(Event::Top), t(Event::Top))
+        * bump(u, t(Event::Impact), t(Event::Impact), t(Event::Finish))
+}
+
+/// Each body check's change since address, `flawed`'s less `clean`'s (each a swing and the
+/// events it is read at, in its own stance frame), [`CHECKS`] order; `None` where one cannot
+/// be measured.
 fn check_differences(
-    flawed: &Motion,
-    clean: &Motion,
-    times: &Times,
+    flawed: (&Motion, &Times),
+    clean: (&Motion, &Times),
     lead: Side,
 ) -> [Option<f32>; CHECKS.len()] {
+    let (clean, clean_times) = clean;
     let skeleton = &clean.skeleton;
     let Ok(body) = body::Body::new(skeleton, lead) else {
         return [None; CHECKS.len()];
@@ -298,27 +357,26 @@ fn check_differences(
         ))
     };
     CHECKS.map(|check| {
-        let t = times[check.position.event()? as usize];
-        let change = |m: &Motion| {
-            let (zero, at) = metrics(m, t)?;
+        let e = check.position.event()? as usize;
+        let change = |(m, times): (&Motion, &Times)| {
+            let (zero, at) = metrics(m, times[e])?;
             check.change(&zero, &at)
         };
-        Some(change(flawed)? - change(clean)?)
+        Some(change(flawed)? - change((clean, clean_times))?)
     })
 }
 
-/// Each gap of the kinematic sequence ([`GAPS`]), `flawed`'s less `clean`'s, both between the
-/// same top and impact (`times`), seconds; `None` where a peak is not found.
+/// Each gap of the kinematic sequence ([`GAPS`]), `flawed`'s less `clean`'s (each a swing and
+/// its events: between its own top and impact), seconds; `None` where a peak is not found.
 fn gap_differences(
-    flawed: &Motion,
-    clean: &Motion,
-    times: &Times,
+    flawed: (&Motion, &Times),
+    clean: (&Motion, &Times),
     lead: Side,
 ) -> [Option<f32>; GAPS.len()] {
-    let Ok(body) = body::Body::new(&clean.skeleton, lead) else {
+    let Ok(body) = body::Body::new(&clean.0.skeleton, lead) else {
         return [None; GAPS.len()];
     };
-    let gaps = |m: &Motion| {
+    let gaps = |(m, times): (&Motion, &Times)| {
         let frame = |e: Event| {
             ((times[e as usize] * m.rate_hz).round().max(0.0) as usize).min(m.frames() - 1)
         };
@@ -663,10 +721,8 @@ fn move_joints(swing: &mut Motion, times: &Times, lead: Side, flaw: &Flaw) {
                 let (Some(spine), Some(thorax)) = (find(Joint::Spine), find(Joint::Thorax)) else {
                     return;
                 };
-                let w = bump(u, t(Event::MidBackswing), t(Event::Top), t(Event::Top))
-                    * bump(u, t(Event::Impact), t(Event::Impact), t(Event::Finish));
                 let last = source.len() / joints - 1;
-                let x = ((u + size / 1000.0 * w) * rate).clamp(0.0, last as f32);
+                let x = ((u + ahead(u, times, size)) * rate).clamp(0.0, last as f32);
                 let (i, fraction) = (x.floor() as usize, x.fract());
                 let later = |k: usize| {
                     source[i * joints + k] * (1.0 - fraction)
@@ -928,7 +984,21 @@ mod tests {
             then: Link::Thorax,
             more: false,
         };
-        assert!(planted.truths.contains(&hips_late), "{:?}", planted.truths);
+        assert_eq!(planted.causes, vec![hips_late]);
+        // Its club meets the ball 50 ms early, the upper body carrying it: at its own impact
+        // the hips are where they were 50 ms before, less open than the clean swing's. True,
+        // and a consequence, not the flaw.
+        let impact = Event::Impact as usize;
+        assert!((t[impact] - planted.times[impact] - 0.05).abs() < 1e-3);
+        let hips_closed = Truth::Body {
+            check: CHECKS[7],
+            more: true,
+        };
+        assert!(
+            planted.truths.contains(&hips_closed),
+            "{:?}",
+            planted.truths
+        );
         // The golfer stands still for 0.3 s before the takeaway, as a recorded swing does: the
         // pose noise is read there.
         let still = |m: &Motion| {
@@ -952,14 +1022,16 @@ mod tests {
             &mut (),
         )
         .unwrap();
+        // The gap comes first, the hips at impact under it.
         let item = report
             .advice
-            .iter()
-            .find(|a| matches!(a, Advice::Sequence(g, _) if g.first == Link::Pelvis))
-            .unwrap_or_else(|| panic!("{:?} {:?}", report.gaps, planted.truths));
+            .first()
+            .filter(|a| matches!(a, Advice::Sequence(g, e) if g.first == Link::Pelvis && e.check == Some(CHECKS[7])))
+            .unwrap_or_else(|| panic!("{:?} {:?}", report.advice, planted.truths));
         assert!(
-            item.to_string()
-                .ends_with(": the upper body starts the downswing."),
+            item.to_string().contains(
+                ": the upper body starts the downswing, which is why at impact (P7) your hips are"
+            ),
             "{item}"
         );
         let small = plant(&swing, &t, lead, &[flaw(10.0)]);

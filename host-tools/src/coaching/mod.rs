@@ -22,8 +22,9 @@
 //!   [`flaws::Truth::Body`]), the share whose advice, at any rank, has a body item stating one;
 //! - **cause named first**: of the body-flaw swings whose flaw moves a body check or a gap of
 //!   the sequence past its tolerance, per kind of flaw, the share whose first item is a body or
-//!   sequence item stating one; a joint item first (a consequence, such as the hands a short
-//!   turn moved) is a miss;
+//!   sequence item stating one ([`flaws::Planted::causes`]); a consequence first is a miss: a
+//!   joint item (the hands a short turn moved), or a check the flaw moves only by moving the
+//!   events it is read at (the hips at impact, which the upper body first brings early);
 //! - **score** of unflawed swings, and its fall for a flaw of a given size;
 //! - **body metrics**: each of [`KEY_METRICS`] and [`MORE_METRICS`] at every P-position of the swing the device scored,
 //!   against the same metric of the planted swing before filming (on the same body, at its own
@@ -41,7 +42,7 @@ use crate::synth::{self, lay_out, Placed, Timeline};
 use crate::synth_imu::{self, ImuNoise};
 use crate::table::{self, KeyMetric, CM, DEG, KEY_METRICS};
 use anyhow::{bail, Context, Result};
-use flaws::{Body, Flaw, Planted, Times, Truth};
+use flaws::{Body, Flaw, Times, Truth};
 use posecoach_adapters::session::Outcome;
 use posecoach_core::band::Band;
 use posecoach_core::body::{self, Metrics, Stance};
@@ -667,10 +668,7 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     outcome.score = Some(report.score);
     outcome.any_advice = !report.advice.is_empty();
     outcome.tempo_verdict = report.advice.iter().any(|a| matches!(a, Advice::Tempo(_)));
-    outcome.body_truth = planted
-        .truths
-        .iter()
-        .any(|t| matches!(t, Truth::Body { .. } | Truth::Sequence { .. }));
+    outcome.body_truth = !planted.causes.is_empty();
     let body_items = || {
         report
             .advice
@@ -685,12 +683,12 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
     outcome.body_advice = body_items().next().is_some();
     outcome.body = report.body.to_vec();
     outcome.truths = planted.truths.clone();
-    outcome.body_named = body_items().any(|a| states(a, &planted));
+    outcome.body_named = body_items().any(|a| states(a, &planted.truths));
     if let Some(first) = report.advice.first() {
         outcome.first = Some(first.to_string());
-        outcome.right_first = states(first, &planted);
-        outcome.cause_first =
-            matches!(first, Advice::Body(..) | Advice::Sequence(..)) && states(first, &planted);
+        outcome.right_first = states(first, &planted.truths);
+        outcome.cause_first = matches!(first, Advice::Body(..) | Advice::Sequence(..))
+            && states(first, &planted.causes);
     }
     Ok(outcome)
 }
@@ -927,9 +925,9 @@ fn run_session(
     Ok((scored, refused, relabels))
 }
 
-/// Whether `advice` states one of the planted flaws.
-fn states(advice: &Advice, planted: &Planted) -> bool {
-    planted.truths.iter().any(|t| match (t, advice) {
+/// Whether `advice` states one of `truths`.
+fn states(advice: &Advice, truths: &[Truth]) -> bool {
+    truths.iter().any(|t| match (t, advice) {
         (Truth::Tempo { phase, verdict }, Advice::Tempo(p)) => {
             p.phase == *phase && p.verdict == *verdict
         }

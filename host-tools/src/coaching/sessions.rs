@@ -20,7 +20,7 @@
 //! intervals (one-sided 95 % each way: 90 % when honest) and the **swings needed** for 90 %
 //! recall per family.
 
-use super::flaws::{self, Body, Flaw, Planted, Truth};
+use super::flaws::{self, Body, Flaw, Planted};
 use super::{imu_messages, pct, phone_messages, share, states, Clean, Input, PhoneView, MODEL_HZ};
 use crate::coaches;
 use crate::synth::lay_out;
@@ -32,7 +32,7 @@ use posecoach_core::events::Event;
 use posecoach_core::joint::Joint;
 use posecoach_core::score::BodyLevel;
 use posecoach_core::score::{Advice, Direction, Phase};
-use posecoach_core::session::{body_level_values, Quantity};
+use posecoach_core::session::{body_level_values, Quantity, Values};
 use posecoach_core::tally::t95;
 use posecoach_core::wire::{Config, Message};
 use rand::{Rng, SeedableRng};
@@ -303,10 +303,7 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
     let mut outcome = SessionOutcome {
         snapshots: vec![None; ns.len()],
         shown_m: nominal.shown_m,
-        body_truth: nominal
-            .truths
-            .iter()
-            .any(|t| matches!(t, Truth::Body { .. } | Truth::Sequence { .. })),
+        body_truth: !nominal.causes.is_empty(),
         error: None,
     };
     // Each scored swing's measurement of each body-level quantity.
@@ -323,6 +320,7 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
                         tempo: &report.tempo,
                         pause_s: (0.0, 0.0),
                         body: &report.body,
+                        coach_rate: &[],
                         gaps: &report.gaps,
                     }));
                 }
@@ -371,9 +369,8 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
     Ok(outcome)
 }
 
-/// One swing's value of each body-level quantity, its stated uncertainty and the coach's
-/// value ([`body_level_values`]).
-type Measured = [Option<(f32, f32, f32)>; BODY_LEVEL];
+/// One swing's value of each body-level quantity ([`body_level_values`]).
+type Measured = [Option<Values>; BODY_LEVEL];
 
 /// Whether an estimator without bias, given the scatter of `measured` (each swing's value of
 /// each body-level quantity), would clear a truth past its tolerance: `|truth| − t · s / √n`
@@ -420,15 +417,12 @@ fn clearable(truths: &[(Quantity, f32)], measured: &[Measured]) -> Option<bool> 
 /// truth is a check or a gap by that body-level item (its cause first), any other by a
 /// statement of a truth.
 fn right(advice: &Advice, planted: &Planted) -> bool {
-    let body_level = planted
-        .truths
-        .iter()
-        .any(|t| matches!(t, Truth::Body { .. } | Truth::Sequence { .. }));
-    match body_level {
-        true => {
-            matches!(advice, Advice::Body(..) | Advice::Sequence(..)) && states(advice, planted)
+    match planted.causes.is_empty() {
+        false => {
+            matches!(advice, Advice::Body(..) | Advice::Sequence(..))
+                && states(advice, &planted.causes)
         }
-        false => states(advice, planted),
+        true => states(advice, &planted.truths),
     }
 }
 
@@ -616,7 +610,7 @@ mod tests {
             .iter()
             .map(|&v| {
                 let mut m = [None; BODY_LEVEL];
-                m[0] = Some((v, 0.0, 1.0));
+                m[0] = Some((v, 0.0, (1.0, 0.0)));
                 m
             })
             .collect()
