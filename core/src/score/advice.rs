@@ -245,6 +245,19 @@ pub(crate) fn insert_sorted<T: Copy, const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::Advice;
+    use crate::score::{Phase, PhaseTempo, Verdict};
+
+    /// Every phase as long as the coach's.
+    fn on_tempo() -> [PhaseTempo; 3] {
+        Phase::ALL.map(|phase| PhaseTempo {
+            phase,
+            student_s: 1.0,
+            coach_s: 1.0,
+            ratio: 1.0,
+            ratio_uncertainty: 0.01,
+            verdict: Verdict::Ok,
+        })
+    }
     use crate::checks::{BodyDeviation, CHECKS, SHIFT_TOLERANCE_M};
     use crate::score::SPATIAL_THRESHOLD_M;
 
@@ -273,7 +286,7 @@ mod tests {
         use crate::events::{Event, Side};
         use crate::joint::Joint;
         use crate::score::cause::causes;
-        use crate::score::{Deviation, Direction, Phase, PhaseTempo, Verdict};
+        use crate::score::{Deviation, Direction};
         // A thorax turn 14° short at the top (severity 1.4) and the left shoulder 20 cm toward
         // the target there (severity 4), which the turn states; the right knee 12 cm lower
         // halfway down, which it does not.
@@ -303,14 +316,7 @@ mod tests {
         ]
         .into_iter()
         .collect();
-        let tempo = Phase::ALL.map(|phase| PhaseTempo {
-            phase,
-            student_s: 1.0,
-            coach_s: 1.0,
-            ratio: 1.0,
-            ratio_uncertainty: 0.01,
-            verdict: Verdict::Ok,
-        });
+        let tempo = on_tempo();
         let advice = advise(&tempo, &mut causes, &spatial, Side::Left);
         assert_eq!(advice.len(), 2, "{advice:?}");
         let Advice::Body(b, explains) = advice[0] else {
@@ -336,7 +342,6 @@ mod tests {
         use crate::body::Link;
         use crate::events::Side;
         use crate::score::cause::causes;
-        use crate::score::{Phase, PhaseTempo, Verdict};
         use crate::sequence::Gap;
         // The hips peak 5 ms after the chest against the coach's 40 ms before (45 ms less,
         // severity 1.5), and at impact (CHECKS[7]) are 20° less open than the coach's (severity
@@ -355,14 +360,7 @@ mod tests {
             coach,
             uncertainty: 1.0,
         };
-        let tempo = Phase::ALL.map(|phase| PhaseTempo {
-            phase,
-            student_s: 1.0,
-            coach_s: 1.0,
-            ratio: 1.0,
-            ratio_uncertainty: 0.01,
-            verdict: Verdict::Ok,
-        });
+        let tempo = on_tempo();
         let advise_on = |body: &[BodyDeviation], rates: &[f32]| {
             let mut causes = causes(body, rates, &[gap]);
             advise(&tempo, &mut causes, &Default::default(), Side::Left)

@@ -269,6 +269,37 @@ mod tests {
         out
     }
 
+    /// The checks of `student` against `coach` (17 joints at 30 Hz, the same events), with a
+    /// centimetre of noise and 10 ms of timing uncertainty.
+    fn checks_of(skeleton: &Skeleton, student: &[Vec3], coach: &[Vec3]) -> super::Checks {
+        let frames = events([10, 20, 30, 40, 50, 60, 70, 90]);
+        let detected = |positions| Detected {
+            positions: crate::frames::Frames::metres(positions, 17),
+            hz: 30.0,
+            events: frames,
+            unsure: Unsure::default(),
+        };
+        let (student, coach) = (detected(student), detected(coach));
+        let pair = Pair::new(skeleton, (&student, &frames), &coach);
+        let noise = Noise {
+            usual: [Vec3::zeros(); 40],
+            wander: [Vec3::zeros(); 40],
+            input: Vec3::repeat(0.01),
+        };
+        let timing = Timing {
+            event: [0.01; Event::COUNT],
+            top_gain: 0.0,
+            paused: false,
+        };
+        checks(
+            skeleton,
+            &pair,
+            ((&frames, &frames), (30.0, 30.0)),
+            &noise,
+            &timing,
+        )
+    }
+
     #[test]
     fn the_coachs_rate_is_how_fast_its_value_moves_at_the_position() {
         // The coach's whole body turning 2° a frame at 30 Hz from frame 30 on (the student
@@ -285,32 +316,7 @@ mod tests {
             );
         }
         let student = swing(&skeleton, 0.0);
-        let frames = events([10, 20, 30, 40, 50, 60, 70, 90]);
-        let detected = |positions| Detected {
-            positions: crate::frames::Frames::metres(positions, 17),
-            hz: 30.0,
-            events: frames,
-            unsure: Unsure::default(),
-        };
-        let (student, coach) = (detected(&student), detected(&coach));
-        let pair = Pair::new(&skeleton, (&student, &frames), &coach);
-        let noise = Noise {
-            usual: [Vec3::zeros(); 40],
-            wander: [Vec3::zeros(); 40],
-            input: Vec3::repeat(0.01),
-        };
-        let timing = Timing {
-            event: [0.01; Event::COUNT],
-            top_gain: 0.0,
-            paused: false,
-        };
-        let found = checks(
-            &skeleton,
-            &pair,
-            ((&frames, &frames), (30.0, 30.0)),
-            &noise,
-            &timing,
-        );
+        let found = checks_of(&skeleton, &student, &coach);
         let rate = |measure| {
             let i = found
                 .found
@@ -330,32 +336,7 @@ mod tests {
     fn a_turned_chest_reads_as_the_thorax_turn_alone_within_its_uncertainty() {
         let skeleton = Skeleton::standard(Format::H36m17).unwrap();
         let (student, coach) = (swing(&skeleton, 25.0), swing(&skeleton, 0.0));
-        let frames = events([10, 20, 30, 40, 50, 60, 70, 90]);
-        let detected = |positions| Detected {
-            positions: crate::frames::Frames::metres(positions, 17),
-            hz: 30.0,
-            events: frames,
-            unsure: Unsure::default(),
-        };
-        let (student, coach) = (detected(&student), detected(&coach));
-        let pair = Pair::new(&skeleton, (&student, &frames), &coach);
-        let noise = Noise {
-            usual: [Vec3::zeros(); 40],
-            wander: [Vec3::zeros(); 40],
-            input: Vec3::repeat(0.01),
-        };
-        let timing = Timing {
-            event: [0.01; Event::COUNT],
-            top_gain: 0.0,
-            paused: false,
-        };
-        let found = checks(
-            &skeleton,
-            &pair,
-            ((&frames, &frames), (30.0, 30.0)),
-            &noise,
-            &timing,
-        );
+        let found = checks_of(&skeleton, &student, &coach);
         let at = |measure| {
             found
                 .found
