@@ -12,7 +12,7 @@ use posecoach_core::wire::Message;
 use serde_json::Value;
 use serialport::{SerialPort, TTYPort};
 use std::io::{BufRead, BufReader, Read, Write};
-use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
+use std::net::{Shutdown, SocketAddr, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -51,8 +51,10 @@ impl Bridge {
         Bridge::start_in(name, port, flags, None)
     }
 
-    /// [`Bridge::start`], under a shell's `ulimit -n` of `descriptors` if given. The bridge's
-    /// log goes to this test's standard error when `ABUSE_LOG` is set, else nowhere.
+    /// [`Bridge::start`], under a shell's `ulimit -n` of `descriptors` if given. The bridge
+    /// picks its own port and says which on standard error, so no other socket can take it
+    /// first; the rest of its log goes to this test's standard error when `ABUSE_LOG` is set,
+    /// else nowhere.
     fn start_in(
         name: &str,
         port: Option<&Path>,
@@ -64,10 +66,6 @@ impl Bridge {
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let port = port.map_or_else(|| dir.join("absent"), Path::to_path_buf);
-        let addr = TcpListener::bind("127.0.0.1:0")
-            .unwrap()
-            .local_addr()
-            .unwrap();
         let bin = env!("CARGO_BIN_EXE_posecoach");
         let mut command = match descriptors {
             Some(n) => {
@@ -77,26 +75,24 @@ impl Bridge {
             }
             None => Command::new(bin),
         };
-        let child = command
-            .args(["bridge", "--json", "--listen", &addr.to_string(), "--port"])
+        let mut child = command
+            .args(["bridge", "--json", "--listen", "127.0.0.1:0", "--port"])
             .arg(&port)
             .args(flags)
             .stdout(Stdio::piped())
-            .stderr(if std::env::var_os("ABUSE_LOG").is_some() {
-                Stdio::inherit()
-            } else {
-                Stdio::null()
-            })
+            .stderr(Stdio::piped())
             .spawn()
             .unwrap();
-        let start = Instant::now();
-        let probe = loop {
-            if let Ok(probe) = TcpStream::connect(addr) {
-                break probe;
+        let mut log = BufReader::new(child.stderr.take().unwrap());
+        let addr = listening_at(&mut log);
+        std::thread::spawn(move || {
+            if std::env::var_os("ABUSE_LOG").is_some() {
+                std::io::copy(&mut log, &mut std::io::stderr())
+            } else {
+                std::io::copy(&mut log, &mut std::io::sink())
             }
-            assert!(start.elapsed() < PATIENCE, "the bridge never listened");
-            std::thread::sleep(Duration::from_millis(20));
-        };
+        });
+        let probe = TcpStream::connect(addr).unwrap();
         // Leaves, and waits until the bridge has closed it: the first client is the controller.
         probe.shutdown(Shutdown::Write).unwrap();
         probe.set_read_timeout(Some(PATIENCE)).unwrap();
@@ -142,6 +138,17 @@ impl Bridge {
         let _ = std::fs::remove_dir_all(&self.dir);
         serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out:?}"))
     }
+}
+
+/// The address a bridge's first line of log names: "bridge: PORT <-> ADDRESS (...)".
+fn listening_at(log: &mut impl BufRead) -> SocketAddr {
+    let mut line = String::new();
+    log.read_line(&mut line).unwrap();
+    line.split(" <-> ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|a| a.parse().ok())
+        .unwrap_or_else(|| panic!("no address in {line:?}"))
 }
 
 /// Open descriptors and resident memory (KiB) of process `pid`.
@@ -327,17 +334,9 @@ fn a_bridge_listens_on_a_name_and_says_where() {
         .spawn()
         .unwrap();
     let mut stderr = BufReader::new(child.stderr.take().unwrap());
-    let mut line = String::new();
-    stderr.read_line(&mut line).unwrap();
+    let addr = listening_at(&mut stderr);
     // The bridge logs on: keep reading what it says.
     let drain = std::thread::spawn(move || std::io::copy(&mut stderr, &mut std::io::sink()));
-    // "bridge: PORT <-> ADDRESS (one JSON message per line; ...)"
-    let addr: SocketAddr = line
-        .split(" <-> ")
-        .nth(1)
-        .and_then(|rest| rest.split(' ').next())
-        .and_then(|a| a.parse().ok())
-        .unwrap_or_else(|| panic!("no address in {line:?}"));
     assert!(addr.ip().is_loopback() && addr.port() != 0, "{addr}");
     client(addr);
     stop(&mut child, "-TERM");
