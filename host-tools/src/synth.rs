@@ -15,11 +15,13 @@
 use crate::phone::{self, to_mm, Camera, PhoneNoise};
 use crate::synth_imu::{self, ImuNoise};
 use anyhow::{bail, Context, Result};
+use nalgebra::Rotation3;
 use posecoach_adapters::log;
 use posecoach_core::band::Band;
 use posecoach_core::body::Stance;
 use posecoach_core::events::{self, SwingEvents, SwingKind};
 use posecoach_core::format::{Format, Source};
+use posecoach_core::joint::Joint;
 use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{self, Config, Message, StudentProfile, MAX_FRAME};
 use posecoach_core::Vec3;
@@ -157,14 +159,27 @@ impl Timeline {
         }
     }
 
-    /// Eases from the last frame to `to` over `seconds`.
-    fn blend(&mut self, to: &[Vec3], seconds: f32) {
+    /// Eases from the last frame to `to` over `seconds`, turning about the vertical through
+    /// the shorter way between the two poses' facings (their `hips`' line, left and right
+    /// joints), as a golfer turns: blending positions across a turn would squeeze the body
+    /// flat, and an IMU on it would see it spin half round in a frame.
+    fn blend(&mut self, to: &[Vec3], seconds: f32, hips: (usize, usize)) {
         let from = self.last();
+        let facing = |pose: &[Vec3]| {
+            let line = pose[hips.0] - pose[hips.1];
+            (-line.z).atan2(line.x)
+        };
+        let turn = (facing(to) - facing(&from) + PI).rem_euclid(TAU) - PI;
+        let about_y = |angle: f32| Rotation3::from_axis_angle(&Vec3::y_axis(), angle);
+        let back = about_y(-turn);
         let frames = (seconds * self.rate) as usize;
         for f in 1..=frames {
             let w = 0.5 * (1.0 - (PI * f as f32 / frames as f32).cos());
-            self.positions
-                .extend(from.iter().zip(to).map(|(a, b)| a + (b - a) * w));
+            let (root, spin) = (from[0] + (to[0] - from[0]) * w, about_y(turn * w));
+            self.positions.extend(from.iter().zip(to).map(|(a, b)| {
+                let shape = (a - from[0]) * (1.0 - w) + back * (b - to[0]) * w;
+                root + spin * shape
+            }));
         }
     }
 
@@ -486,6 +501,11 @@ pub fn lay_out(
         rate,
         positions: Vec::new(),
     };
+    let hips = [Joint::LeftHip, Joint::RightHip].map(|j| skeleton.index_of(j));
+    let [Some(left), Some(right)] = hips else {
+        bail!("the student's body has no hips to turn about");
+    };
+    let hips = (left, right);
     t.hold(&place(&rest, first[0]), 1.5);
     // Walking up to where the next swing's set-up stands.
     let walk_to = |t: &mut Timeline, at: Vec3| {
@@ -493,7 +513,7 @@ pub fn lay_out(
             let end = walk.frame(walk.frames() - 1)[0];
             let shift = Vec3::new(at.x - end.x, 0.0, at.z - end.z);
             let walk: Vec<Vec3> = walk.positions.iter().map(|p| p + shift).collect();
-            t.blend(&walk[..joints], 1.0);
+            t.blend(&walk[..joints], 1.0, hips);
             t.positions.extend_from_slice(&walk);
         }
     };
@@ -509,7 +529,7 @@ pub fn lay_out(
                 path.display()
             );
         }
-        t.blend(&address, 1.0);
+        t.blend(&address, 1.0, hips);
         t.hold(&address, 0.8);
         t.waggle(&address, 0.08);
         let still = t.frames();
@@ -523,7 +543,7 @@ pub fn lay_out(
             end: t.frames(),
             events,
         });
-        t.blend(&address, 1.0);
+        t.blend(&address, 1.0, hips);
         t.hold(&address, 1.0);
         if n + 1 < swings.len() {
             // A practice half swing: the takeaway to hip height and back.
@@ -538,6 +558,33 @@ pub fn lay_out(
     let end = t.last();
     t.hold(&end, 1.0);
     Ok((t, placed))
+}
+
+/// `body` (a student's T-pose) turned by `angle` radians about the vertical through its root:
+/// the same student facing elsewhere.
+///
+/// # Errors
+/// If the turned rest pose does not make a skeleton (it always does for a skeleton's own).
+pub fn turned(body: &Motion, angle: f32) -> Result<Motion> {
+    let skeleton = &body.skeleton;
+    let turn = Rotation3::from_axis_angle(&Vec3::y_axis(), angle);
+    let mut rest = vec![Vec3::zeros(); skeleton.len()];
+    skeleton.rest_positions(&mut rest);
+    let about = |p: &Vec3| rest[0] + turn * (p - rest[0]);
+    let rest: Vec<Vec3> = rest.iter().map(about).collect();
+    let parents: Vec<Option<usize>> = (0..skeleton.len()).map(|k| skeleton.parent(k)).collect();
+    Ok(Motion {
+        skeleton: Skeleton::from_rest_positions(
+            skeleton.format(),
+            &parents,
+            &rest,
+            skeleton.joints(),
+        )?,
+        names: body.names.clone(),
+        rate_hz: body.rate_hz,
+        missing: body.missing.clone(),
+        positions: body.positions.iter().map(about).collect(),
+    })
 }
 
 /// Appends the pose frames a phone (see [`phone`]) would send while `timeline` happens;

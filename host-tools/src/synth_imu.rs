@@ -2,7 +2,9 @@
 //!
 //! Each frame's bone rotations come from `kinematics::inverse` on the motion's skeleton. At the
 //! IMU rate a sensor's orientation is its segment's global rotation, interpolated by slerp
-//! between frames, times its mounting; its position is the middle of its bone (the pelvis
+//! between frames, times its mounting. A layout's mountings are on the segments of a body in
+//! the format's standard T-pose; the motion's own T-pose (its skeleton's rest) may face any
+//! way ([`rest_heading`]), and its straps turn with it; its position is the middle of its bone (the pelvis
 //! sensor sits on the pelvis joint), interpolated by a Catmull-Rom spline whose second
 //! derivative is the linear acceleration. From these, in the sensor frame:
 //!
@@ -17,6 +19,7 @@
 use posecoach_adapters::fusion::G;
 use posecoach_core::joint::Joint;
 use posecoach_core::kinematics::{forward, inverse, swing};
+use posecoach_core::skeleton::Skeleton;
 use posecoach_core::wire::{ImuSample, SensorLayout, SensorPlacement, MAX_SENSORS};
 use posecoach_core::{Quat, Vec3};
 use posecoach_io::Motion;
@@ -72,10 +75,11 @@ pub fn imu_samples(
     rng: &mut impl Rng,
 ) -> Vec<ImuSample> {
     let track = Track::new(motion);
+    let heading = rest_heading(&motion.skeleton);
     let sensors: Vec<Sensor> = layout
         .sensors
         .iter()
-        .filter_map(|p| Sensor::new(p, motion, noise, rng))
+        .filter_map(|p| Sensor::new(p, motion, heading, noise, rng))
         .collect();
     let count = (motion.duration_s() * rate_hz).floor() as usize + 1;
     let white = |density: f32| {
@@ -134,10 +138,12 @@ struct Sensor {
 }
 
 impl Sensor {
-    /// `None` where the skeleton lacks the placement's joint.
+    /// `None` where the skeleton lacks the placement's joint. `heading` turns the standard
+    /// T-pose to the motion's.
     fn new(
         placement: &SensorPlacement,
         motion: &Motion,
+        heading: Quat,
         noise: &ImuNoise,
         rng: &mut impl Rng,
     ) -> Option<Sensor> {
@@ -162,11 +168,28 @@ impl Sensor {
         Some(Sensor {
             number: placement.sensor,
             joint,
-            mounting: Quat::from_scaled_axis(axis * angle) * nominal,
+            mounting: heading * Quat::from_scaled_axis(axis * angle) * nominal,
             bias_dps: Vec3::from_fn(|_, _| rng.random_range(-bias..=bias)),
             site,
         })
     }
+}
+
+/// The turn about the vertical that takes the format's standard T-pose, which faces +Z with
+/// the left side at +X, to the facing of `skeleton`'s rest pose: its hips' line, or its
+/// shoulders' without hips (the identity with neither).
+pub fn rest_heading(skeleton: &Skeleton) -> Quat {
+    let mut rest = vec![Vec3::zeros(); skeleton.len()];
+    skeleton.rest_positions(&mut rest);
+    let line = [
+        (Joint::LeftHip, Joint::RightHip),
+        (Joint::LeftShoulder, Joint::RightShoulder),
+    ]
+    .into_iter()
+    .find_map(|(l, r)| Some(rest[skeleton.index_of(l)?] - rest[skeleton.index_of(r)?]));
+    line.map_or(Quat::identity(), |l| {
+        Quat::from_axis_angle(&Vec3::y_axis(), (-l.z).atan2(l.x))
+    })
 }
 
 /// A motion's frames as global bone rotations, sampled at any time.
@@ -305,7 +328,7 @@ const _: () = assert!(GOLF_SENSORS.len() <= MAX_SENSORS);
 
 /// A golf sensor set on the joints `skeleton` has: pelvis, thorax, both upper arms and both
 /// forearms, numbered from 0 in that order.
-pub fn default_layout(skeleton: &posecoach_core::skeleton::Skeleton) -> SensorLayout {
+pub fn default_layout(skeleton: &Skeleton) -> SensorLayout {
     let placed = GOLF_SENSORS
         .iter()
         .filter(|(joint, _)| skeleton.index_of(*joint).is_some());
@@ -328,7 +351,6 @@ pub fn default_layout(skeleton: &posecoach_core::skeleton::Skeleton) -> SensorLa
 mod tests {
     use super::*;
     use posecoach_adapters::imu::{ImuAdapter, CALIBRATION_S};
-    use posecoach_core::skeleton::Skeleton;
     use posecoach_io as io;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
