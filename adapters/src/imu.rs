@@ -21,8 +21,10 @@
 //! adapter's rate, starting one period after calibration; each sensor's orientation is
 //! interpolated to a grid time when a sample passes it, and once every sensor has passed it
 //! one frame of positions goes out. A sensed bone's global rotation comes from its sensor;
-//! unsensed thighs, shins and feet keep their T-pose (vertical, planted) rotation; every other
-//! unsensed bone follows its parent (the hip bones move with the pelvis). The root stays at
+//! unsensed thighs, shins and feet stand vertical and planted, facing where the trunk last
+//! faced while still (the heading of the lowest trunk sensor's segment, pelvis, spine or thorax,
+//! at its last sample turning under [`QUIET_RAD_S`]: the golfer's set-up, wherever the T-pose
+//! faced); every other unsensed bone follows its parent (the hip bones move with the pelvis). The root stays at
 //! the skeleton's rest position. With each frame goes the activity for swing detection: the
 //! largest bias-free gyro rate (rad/s) of the wrist, hand and club sensors (of all sensors if
 //! there are none of those) since the previous frame.
@@ -73,6 +75,11 @@ pub const RATE_RANGE_HZ: core::ops::RangeInclusive<f32> = 1.0..=1000.0;
 const MOUNTING_TOLERANCE: f32 = 0.1;
 /// Units of a `mounting_q14` component.
 const Q14: f32 = 16384.0;
+/// The trunk sensor's rate under which the legs take the trunk's heading, rad/s (20 °/s): a
+/// golfer at address is under it, and a takeaway passes it within a few degrees of turn.
+pub const QUIET_RAD_S: f32 = 0.35;
+/// Joints whose sensor, the first the layout places, sets the legs' heading.
+const TRUNK_JOINTS: [Joint; 3] = [Joint::Pelvis, Joint::Spine, Joint::Thorax];
 /// Joints whose sensors give the activity.
 const ACTIVITY_JOINTS: [Joint; 6] = [
     Joint::LeftWrist,
@@ -185,8 +192,12 @@ pub struct ImuAdapter {
     len: u8,
     /// Track of each joint's sensor, [`NO_SENSOR`] where none.
     sensed: [u8; MAX_JOINTS],
-    /// Joints whose bones keep their T-pose global rotation (bit `i` = joint `i`).
+    /// Joints whose bones stand as in the T-pose, turned to `stance` (bit `i` = joint `i`).
     planted: u64,
+    /// Track of the trunk sensor that sets `stance`, [`NO_SENSOR`] where none.
+    trunk: u8,
+    /// The planted bones' global rotation: the trunk's heading when it was last quiet.
+    stance: Quat,
     joints: u8,
     root: Vec3,
     rate_mhz: u64,
@@ -266,11 +277,17 @@ impl ImuAdapter {
         let planted = (1..skeleton.len())
             .filter(|&k| legs & (1 << k) != 0 && skeleton.parent(k) != Some(0))
             .fold(0u64, |mask, k| mask | 1 << k);
+        let trunk = TRUNK_JOINTS
+            .iter()
+            .find_map(|&j| tracks[..len].iter().position(|t| t.joint == j))
+            .map_or(NO_SENSOR, |t| t as u8);
         Ok(ImuAdapter {
             tracks,
             len: len as u8,
             sensed,
             planted,
+            trunk,
+            stance: Quat::identity(),
             joints: skeleton.len() as u8,
             root: skeleton.offset(0),
             rate_mhz: (rate_hz * 1000.0) as u64,
@@ -446,6 +463,7 @@ impl ImuAdapter {
             track.right = track.filter.orientation().inverse() * yaw;
             track.snapshot = None;
         }
+        self.stance = Quat::identity();
         self.activity = 0.0;
         Ok(())
     }
@@ -461,6 +479,9 @@ impl ImuAdapter {
             track.filter.update(gyro, reading.accel, reading.mag, dt);
             if track.activity {
                 self.activity = self.activity.max(gyro.norm());
+            }
+            if usize::from(self.trunk) == t && gyro.norm() < QUIET_RAD_S {
+                self.stance = heading(track.left * track.filter.orientation() * track.right);
             }
         }
         let Some(due) = due.filter(|&due| t_us >= due) else {
@@ -528,16 +549,18 @@ impl ImuAdapter {
             let q = track.snapshot.unwrap_or_else(|| track.filter.orientation());
             Some(track.left * q * track.right)
         };
-        if self.compose(skeleton, sensed, &mut positions[..n]) {
+        if self.compose(skeleton, sensed, self.stance, &mut positions[..n]) {
             emit(&positions[..n], self.activity);
         }
         self.activity = 0.0;
     }
 
-    /// `frame` (positions on `skeleton`) as these sensors would see it: sensed bones keep
-    /// their rotation, the others follow the tracking rules and the root goes to its rest
-    /// position. An IMU session's swings are scored against a coach seen this way, so that
-    /// what no sensor measures is not held against the student.
+    /// `frame` (positions on `skeleton`) as these sensors would see it, its legs planted
+    /// facing `stance` (what [`ImuAdapter::stance_of`] gives of the frame the golfer was
+    /// still in, the address): sensed bones keep their rotation, the others follow the
+    /// tracking rules and the root goes to its rest position. An IMU session's swings are
+    /// scored against a coach seen this way, so that what no sensor measures is not held
+    /// against the student.
     ///
     /// # Errors
     /// [`ImuError::SkeletonMismatch`] if `skeleton` is not the one given to
@@ -546,35 +569,66 @@ impl ImuAdapter {
         &self,
         skeleton: &Skeleton,
         frame: &[Vec3],
+        stance: Quat,
         out: &mut [Vec3],
     ) -> Result<(), ImuError> {
-        let n = skeleton.len();
-        if n != usize::from(self.joints) || out.len() < n {
-            return Err(ImuError::SkeletonMismatch);
-        }
-        let mut local = [Quat::identity(); MAX_JOINTS];
-        inverse(skeleton, frame, &mut local[..n]).map_err(|_| ImuError::SkeletonMismatch)?;
         let mut global = [Quat::identity(); MAX_JOINTS];
-        for k in 0..n {
-            let parent = skeleton.parent(k).map_or(Quat::identity(), |p| global[p]);
-            global[k] = parent * local[k];
+        let n = self.global(skeleton, frame, &mut global)?;
+        if out.len() < n {
+            return Err(ImuError::SkeletonMismatch);
         }
         let sensed = |k: usize| {
             self.tracks
                 .get(usize::from(self.sensed[k]))
                 .map(|_| global[k])
         };
-        self.compose(skeleton, sensed, &mut out[..n])
+        self.compose(skeleton, sensed, stance, &mut out[..n])
             .then_some(())
             .ok_or(ImuError::SkeletonMismatch)
     }
 
+    /// The heading the legs of `frame` (positions on `skeleton`) take when the golfer is still
+    /// in it: its trunk sensor's segment's, as tracking takes it (the identity without one).
+    ///
+    /// # Errors
+    /// As [`ImuAdapter::view`].
+    pub fn stance_of(&self, skeleton: &Skeleton, frame: &[Vec3]) -> Result<Quat, ImuError> {
+        let mut global = [Quat::identity(); MAX_JOINTS];
+        self.global(skeleton, frame, &mut global)?;
+        Ok(self
+            .tracks
+            .get(usize::from(self.trunk))
+            .map_or(Quat::identity(), |t| heading(global[usize::from(t.index)])))
+    }
+
+    /// The global rotations of `frame`'s bones into `out`; the skeleton's joints.
+    fn global(
+        &self,
+        skeleton: &Skeleton,
+        frame: &[Vec3],
+        out: &mut [Quat; MAX_JOINTS],
+    ) -> Result<usize, ImuError> {
+        let n = skeleton.len();
+        if n != usize::from(self.joints) {
+            return Err(ImuError::SkeletonMismatch);
+        }
+        let mut local = [Quat::identity(); MAX_JOINTS];
+        inverse(skeleton, frame, &mut local[..n]).map_err(|_| ImuError::SkeletonMismatch)?;
+        for k in 0..n {
+            let parent = skeleton.parent(k).map_or(Quat::identity(), |p| out[p]);
+            out[k] = parent * local[k];
+        }
+        Ok(n)
+    }
+
     /// Positions from the global rotations of the sensed bones (`sensed(k)`, `None` for an
-    /// unsensed joint): planted legs keep the T-pose, other bones follow their parent.
+    /// unsensed joint): planted legs stand as in the T-pose turned to `stance`, other bones
+    /// follow their parent.
     fn compose(
         &self,
         skeleton: &Skeleton,
         sensed: impl Fn(usize) -> Option<Quat>,
+        stance: Quat,
         out: &mut [Vec3],
     ) -> bool {
         let n = skeleton.len();
@@ -584,7 +638,7 @@ impl ImuAdapter {
             let parent = skeleton.parent(k).map_or(Quat::identity(), |p| global[p]);
             global[k] = match sensed(k) {
                 Some(q) => q,
-                None if self.planted & (1 << k) != 0 => Quat::identity(),
+                None if self.planted & (1 << k) != 0 => stance,
                 None => parent,
             };
             local[k] = parent.inverse() * global[k];
@@ -604,6 +658,17 @@ fn heading_fit(rotations: impl Iterator<Item = Quat>) -> Quat {
     }
     let half = 0.5 * libm::atan2f(2.0 * wy, ww - yy);
     Quat::from_axis_angle(&Vec3::y_axis(), 2.0 * half)
+}
+
+/// The turn of `q` about +Y: its twist about the vertical, which for a segment bent or leaned
+/// about a level axis is where it faces (the identity for a rotation with none, a half turn
+/// about a level axis).
+fn heading(q: Quat) -> Quat {
+    let norm = posecoach_core::math::sqrt(q.w * q.w + q.j * q.j);
+    if norm < f32::EPSILON {
+        return Quat::identity();
+    }
+    Quat::new_unchecked(nalgebra::Quaternion::new(q.w / norm, 0.0, q.j / norm, 0.0))
 }
 
 /// The rotation a fraction `f` of the way from `a` to `b` (shortest arc).
@@ -724,6 +789,44 @@ mod tests {
         }
         assert!(adapter.is_tracking());
         adapter
+    }
+
+    /// The golfer turns 90° about the vertical from the T-pose (the pelvis sensor at 90 °/s
+    /// for a second) and stands still: while the pelvis turns the feet stay as they stood,
+    /// and once it is quiet they point where it faces.
+    #[test]
+    fn the_feet_face_where_the_trunk_last_faced_while_still() {
+        let s = Skeleton::standard(Format::Canonical).unwrap();
+        let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 60.0).unwrap();
+        let at = |j: Joint| s.index_of(j).unwrap();
+        let (ankle, toe) = (at(Joint::LeftAnkle), at(Joint::LeftToe));
+        let mut rest = [Vec3::zeros(); MAX_JOINTS];
+        s.rest_positions(&mut rest);
+        let mut feet = Vec::new();
+        for k in 0..600u64 {
+            let turning = (250..450).contains(&k);
+            for sensor in [3, 7] {
+                let mut sample = still(sensor, k);
+                if turning && sensor == 3 {
+                    sample.gyro_ddps = [0, 900, 0];
+                }
+                adapter
+                    .push(&s, &sample, |p, _| feet.push((turning, p[toe] - p[ankle])))
+                    .unwrap();
+            }
+        }
+        let foot = rest[toe] - rest[ankle];
+        let turned = Quat::from_axis_angle(&Vec3::y_axis(), core::f32::consts::FRAC_PI_2) * foot;
+        let (during, after): (Vec<_>, Vec<_>) = feet.iter().partition(|(turning, _)| *turning);
+        assert!(!during.is_empty());
+        for (_, f) in &during {
+            assert!((f - foot).norm() < 1e-4, "{f:?} against {foot:?}");
+        }
+        let last = after.last().unwrap().1;
+        assert!(
+            (last - turned).norm() < 0.01 * foot.norm(),
+            "{last:?} against {turned:?}"
+        );
     }
 
     /// Frames emitted by `samples` still samples of both sensors from `from_us` on, the clock

@@ -17,7 +17,7 @@ use posecoach_core::retarget::Analytic;
 use posecoach_core::skeleton::Skeleton;
 #[cfg(feature = "network")]
 use posecoach_core::weights::Weights;
-use posecoach_core::Vec3;
+use posecoach_core::{Quat, Vec3};
 
 /// A stored coach reference swing.
 #[derive(Clone, Copy, Debug)]
@@ -127,10 +127,19 @@ impl Coach<'_> {
                 true
             })
         };
+        // The IMUs see the coach's legs planted facing where its trunk faced at address.
+        let mut pose = [Vec3::zeros(); MAX_JOINTS];
+        let address = swing.map_or(0, |s| s.address);
+        let stance = match imu {
+            Some(imu) if read(address, &mut pose[..n]) => {
+                imu.stance_of(student, &pose[..n]).map_err(Refusal::Imu)?
+            }
+            _ => Quat::identity(),
+        };
         let mut refusal = Refusal::Retarget;
         let write = |f: usize, pose: &[Vec3]| {
             let mut seen = [Vec3::zeros(); MAX_JOINTS];
-            let pose = match imu.map(|imu| seen_by(imu, student, pose, &mut seen)) {
+            let pose = match imu.map(|imu| seen_by(imu, student, pose, stance, &mut seen)) {
                 None => pose,
                 Some(Ok(())) => &seen[..n],
                 Some(Err(e)) => {
@@ -244,9 +253,10 @@ fn seen_by(
     imu: &ImuAdapter,
     skeleton: &Skeleton,
     frame: &[Vec3],
+    stance: Quat,
     out: &mut [Vec3],
 ) -> Result<(), ImuError> {
-    imu.view(skeleton, frame, out)
+    imu.view(skeleton, frame, stance, out)
 }
 
 /// `pose` (metres) stored in `out` in millimetres; `None` if a position has none
