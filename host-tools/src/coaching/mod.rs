@@ -58,6 +58,7 @@ use posecoach_io::{self as io, Motion};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{json, Value};
+use std::borrow::Cow;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
@@ -131,6 +132,28 @@ struct Clean {
     swing: Motion,
     times: Times,
     lead: Side,
+}
+
+impl Clean {
+    /// The swing in `motion` (read from `source`, the coach numbered `coach`) on `body`.
+    fn new(source: &Path, coach: u16, motion: &Motion, body: &Motion) -> Result<Clean> {
+        let found = events::detect(&motion.skeleton, motion.swing(), motion.rate_hz)
+            .with_context(|| format!("events of {}", source.display()))?;
+        // The golfer swings as the coach on their own body, keeping their grip and planted
+        // feet: the virtual coach the device makes, before any flaw.
+        let mut swing = motion
+            .retarget_analytic(body)
+            .map_err(|(f, e)| anyhow::anyhow!("{} frame {f}: {e}", source.display()))?;
+        swing.keep_contacts(motion)?;
+        Ok(Clean {
+            source: source.to_path_buf(),
+            coach,
+            body: body.clone(),
+            swing: swing.resampled(LAYOUT_HZ)?,
+            times: flaws::times(&found, motion.rate_hz),
+            lead: found.lead,
+        })
+    }
 }
 
 /// How a case reaches the device.
@@ -254,25 +277,8 @@ pub fn run(args: &Args) -> Result<String> {
             );
         };
         let motion = io::load(path).with_context(|| format!("reading {}", path.display()))?;
-        let found = events::detect(&motion.skeleton, motion.swing(), motion.rate_hz)
-            .with_context(|| format!("events of {}", path.display()))?;
-        let times = flaws::times(&found, motion.rate_hz);
         for body in &bodies {
-            // The golfer swings as the coach on their own body, keeping their grip and
-            // planted feet: the virtual coach the device makes, before any flaw.
-            let mut swing = motion
-                .retarget_analytic(body)
-                .map_err(|(f, e)| anyhow::anyhow!("{} frame {f}: {e}", path.display()))?;
-            swing.keep_contacts(&motion)?;
-            let swing = swing.resampled(LAYOUT_HZ)?;
-            cleans.push(Clean {
-                source: path.clone(),
-                coach: coach as u16,
-                body: body.clone(),
-                swing,
-                times,
-                lead: found.lead,
-            });
+            cleans.push(Clean::new(path, coach as u16, &motion, body)?);
         }
     }
     let cases = cases(&cleans, args);
@@ -532,10 +538,11 @@ fn cases(cleans: &[Clean], args: &Args) -> Vec<Case> {
 fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outcome1> {
     let planted = flaws::plant(&clean.swing, &clean.times, clean.lead, &case.flaws);
     let source = (clean.source.clone(), planted.swing.clone());
-    let (mut timeline, placed) = lay_out(&clean.body, &[source], None, LAYOUT_HZ)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(case.seed);
+    let body = body_of(clean, case.input, &mut rng)?;
+    let (mut timeline, placed) = lay_out(&body, &[source], None, LAYOUT_HZ)?;
     let start_s = placed[0].start as f64 / f64::from(LAYOUT_HZ);
     let swing_end_s = placed[0].end as f64 / f64::from(LAYOUT_HZ);
-    let mut rng = ChaCha8Rng::seed_from_u64(case.seed);
 
     let (mut messages, failures) = match case.input {
         Input::Phone {
@@ -553,7 +560,7 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
             phone_messages(clean, &mut timeline, &placed, &camera, &mut rng)?
         }
         Input::Imu { magnetometers } => (
-            imu_messages(clean, &timeline, magnetometers, &mut rng)?,
+            imu_messages(&body, &timeline, magnetometers, &mut rng)?,
             Vec::new(),
         ),
     };
@@ -811,24 +818,34 @@ fn phone_messages(
     Ok((messages, failures))
 }
 
-/// The profile (the student's T-pose turned to any heading), the sensor layout and the samples
-/// six IMUs send of `timeline` (3 % lost).
+/// The body a case is laid out on: for IMUs the student's T-pose turned to a heading drawn
+/// from `rng` (the golfer turns from it to the set-up), as `synth-log` lays out a T-pose file
+/// that faces anywhere; for a phone the T-pose as it is.
+fn body_of<'c>(clean: &'c Clean, input: Input, rng: &mut ChaCha8Rng) -> Result<Cow<'c, Motion>> {
+    Ok(match input {
+        Input::Imu { .. } => {
+            let heading = rng.random_range(0.0f32..std::f32::consts::TAU);
+            Cow::Owned(synth::turned(&clean.body, heading)?)
+        }
+        Input::Phone { .. } => Cow::Borrowed(&clean.body),
+    })
+}
+
+/// The profile (the student's T-pose in `body`), the sensor layout and the samples six IMUs
+/// send of `timeline` (3 % lost).
 fn imu_messages(
-    clean: &Clean,
+    body: &Motion,
     timeline: &Timeline,
     magnetometers: bool,
     rng: &mut ChaCha8Rng,
 ) -> Result<Vec<Message>> {
-    let body = &clean.body;
-    let heading = rng.random_range(0.0f32..std::f32::consts::TAU);
-    let turn = nalgebra::Rotation3::from_axis_angle(&Vec3::y_axis(), heading);
     let format = Format::H36m17;
     let keypoint_joints = synth::keypoint_sources(format, &body.skeleton)?;
     let profile = StudentProfile {
         format,
         joints_mm: keypoint_joints
             .iter()
-            .map(|&k| phone::to_mm(turn * body.positions[k]))
+            .map(|&k| phone::to_mm(body.positions[k]))
             .collect(),
     };
     let motion = Motion {
@@ -1311,4 +1328,52 @@ pub const MORE_METRICS: [KeyMetric; 9] = [
 /// Every body metric the benchmark measures the error of.
 fn measured_metrics() -> impl Iterator<Item = &'static KeyMetric> {
     KEY_METRICS.iter().chain(&MORE_METRICS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use posecoach_io::csv;
+    use std::f32::consts::TAU;
+
+    /// The bench's IMU path at eight headings of the student's T-pose, 45° apart: seeds whose
+    /// first draw (the heading, [`body_of`]) falls in each octant, the unflawed iron on the
+    /// bundled T-pose, six IMUs with and without magnetometers.
+    #[test]
+    fn imu_cases_are_found_and_timed_at_every_heading() {
+        let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures");
+        let source = fixtures.join("golf_iron_60hz.csv");
+        let motion = io::load(&source).unwrap();
+        let body = csv::read(include_str!("../../../tests/fixtures/h36m17_tpose.csv")).unwrap();
+        let clean = Clean::new(&source, 1, &motion, &body).unwrap();
+        let octant = |seed: u64| {
+            let heading = ChaCha8Rng::seed_from_u64(seed).random_range(0.0f32..TAU);
+            (heading / (TAU / 8.0)) as usize
+        };
+        let mut seeds = [None; 8];
+        for seed in 0.. {
+            seeds[octant(seed)].get_or_insert(seed);
+            if seeds.iter().all(Option::is_some) {
+                break;
+            }
+        }
+        for magnetometers in [true, false] {
+            for seed in seeds.into_iter().flatten() {
+                let case = Case {
+                    clean: 0,
+                    flaws: Vec::new(),
+                    input: Input::Imu { magnetometers },
+                    seed,
+                };
+                let outcome = run_case(&clean, &case, None).unwrap();
+                let at = format!("octant {}, magnetometers {magnetometers}", octant(seed));
+                assert!(outcome.found, "{at}: not found");
+                let [_, top, impact] = outcome.timing_ms.unwrap();
+                assert!(
+                    top.abs() < 50.0 && impact.abs() < 50.0,
+                    "{at}: {top} / {impact} ms"
+                );
+            }
+        }
+    }
 }

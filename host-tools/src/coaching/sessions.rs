@@ -21,7 +21,9 @@
 //! recall per family.
 
 use super::flaws::{self, Body, Flaw, Planted};
-use super::{imu_messages, pct, phone_messages, share, states, Clean, Input, PhoneView, MODEL_HZ};
+use super::{
+    body_of, imu_messages, pct, phone_messages, share, states, Clean, Input, PhoneView, MODEL_HZ,
+};
 use crate::coaches;
 use crate::synth::lay_out;
 use anyhow::Result;
@@ -265,7 +267,8 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
             (clean.source.clone(), planted.swing)
         })
         .collect();
-    let (mut timeline, placed) = lay_out(&clean.body, &sources, None, super::LAYOUT_HZ)?;
+    let body = body_of(clean, case.input, &mut rng)?;
+    let (mut timeline, placed) = lay_out(&body, &sources, None, super::LAYOUT_HZ)?;
     let mut messages = match case.input {
         Input::Phone {
             level_mm,
@@ -281,7 +284,7 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
             };
             phone_messages(clean, &mut timeline, &placed, &view, &mut rng)?.0
         }
-        Input::Imu { magnetometers } => imu_messages(clean, &timeline, magnetometers, &mut rng)?,
+        Input::Imu { magnetometers } => imu_messages(&body, &timeline, magnetometers, &mut rng)?,
     };
     messages.insert(
         1,
