@@ -29,6 +29,7 @@
 //! ```
 
 use posecoach_core::kinematics::swing;
+use posecoach_core::math;
 use posecoach_core::wire::ImuSample;
 use posecoach_core::{Quat, Vec3};
 
@@ -296,25 +297,26 @@ impl Mahony {
         let inverse = self.q.inverse();
         let up = inverse * Vec3::y();
         let mut error = Vec3::zeros();
-        let norm = accel.norm();
-        if (norm / G - 1.0).abs() <= ACCEL_GATE && gyro.norm() <= TURN_GATE {
+        let norm = math::norm(&accel);
+        if (norm / G - 1.0).abs() <= ACCEL_GATE && math::norm(&gyro) <= TURN_GATE {
             error += (accel / norm).cross(&up);
         }
-        if let Some(m) = mag.filter(|m| self.magnetic && m.norm() > 0.0) {
-            let m = m.normalize();
+        if let Some(m) = mag.filter(|m| self.magnetic && m.norm_squared() > 0.0) {
+            let m = m / math::norm(&m);
             let h = self.q * m;
-            let horizontal = posecoach_core::math::sqrt(h.x * h.x + h.z * h.z);
+            let horizontal = math::sqrt(h.x * h.x + h.z * h.z);
             let expected = inverse * Vec3::new(0.0, h.y, horizontal);
             error += up * up.dot(&m.cross(&expected));
         }
         self.integral += error * (self.gains.ki * dt);
-        let bias_norm = self.integral.norm();
+        let bias_norm = math::norm(&self.integral);
         if bias_norm > MAX_INTEGRAL {
             self.integral *= MAX_INTEGRAL / bias_norm;
         }
         let rate = gyro + error * self.gains.kp + self.integral;
-        let turned = self.q * posecoach_core::math::turn(rate * dt);
-        self.q = Quat::new_normalize(turned.into_inner());
+        // Normalized through the FPU's root (nalgebra's `new_normalize`, to the bit).
+        let turned = (self.q * math::turn(rate * dt)).into_inner();
+        self.q = Quat::new_unchecked(turned / math::sqrt(turned.norm_squared()));
     }
 }
 
@@ -350,7 +352,8 @@ impl StillPeriod {
     /// Whether `reading` looks like a sensor at rest: turning slower than [`STILL_GYRO`] and
     /// feeling 1 g within [`STILL_ACCEL`].
     pub fn is_still(reading: &Reading) -> bool {
-        reading.gyro.norm() < STILL_GYRO && (reading.accel.norm() / G - 1.0).abs() < STILL_ACCEL
+        math::norm(&reading.gyro) < STILL_GYRO
+            && (math::norm(&reading.accel) / G - 1.0).abs() < STILL_ACCEL
     }
 
     /// Adds one reading.

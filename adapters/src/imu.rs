@@ -62,6 +62,7 @@ use crate::fusion::{self, FusionError, Gains, Mahony, Reading, StillPeriod};
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::joint::Joint;
 use posecoach_core::kinematics::{forward, inverse};
+use posecoach_core::math;
 use posecoach_core::skeleton::{Segment, Skeleton};
 use posecoach_core::wire::{SensorLayout, MAX_SENSORS};
 use posecoach_core::{Quat, Vec3};
@@ -478,9 +479,9 @@ impl ImuAdapter {
         if let Some(dt) = dt {
             track.filter.update(gyro, reading.accel, reading.mag, dt);
             if track.activity {
-                self.activity = self.activity.max(gyro.norm());
+                self.activity = self.activity.max(math::norm(&gyro));
             }
-            if usize::from(self.trunk) == t && gyro.norm() < QUIET_RAD_S {
+            if usize::from(self.trunk) == t && math::norm(&gyro) < QUIET_RAD_S {
                 self.stance = heading(track.left * track.filter.orientation() * track.right);
             }
         }
@@ -664,7 +665,7 @@ fn heading_fit(rotations: impl Iterator<Item = Quat>) -> Quat {
 /// about a level axis is where it faces (the identity for a rotation with none, a half turn
 /// about a level axis).
 fn heading(q: Quat) -> Quat {
-    let norm = posecoach_core::math::sqrt(q.w * q.w + q.j * q.j);
+    let norm = math::sqrt(q.w * q.w + q.j * q.j);
     if norm < f32::EPSILON {
         return Quat::identity();
     }
@@ -673,7 +674,7 @@ fn heading(q: Quat) -> Quat {
 
 /// The rotation a fraction `f` of the way from `a` to `b` (shortest arc).
 fn interpolate(a: Quat, b: Quat, f: f32) -> Quat {
-    a * posecoach_core::math::turn((a.inverse() * b).scaled_axis() * f.clamp(0.0, 1.0))
+    a * math::turn((a.inverse() * b).scaled_axis() * f.clamp(0.0, 1.0))
 }
 
 #[cfg(test)]
