@@ -20,7 +20,7 @@ minstr() { awk -v n="$1" 'BEGIN { printf "%.3f M", n / 1e6 }'; }
 # ELF just built whose output is in $1.
 flash_of() {
     local code=$(( $(section .vector_table) + $(section .text) + $(section .rodata) + $(section .data) ))
-    echo $((code - $(field "$1" EMBEDDED log) - $(field "$1" EMBEDDED transcript) - $(field "$1" EMBEDDED vectors) - $(field "$1" EMBEDDED hostile)))
+    echo $((code - $(field "$1" EMBEDDED log) - $(field "$1" EMBEDDED transcript) - $(field "$1" EMBEDDED vectors) - $(field "$1" EMBEDDED hostile) - $(field "$1" EMBEDDED imu)))
 }
 static_of() { echo $(( $(section .data) + $(section .bss) + $(section .uninit) )); }
 
@@ -71,6 +71,12 @@ row "a set-up (profile, settings or coach selection): coach retargeted, its cont
 row "hostile recording ($(field "$out" 'HOSTILE decode' calls) messages): costliest pose frame / IMU sample / set-up" "" "$(minstr "$(field "$out" 'HOSTILE frame' max)") / $(minstr "$(field "$out" 'HOSTILE imu' max)") / $(minstr "$(field "$out" 'HOSTILE setup' max)")"
 row "costliest message of either recording" "$(minstr "$(field "$out" BUDGET budget)")" "$(minstr "$(field "$out" BUDGET message)")" "$(field "$out" BUDGET message)" "$(field "$out" BUDGET budget)"
 row "stack high-water mark of the hostile recording" "" "$(kib "$hostile_stack")"
+imu() { field "$out" "IMU $1" "$2"; }
+row "wearing six IMUs at 200 Hz (\`imu_device_200hz\`, a 30 Hz model rate): instructions a second of the stream, every sample that does not end a swing (decoding, fusion, posing at the model rate, detection): the battery's load" "640 k (1 % of 64 MHz)" "$(minstr "$(field "$out" BATTERY "imu per_second")")" "$(field "$out" BATTERY "imu per_second")" 640000
+row "of which decoding a sample (mean of $(imu decode calls) messages)" "" "$(minstr "$(imu decode mean)")"
+row "of which an IMU sample: fusion, and posing and detecting the frames it completes (mean / max)" "" "$(minstr "$(imu imu mean)") / $(minstr "$(imu imu max)")"
+row "the IMU sample that ends a swing (events, DTW, report, session)" "3.2 M" "$(minstr "$(imu swing mean)")" "$(imu swing mean)" 3200000
+row "a phone's pose stream at 30 Hz (\`device_h36m_30hz\`): instructions a second, every frame that does not end a swing, decoding included" "" "$(minstr "$(field "$out" BATTERY "pose per_second")")"
 echo
 echo "With the int8 network (\`--features network\`) in the analytic retargeter's place."
 echo

@@ -39,6 +39,12 @@ pc synth-log --swing $fx/golf_iron_60hz.csv --swing $fx/golf_driver_60hz.csv \
 pc synth-log --swing $fx/golf_driver_60hz.csv --swing $fx/golf_iron_60hz.csv --imu-rate 200 \
     --coach 0 --seed 4 --out tests/logs/imu_200hz.pclog
 
+# The same golfer with the six IMUs at the device's own model rate, 30 Hz: a still T-pose, then
+# the driver. The session the QEMU firmware replays to measure what wearing the sensors costs
+# a second.
+pc synth-log --swing $fx/golf_driver_60hz.csv --imu-rate 200 --model-rate 30 --coach 0 --seed 5 \
+    --out tests/logs/imu_device_200hz.pclog
+
 # The hostile session (hostile_h36m_30hz: the firmware's session with bursts of what a broken or
 # hostile phone sends) is made from device_h36m_30hz.pclog by its test:
 # POSECOACH_BLESS=1 cargo test -p posecoach-tests --test hostile

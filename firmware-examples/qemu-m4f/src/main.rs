@@ -9,8 +9,12 @@
 //! session, the hostile recording `tests/logs/hostile_h36m_30hz.pclog` (the same session with
 //! bursts of what a broken or hostile phone sends, and IMU clocks that leap, restart and
 //! wrap), its replies compared the same way, and no message of either allowed more than
-//! [`MESSAGE_BUDGET`] instructions. Prints each report and the instructions each stage took
-//! over defmt; exits 0 only if every bit matched and every message kept to the budget.
+//! [`MESSAGE_BUDGET`] instructions. Then (without the network) six IMUs at 200 Hz,
+//! `tests/logs/imu_device_200hz.pclog`: a still T-pose and a driver swing, its replies compared
+//! the same way. Prints each report, the instructions each stage took and what each stream
+//! costs a second of wearing it (the battery: every message of the stream that does not end a
+//! swing, decoding included, over the stream's own time) over defmt; exits 0 only if every bit
+//! matched and every message kept to the budget.
 //!
 //! With the `network` feature the session retargets with the int8 network instead
 //! (`weights/distilled-int8.pcw`, embedded), checked first against its golden vectors bit for
@@ -41,7 +45,7 @@ use posecoach_core::session::JointTallies;
 use posecoach_core::weights::Weights;
 #[cfg(feature = "network")]
 use posecoach_core::weights::{Architecture, SEGMENTS, WINDOW};
-use posecoach_core::wire::{encode, Config, Message, MAX_FRAME};
+use posecoach_core::wire::{self, encode, Config, Message, MAX_FRAME};
 use static_cell::ConstStaticCell;
 
 static LOG: &Aligned<[u8]> = &Aligned(*include_bytes!(
@@ -59,6 +63,16 @@ static HOSTILE_EXPECTED: &[u8] = include_bytes!("../../../tests/logs/hostile_h36
 #[cfg(feature = "network")]
 static HOSTILE_EXPECTED: &[u8] =
     include_bytes!("../../../tests/logs/hostile_h36m_30hz.int8.device.bin");
+#[cfg(not(feature = "network"))]
+static IMU: &Aligned<[u8]> = &Aligned(*include_bytes!("../../../tests/logs/imu_device_200hz.pclog"));
+#[cfg(not(feature = "network"))]
+static IMU_EXPECTED: &[u8] = include_bytes!("../../../tests/logs/imu_device_200hz.device.bin");
+/// The IMU recording replayed, with its transcript (none with the network: its int8 coach
+/// changes nothing the stream costs).
+#[cfg(not(feature = "network"))]
+static IMU_RECORDING: Option<(&[u8], &[u8])> = Some((&IMU.0, IMU_EXPECTED));
+#[cfg(feature = "network")]
+static IMU_RECORDING: Option<(&[u8], &[u8])> = None;
 static COACHES: [&Aligned<[u8]>; 2] = [
     &Aligned(*include_bytes!("../../../coaches/driver.pcr")),
     &Aligned(*include_bytes!("../../../coaches/iron.pcr")),
@@ -114,9 +128,10 @@ struct Stages {
     decode: Tally,
     /// A pose frame that did not end a swing: pose stream, skeleton fit, detector.
     frame: Tally,
-    /// A pose frame that ended a swing: the above, the copy out, events, DTW, report.
+    /// A pose frame or IMU sample that ended a swing: the above, the copy out, events, DTW,
+    /// report.
     swing: Tally,
-    /// An IMU sample: the adapter, and detection (or a swing's scoring) of the frames it
+    /// An IMU sample that did not end a swing: the adapter, and detection of the frames it
     /// completes.
     imu: Tally,
     /// A profile, settings, coach selection or sensor layout: the coach retargeted onto the
@@ -124,6 +139,10 @@ struct Stages {
     setup: Tally,
     /// Encoding a reply for the serial link.
     reply: Tally,
+    /// Decoding the pose frames and IMU samples, instructions.
+    stream_decode: u64,
+    /// The first and last capture time of a pose frame or IMU sample, microseconds.
+    stream_us: Option<(u64, u64)>,
 }
 
 #[entry]
@@ -181,10 +200,18 @@ fn run() -> Result<(), &'static str> {
     let checks_stack = stack::high_water();
     let (floats, bytes, unsure) = (FLOATS.take(), BYTES.take(), UNSURE.take());
     let tallies = TALLIES.take();
-    // Both recordings through one call of the replay.
-    let mut replayed: [Option<Replayed>; 2] = [None, None];
-    let recordings = [(&LOG.0[..], EXPECTED), (&HOSTILE.0[..], HOSTILE_EXPECTED)];
-    for (slot, (log, expected)) in replayed.iter_mut().zip(recordings) {
+    // Every recording through one call of the replay.
+    let mut replayed: [Option<Replayed>; 3] = [None, None, None];
+    let recordings = [
+        Some((&LOG.0[..], EXPECTED)),
+        Some((&HOSTILE.0[..], HOSTILE_EXPECTED)),
+        IMU_RECORDING,
+    ];
+    for (slot, (log, expected)) in replayed
+        .iter_mut()
+        .zip(recordings)
+        .filter_map(|(slot, r)| Some((slot, r?)))
+    {
         let buffers = Buffers {
             ring: &mut *ring,
             coach: &mut *coach,
@@ -195,9 +222,10 @@ fn run() -> Result<(), &'static str> {
         };
         *slot = Some(replay(&coaches, weights, buffers, log, expected)?);
     }
-    let [Some(clean), Some(hostile)] = replayed else {
+    let [Some(clean), Some(hostile), imu] = replayed else {
         return Err("a recording was not replayed");
     };
+    let imu_deepest = imu.as_ref().map_or(0, |r| r.stages.deepest());
     print("STAGE", &clean.stages);
     defmt::println!(
         "RAM ring {=usize} coach {=usize} floats {=usize} bytes {=usize} unsure {=usize} tallies {=usize} stack {=usize}",
@@ -207,24 +235,37 @@ fn run() -> Result<(), &'static str> {
         LENS.bytes,
         LENS.unsure * core::mem::size_of::<u64>(),
         LENS.tallies * core::mem::size_of::<JointTallies>(),
-        checks_stack.max(clean.stages.deepest())
+        checks_stack.max(clean.stages.deepest()).max(imu_deepest)
     );
     print("HOSTILE", &hostile.stages);
     // How deep the hostile recording took the stack (the clean session's depth is above).
     defmt::println!("STACK hostile recording {=usize}", hostile.stages.deepest());
+    if let Some(imu) = &imu {
+        print("IMU", &imu.stages);
+    }
+    defmt::println!(
+        "BATTERY pose per_second {=u64} imu per_second {=u64} instructions",
+        clean.stages.per_second(),
+        imu.as_ref().map_or(0, |r| r.stages.per_second())
+    );
     #[cfg(feature = "network")]
     let (vectors, weights) = (network::golden_bytes(), network::WEIGHTS.0.len());
     #[cfg(not(feature = "network"))]
     let (vectors, weights) = (dtw::SWING.0.len(), 0);
     defmt::println!(
-        "EMBEDDED log {=usize} transcript {=usize} vectors {=usize} weights {=usize} hostile {=usize}",
+        "EMBEDDED log {=usize} transcript {=usize} vectors {=usize} weights {=usize} hostile {=usize} imu {=usize}",
         LOG.0.len(),
         EXPECTED.len(),
         vectors,
         weights,
-        HOSTILE.0.len() + HOSTILE_EXPECTED.len()
+        HOSTILE.0.len() + HOSTILE_EXPECTED.len(),
+        IMU_RECORDING.map_or(0, |(log, expected)| log.len() + expected.len())
     );
-    let costliest = clean.stages.costliest().max(hostile.stages.costliest());
+    let costliest = clean
+        .stages
+        .costliest()
+        .max(hostile.stages.costliest())
+        .max(imu.as_ref().map_or(0, |r| r.stages.costliest()));
     defmt::println!(
         "BUDGET costliest message {=u64} budget {=u64}",
         costliest,
@@ -235,6 +276,9 @@ fn run() -> Result<(), &'static str> {
     }
     if !hostile.matched {
         return Err("a reply to the hostile recording differs from the host's");
+    }
+    if imu.is_some_and(|r| !r.matched) {
+        return Err("a reply to the IMU recording differs from the host's");
     }
     if costliest > MESSAGE_BUDGET {
         return Err("a message took more instructions than the budget");
@@ -290,7 +334,15 @@ fn replay(
         stack::repaint();
         let start = count::now();
         let Some(message) = reader.next() else { break };
-        stages.decode.add(count::now() - start);
+        let decoded = count::now() - start;
+        stages.decode.add(decoded);
+        if let Message::PoseFrame(wire::PoseFrame { t_us, .. })
+        | Message::ImuSample(wire::ImuSample { t_us, .. }) = &message
+        {
+            stages.stream_decode += decoded;
+            let (first, _) = stages.stream_us.get_or_insert((*t_us, *t_us));
+            stages.stream_us = Some((*first, *t_us));
+        }
         stages.decode.reached(stack::high_water());
         stack::repaint();
         let mut scored = false;
@@ -320,7 +372,7 @@ fn replay(
         });
         let spent = count::now() - start;
         let stage = match message {
-            Message::PoseFrame(_) if scored => &mut stages.swing,
+            Message::PoseFrame(_) | Message::ImuSample(_) if scored => &mut stages.swing,
             Message::PoseFrame(_) => &mut stages.frame,
             Message::ImuSample(_) => &mut stages.imu,
             _ => &mut stages.setup,
@@ -346,6 +398,15 @@ impl Stages {
 }
 
 impl Stages {
+    /// Instructions a second of the stream takes: decoding and handling every pose frame and
+    /// IMU sample that did not end a swing, over the time from the first to the last.
+    fn per_second(&self) -> u64 {
+        let span_us = self.stream_us.map_or(0, |(first, last)| last.saturating_sub(first));
+        let spent = self.stream_decode + self.frame.total + self.imu.total;
+        // Under 2^44 instructions for a recording (hours of QEMU time): no overflow.
+        spent.saturating_mul(1_000_000) / span_us.max(1)
+    }
+
     /// Bytes of stack the deepest message reached, its decoding and reply included.
     fn deepest(&self) -> usize {
         [
