@@ -17,7 +17,8 @@ qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic -monitor none -ser
     -plugin "$work/libinsns.so,out=$work/counts.txt" -kernel "$elf" >/dev/null
 total=$(awk '$1 == "total" { print $2 }' "$work/counts.txt")
 echo "instructions executed, whole run (boot, checks, replay, printing): $total"
-# Function start addresses (Thumb bit cleared), then each block's count added to the function
+# Function start addresses (the Thumb bit some symbols carry cleared: a function's first
+# block would otherwise count as its neighbour's), then each block's count added to the function
 # that starts at or before it.
 # ARM mapping symbols ($t, $d) mark code and data runs, not functions.
 nm -C -n --defined-only "$elf" | awk '$2 ~ /^[tTwW]$/ && $3 !~ /^\$/ { $2 = ""; print }' >"$work/symbols.txt"
@@ -28,7 +29,7 @@ awk -v total="$total" '
         for (i = 1; i <= length(s); i++) v = v * 16 + index("0123456789abcdef", substr(tolower(s), i, 1)) - 1
         return v
     }
-    NR == FNR { addr[NR] = hex($1); $1 = ""; sub(/^ +/, ""); name[NR] = $0; n = NR; next }
+    NR == FNR { addr[NR] = hex($1); if (addr[NR] % 2 == 1) addr[NR] -= 1; $1 = ""; sub(/^ +/, ""); name[NR] = $0; n = NR; next }
     {
         at = hex($1); lo = 1; hi = n
         while (lo < hi) { mid = int((lo + hi + 1) / 2); if (addr[mid] <= at) lo = mid; else hi = mid - 1 }
