@@ -23,8 +23,10 @@
 //! one frame of positions goes out. A sensed bone's global rotation comes from its sensor;
 //! unsensed thighs, shins and feet stand vertical and planted, facing where the trunk last
 //! faced while still (the heading of the lowest trunk sensor's segment, pelvis, spine or thorax,
-//! at its last sample turning under [`QUIET_RAD_S`]: the golfer's set-up, wherever the T-pose
-//! faced); every other unsensed bone follows its parent (the hip bones move with the pelvis). The root stays at
+//! once it has turned under [`QUIET_RAD_S`] for [`QUIET_S`]: the golfer's set-up, wherever the
+//! T-pose faced; a pelvis reversing at the top passes under that rate for a few hundredths of a
+//! second only); every other unsensed bone follows its parent (the hip bones move with the
+//! pelvis). The root stays at
 //! the skeleton's rest position. With each frame goes the activity for swing detection: the
 //! largest bias-free gyro rate (rad/s) of the wrist, hand and club sensors (of all sensors if
 //! there are none of those) since the previous frame.
@@ -79,6 +81,10 @@ const Q14: f32 = 16384.0;
 /// The trunk sensor's rate under which the legs take the trunk's heading, rad/s (20 °/s): a
 /// golfer at address is under it, and a takeaway passes it within a few degrees of turn.
 pub const QUIET_RAD_S: f32 = 0.35;
+/// How long the trunk sensor must stay under [`QUIET_RAD_S`] before the legs take its heading,
+/// seconds: a golfer holds the set-up longer; a turning pelvis reverses (at the top) in far less.
+pub const QUIET_S: f32 = 0.2;
+const QUIET_US: u64 = 200_000;
 /// Joints whose sensor, the first the layout places, sets the legs' heading.
 const TRUNK_JOINTS: [Joint; 3] = [Joint::Pelvis, Joint::Spine, Joint::Thorax];
 /// Joints whose sensors give the activity.
@@ -199,6 +205,8 @@ pub struct ImuAdapter {
     trunk: u8,
     /// The planted bones' global rotation: the trunk's heading when it was last quiet.
     stance: Quat,
+    /// Since when the trunk sensor has turned under [`QUIET_RAD_S`], microseconds.
+    quiet_since: Option<u64>,
     joints: u8,
     root: Vec3,
     rate_mhz: u64,
@@ -289,6 +297,7 @@ impl ImuAdapter {
             planted,
             trunk,
             stance: Quat::identity(),
+            quiet_since: None,
             joints: skeleton.len() as u8,
             root: skeleton.offset(0),
             rate_mhz: (rate_hz * 1000.0) as u64,
@@ -389,6 +398,7 @@ impl ImuAdapter {
             track.last_us = None;
             track.snapshot = None;
         }
+        self.quiet_since = None;
         self.phase = match self.phase {
             Phase::Calibrating(_) => {
                 for track in &mut self.tracks {
@@ -465,6 +475,7 @@ impl ImuAdapter {
             track.snapshot = None;
         }
         self.stance = Quat::identity();
+        self.quiet_since = None;
         self.activity = 0.0;
         Ok(())
     }
@@ -481,8 +492,15 @@ impl ImuAdapter {
             if track.activity {
                 self.activity = self.activity.max(math::norm(&gyro));
             }
-            if usize::from(self.trunk) == t && math::norm(&gyro) < QUIET_RAD_S {
-                self.stance = heading(track.left * track.filter.orientation() * track.right);
+            if usize::from(self.trunk) == t {
+                self.quiet_since =
+                    (math::norm(&gyro) < QUIET_RAD_S).then(|| self.quiet_since.unwrap_or(t_us));
+                if self
+                    .quiet_since
+                    .is_some_and(|s| t_us.saturating_sub(s) >= QUIET_US)
+                {
+                    self.stance = heading(track.left * track.filter.orientation() * track.right);
+                }
             }
         }
         let Some(due) = due.filter(|&due| t_us >= due) else {
@@ -793,8 +811,9 @@ mod tests {
     }
 
     /// The golfer turns 90° about the vertical from the T-pose (the pelvis sensor at 90 °/s
-    /// for a second) and stands still: while the pelvis turns the feet stay as they stood,
-    /// and once it is quiet they point where it faces.
+    /// for a second, halting for 50 ms halfway as a pelvis reversing at the top would) and
+    /// stands still: while the pelvis turns the feet stay as they stood, and once it has been
+    /// quiet for [`QUIET_S`] they point where it faces.
     #[test]
     fn the_feet_face_where_the_trunk_last_faced_while_still() {
         let s = Skeleton::standard(Format::Canonical).unwrap();
@@ -804,11 +823,12 @@ mod tests {
         let mut rest = [Vec3::zeros(); MAX_JOINTS];
         s.rest_positions(&mut rest);
         let mut feet = Vec::new();
-        for k in 0..600u64 {
-            let turning = (250..450).contains(&k);
+        for k in 0..610u64 {
+            let turning = (250..460).contains(&k);
+            let halted = (350..360).contains(&k);
             for sensor in [3, 7] {
                 let mut sample = still(sensor, k);
-                if turning && sensor == 3 {
+                if turning && !halted && sensor == 3 {
                     sample.gyro_ddps = [0, 900, 0];
                 }
                 adapter
