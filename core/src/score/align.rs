@@ -193,6 +193,9 @@ pub(super) struct Pair<'a> {
     pub half: (usize, usize),
     /// The input held the student's root still: the coach is read with its root held too.
     pub root_held: bool,
+    /// The coach's root stays where it is at address in every frame (the IMUs' view of it),
+    /// so that holding it changes nothing and is skipped.
+    coach_still: bool,
     /// The coach's root at address, single frames and smoothed.
     anchors: [Vec3; 2],
     /// The joints the stream was unsure of.
@@ -217,6 +220,7 @@ impl<'a> Pair<'a> {
         // then compared the same way, its root held at address.
         let root_held =
             (0..swing_s.len()).all(|f| norm(&(swing_s.at(f, 0) - swing_s.at(0, 0))) < HELD_ROOT_M);
+        let coach_still = (0..swing_c.len()).all(|f| swing_c.at(f, 0) == swing_c.at(0, 0));
         let address = events_c.time(Event::Address).unwrap_or(0.0);
         Pair {
             student: swing_s,
@@ -226,6 +230,7 @@ impl<'a> Pair<'a> {
             time_map: TimeMap::new(events_s, events_c, coach.hz / student.hz),
             half,
             root_held,
+            coach_still,
             anchors: [0, half.1].map(|h| smoothed(swing_c, address, 0, h)),
             unsure: student.unsure,
         }
@@ -235,7 +240,7 @@ impl<'a> Pair<'a> {
     /// address where the student's is).
     pub(super) fn coach_at(&self, k: usize, x: f32, half: usize) -> Vec3 {
         let p = smoothed(self.coach, x, k, half);
-        if self.root_held {
+        if self.root_held && !self.coach_still {
             let anchor = self.anchors[usize::from(half == self.half.1)];
             p - (smoothed(self.coach, x, 0, half) - anchor)
         } else {
