@@ -211,6 +211,9 @@ pub struct ImuAdapter {
     root: Vec3,
     rate_mhz: u64,
     phase: Phase,
+    /// The pending output time, [`ImuAdapter::output_time`] of `phase`: kept, as its 128-bit
+    /// division would cost every sample some thousand instructions.
+    due: Option<u64>,
     activity: f32,
 }
 
@@ -302,6 +305,7 @@ impl ImuAdapter {
             root: skeleton.offset(0),
             rate_mhz: (rate_hz * 1000.0) as u64,
             phase: Phase::Calibrating(None),
+            due: None,
             activity: 0.0,
         })
     }
@@ -399,7 +403,7 @@ impl ImuAdapter {
             track.snapshot = None;
         }
         self.quiet_since = None;
-        self.phase = match self.phase {
+        let phase = match self.phase {
             Phase::Calibrating(_) => {
                 for track in &mut self.tracks {
                     track.still = StillPeriod::new();
@@ -411,6 +415,7 @@ impl ImuAdapter {
                 next: 1,
             },
         };
+        self.enter(phase);
     }
 
     fn tracks(&self) -> &[Track] {
@@ -435,7 +440,7 @@ impl ImuAdapter {
                 t_us
             }
         };
-        self.phase = Phase::Calibrating(Some(start));
+        self.enter(Phase::Calibrating(Some(start)));
         if !StillPeriod::is_still(reading) {
             return Ok(());
         }
@@ -445,7 +450,7 @@ impl ImuAdapter {
             return Ok(());
         }
         self.finish_calibration()?;
-        self.phase = Phase::Tracking { origin_us, next: 1 };
+        self.enter(Phase::Tracking { origin_us, next: 1 });
         Ok(())
     }
 
@@ -483,7 +488,7 @@ impl ImuAdapter {
     /// Updates a sensor's filter (over `dt` seconds, or holds it after a gap) and records its
     /// orientation at the pending output time if this sample passed it.
     fn track(&mut self, t: usize, reading: &Reading, dt: Option<f32>, t_us: u64) {
-        let due = self.output_time();
+        let due = self.due;
         let track = &mut self.tracks[t];
         let before = track.filter.orientation();
         let gyro = reading.gyro - track.bias;
@@ -534,7 +539,8 @@ impl ImuAdapter {
                     .saturating_add(1)
                     .max(u64::try_from(passed).unwrap_or(u64::MAX));
             }
-            let due = self.output_time();
+            self.due = self.output_time();
+            let due = self.due;
             let len = usize::from(self.len);
             for track in &mut self.tracks[..len] {
                 track.snapshot = track
@@ -544,6 +550,12 @@ impl ImuAdapter {
                     .map(|_| track.filter.orientation());
             }
         }
+    }
+
+    /// Moves to `phase`, and its pending output time.
+    fn enter(&mut self, phase: Phase) {
+        self.phase = phase;
+        self.due = self.output_time();
     }
 
     /// Time of the pending output frame, microseconds: none before tracking, nor once the
