@@ -514,3 +514,57 @@ mod tests {
         check(1000.0, Some(EARTH_FIELD_UT));
     }
 }
+
+#[cfg(test)]
+mod view_probe {
+    use super::*;
+    use posecoach_adapters::imu::ImuAdapter;
+    use posecoach_core::events::{self, Event};
+    use posecoach_core::frames::Frames;
+
+    #[test]
+    fn probe() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        for src in [
+            "tests/fixtures/golf_driver_60hz.csv",
+            "tests/fixtures/golf_iron_60hz.csv",
+            "../shared/data/golf/gears_tour_driver.c3d",
+            "../shared/data/golf/gears_tour_iron.c3d",
+        ] {
+            let coach = posecoach_io::load(&root.join(src)).unwrap();
+            let body =
+                posecoach_io::csv::read(include_str!("../../tests/fixtures/h36m17_tpose.csv"))
+                    .unwrap();
+            let mut m = coach.retarget_analytic(&body).unwrap();
+            m.keep_contacts(&coach).unwrap();
+            let m = m.resampled(60.0).unwrap();
+            let sk = &m.skeleton;
+            let n = sk.len();
+            let truth = events::detect(sk, Frames::metres(&m.positions, n), 60.0).unwrap();
+            // truth with the club, from the source
+            let club = events::detect(&coach.skeleton, coach.swing(), coach.rate_hz).unwrap();
+            let layout = default_layout(sk);
+            let adapter = ImuAdapter::new(&layout, sk, 60.0).unwrap();
+            let a = truth.address();
+            let stance = adapter.stance_of(sk, m.frame(a)).unwrap();
+            let mut viewed = vec![Vec3::zeros(); m.positions.len()];
+            for f in 0..m.frames() {
+                adapter
+                    .view(sk, m.frame(f), stance, &mut viewed[f * n..(f + 1) * n])
+                    .unwrap();
+            }
+            let seen = events::detect(sk, Frames::metres(&viewed, n), 60.0).unwrap();
+            let ms =
+                |e: &events::SwingEvents, ev: Event, hz: f32| e.time(ev).unwrap() / hz * 1000.0;
+            for ev in [Event::Address, Event::Top, Event::Impact] {
+                println!(
+                    "{src} {:?}: club source {:.0} ms, positions {:.0} ms, viewed {:.0} ms",
+                    ev,
+                    ms(&club, ev, coach.rate_hz),
+                    ms(&truth, ev, 60.0),
+                    ms(&seen, ev, 60.0)
+                );
+            }
+        }
+    }
+}

@@ -7,7 +7,7 @@ use crate::imu::{ImuAdapter, ImuError};
 use core::cell::Cell;
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::contacts::{Contacts, Swing};
-use posecoach_core::events;
+use posecoach_core::events::{self, SwingEvents};
 use posecoach_core::frames::{from_mm, to_mm, Frames, Mm};
 #[cfg(feature = "network")]
 use posecoach_core::network::{self, NetworkError};
@@ -103,7 +103,7 @@ impl Coach<'_> {
     /// the ball) a frame at a time, each frame read from `out` and stored back in its place,
     /// and in a session with IMUs as the student's IMUs would see it (the coach seen the way
     /// the student is). The coach's address, impact and lead side are the retargeted swing's,
-    /// [`Coach::swing_of`] (without a swing found, only the feet are kept). (Out of line: its
+    /// [`Coach::events_of`] (without a swing found, only the feet are kept). (Out of line: its
     /// frame is not on the stack while a coach is retargeted or its swing found.)
     #[inline(never)]
     pub(super) fn keep_contacts(
@@ -165,13 +165,17 @@ impl Coach<'_> {
             .map_err(|_| refusal)
     }
 
-    /// What the contacts need of the swing of the retargeted coach in `out` (whole frames of
-    /// `student` at `rate_hz`, millimetres), if one is found: its address, impact and lead side.
-    pub(super) fn swing_of(&self, student: &Skeleton, rate_hz: u16, out: &[Mm]) -> Option<Swing> {
+    /// The events of the retargeted coach in `out` (whole frames of `student` at `rate_hz`,
+    /// millimetres), if a swing is found: what the contacts need (its address, impact and lead
+    /// side), and its timing as it was made.
+    pub(super) fn events_of(
+        &self,
+        student: &Skeleton,
+        rate_hz: u16,
+        out: &[Mm],
+    ) -> Option<SwingEvents> {
         let frames = Frames::millimetres(out, student.len());
-        events::detect(student, frames, self.rate_at(rate_hz))
-            .ok()
-            .map(|s| Swing::from(&s))
+        events::detect(student, frames, self.rate_at(rate_hz)).ok()
     }
 
     /// The coach at `rate_hz` retargeted onto `student` frame by frame with the analytic

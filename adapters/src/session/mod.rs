@@ -51,8 +51,9 @@ use core::ops::Range;
 use posecoach_core::band::Band;
 use posecoach_core::body::Stance;
 use posecoach_core::config::MAX_SWING_FRAMES;
+use posecoach_core::contacts::Swing as Contact;
 use posecoach_core::detector::{DetectorConfig, SwingDetector, SwingWindow};
-use posecoach_core::events::{self, EventError, Side, SwingEvents, STILL_S};
+use posecoach_core::events::{self, Event, EventError, Side, SwingEvents, STILL_S};
 use posecoach_core::format::Format;
 use posecoach_core::frames::{Frames, Mm};
 use posecoach_core::math::norm;
@@ -111,6 +112,8 @@ struct Student<'b> {
     coach_swing: Range<usize>,
     /// The events of the virtual coach's swing, found once.
     coach_events: SwingEvents,
+    /// How far the IMUs' view moves events ([`make_virtual`]): a student's are moved back.
+    lag: Lag,
     /// The coach reference the virtual coach was made from.
     coach: u16,
     /// Each of the first [`MAX_COACHES`] coaches' set-ups on the student's skeleton, while no
@@ -436,7 +439,7 @@ impl<'b> Session<'b> {
                             imu.as_ref(),
                             self.virtual_coach,
                         );
-                        *setup = made.ok().and_then(|(swing, events)| {
+                        *setup = made.ok().and_then(|(swing, events, _)| {
                             let address = swing.start + events.address();
                             let out = &self.virtual_coach[..swing.end * joints];
                             let out = Frames::millimetres(out, joints);
@@ -445,7 +448,7 @@ impl<'b> Session<'b> {
                     }
                 }
                 let network = network.map(|w| (w, &mut *ring));
-                let (swing, events) = make_virtual(
+                let (swing, events, lag) = make_virtual(
                     coach,
                     &skeleton,
                     rate,
@@ -454,9 +457,9 @@ impl<'b> Session<'b> {
                     self.virtual_coach,
                 )?;
                 let stream = PoseStream::new(StreamConfig::new(rate)).map_err(Refusal::Stream)?;
-                Ok((stream, swing, events, imu))
+                Ok((stream, swing, events, lag, imu))
             });
-        let (stream, coach_swing, coach_events, imu) = match checked {
+        let (stream, coach_swing, coach_events, lag, imu) = match checked {
             Ok(done) => done,
             Err(e) => {
                 self.spare = ring;
@@ -474,6 +477,7 @@ impl<'b> Session<'b> {
             t0_us: None,
             coach_swing,
             coach_events,
+            lag,
             coach: first,
             setups,
             imu,
@@ -620,6 +624,7 @@ impl<'b> Session<'b> {
             detector,
             coach_swing,
             coach_events,
+            lag,
             coach: made,
             setups,
             imu,
@@ -658,16 +663,16 @@ impl<'b> Session<'b> {
                     // It cannot fail: the same coach was made onto the same skeleton, at the same
                     // rate and through the same IMU layout, when its set-up was measured.
                     let rate = config.model_rate_hz;
-                    if let Ok((swing, events)) =
+                    if let Ok((swing, events, l)) =
                         make_virtual(coach, skeleton, rate, None, imu.as_ref(), virtual_coach)
                     {
-                        (*coach_swing, *coach_events, *made) = (swing, events, c);
+                        (*coach_swing, *coach_events, *lag, *made) = (swing, events, l, c);
                     }
                 }
             }
             let coach = *made;
             let (span, events) = match found {
-                Ok(found) => found,
+                Ok((span, events)) => (span, lagged(&events, lag, rate)),
                 Err(error) => {
                     let swing = Swing {
                         number: *swings,
@@ -802,8 +807,12 @@ fn valid(config: &Config) -> bool {
 /// Makes the virtual coach of `coach` on `skeleton` at the model rate `rate` into the front of
 /// `out`, in millimetres: with the int8 network (its scratch the ring) where given, else the
 /// analytic retargeter, then moved onto the coach's golf contacts; as the student's IMUs would
-/// see it in a session with them. Returns its swing and events, as [`swing_span`]. (Kept out of
-/// line: three callers, one copy in flash.)
+/// see it in a session with them. Returns its swing and events, as [`swing_span`], and the
+/// [`Lag`] of its IMUs' view (kept out of line: three callers, one copy in flash). The IMUs'
+/// view holds the root still and moves unsensed bones with their parents, which moves where
+/// the events are found (on the bundled swings the takeaway 11 to 13 ms late, the top 5 ms
+/// early, impact 5 to 10 ms late): the coach's takeaway, top and impact are put back where the
+/// coach made them, and a student seen the same way is moved by as much.
 #[inline(never)]
 fn make_virtual(
     coach: &Coach<'_>,
@@ -812,7 +821,7 @@ fn make_virtual(
     network: Option<(&Weights<'_>, &mut [Mm])>,
     imu: Option<&ImuAdapter>,
     out: &mut [Mm],
-) -> Result<(Range<usize>, SwingEvents), Refusal> {
+) -> Result<(Range<usize>, SwingEvents, Lag), Refusal> {
     let joints = skeleton.len();
     let out = out
         .get_mut(..coach.frames_at(rate) * joints)
@@ -823,14 +832,42 @@ fn make_virtual(
         _ => coach.retarget_analytic(skeleton, rate, out)?,
     }
     // Found before the contacts are kept, so that their frame is not under the finding's.
-    let swing = coach.swing_of(skeleton, rate, out);
-    coach.keep_contacts(skeleton, rate, swing, imu, out)?;
-    swing_span(
-        skeleton,
-        Frames::millimetres(out, joints),
-        coach.rate_at(rate),
-    )
-    .map_err(Refusal::CoachSwing)
+    let made = coach.events_of(skeleton, rate, out);
+    coach.keep_contacts(skeleton, rate, made.as_ref().map(Contact::from), imu, out)?;
+    let hz = coach.rate_at(rate);
+    let (span, seen) =
+        swing_span(skeleton, Frames::millimetres(out, joints), hz).map_err(Refusal::CoachSwing)?;
+    let lag = match (imu, made) {
+        (Some(_), Some(made)) => LAGGED.map(|e| {
+            let by = made
+                .time(e)
+                .zip(seen.time(e))
+                .map_or(0.0, |(m, s)| m - span.start as f32 - s);
+            // More than a tenth of a second is two different findings, not a lag.
+            if (by / hz).abs() < MAX_LAG_S {
+                by / hz
+            } else {
+                0.0
+            }
+        }),
+        _ => [0.0; 3],
+    };
+    Ok((span, lagged(&seen, &lag, hz), lag))
+}
+
+/// The events an IMU view moves, and by how much each ([`make_virtual`]), seconds.
+type Lag = [f32; 3];
+/// The events of [`Lag`], in its order.
+const LAGGED: [Event; 3] = [Event::Address, Event::Top, Event::Impact];
+/// A view's lag beyond this is not taken, seconds.
+const MAX_LAG_S: f32 = 0.1;
+
+/// `events` (of a swing at `hz`) with each of [`LAGGED`] moved by its `lag`.
+fn lagged(events: &SwingEvents, lag: &Lag, hz: f32) -> SwingEvents {
+    LAGGED
+        .iter()
+        .zip(lag)
+        .fold(*events, |e, (&at, &by)| e.moved(at, by * hz))
 }
 
 /// The set-up of the swing in `positions` (at `rate_hz`) whose takeaway is at frame

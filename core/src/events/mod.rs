@@ -354,6 +354,32 @@ impl SwingEvents {
         events
     }
 
+    /// These events with `at` moved by `by` frames (a time read through a biased view
+    /// corrected), kept within the positions on either side of it; the hands' arrival at the
+    /// top moves with the top.
+    pub fn moved(&self, at: impl Into<Position>, by: f32) -> SwingEvents {
+        let at = at.into() as usize;
+        let mut events = *self;
+        if events.frames[at] == ABSENT || !by.is_finite() {
+            return events;
+        }
+        let present = |p: &usize| events.frames[*p] != ABSENT;
+        let before = (0..at).rev().find(present).map_or(0.0, |p| events.times[p]);
+        let after = (at + 1..events.times.len())
+            .find(present)
+            .map_or(f32::MAX, |p| events.times[p]);
+        let time = (events.times[at] + by).clamp(before, after);
+        let moved = time - events.times[at];
+        if at == Position::P4 as usize {
+            events.arrival = (events.arrival + moved).min(time);
+        }
+        events.times[at] = time;
+        // The frame moves as far (rounded): a position's frame is not always its time's floor.
+        let frame = libm::roundf(f32::from(events.frames[at]) + moved);
+        events.frames[at] = frame.clamp(0.0, f32::from(ABSENT - 1)) as u16;
+        events
+    }
+
     /// These events counted from frame `start` instead of 0: the events of the stretch that
     /// begins there (`start` at most the address; a later one clamps events before it to 0).
     pub fn from_frame(&self, start: usize) -> SwingEvents {
@@ -646,6 +672,29 @@ mod tests {
     /// Events at `frames`, each a quarter frame later.
     fn at(frames: [usize; 8]) -> [Moment; 8] {
         frames.map(|f| Moment::new(f, f as f32 + 0.25))
+    }
+
+    #[test]
+    fn a_moved_event_keeps_its_frame_in_step_and_stays_between_its_neighbours() {
+        let eight = at([10, 20, 30, 40, 50, 60, 70, 80]);
+        let events = SwingEvents::full(Side::Left, false, eight, 38.5, [None, None]).unwrap();
+        // Impact 0.4 frame earlier: its time moves, its frame rounds with it.
+        let moved = events.moved(Event::Impact, -0.4);
+        assert_eq!(moved.time(Event::Impact), Some(59.85));
+        assert_eq!(moved.frame(Event::Impact), Some(60));
+        assert_eq!(
+            moved.moved(Event::Impact, -0.6).frame(Event::Impact),
+            Some(59)
+        );
+        // Never past the positions either side; nothing moves by nothing.
+        assert_eq!(
+            events.moved(Event::Impact, -30.0).time(Event::Impact),
+            Some(50.25)
+        );
+        assert_eq!(events.moved(Event::Impact, 0.0), events);
+        // The top carries the hands' arrival with it.
+        let top = events.moved(Event::Top, 0.5);
+        assert_eq!((top.time(Event::Top), top.arrival()), (Some(40.75), 39.0));
     }
 
     #[test]
