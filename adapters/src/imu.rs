@@ -687,8 +687,8 @@ fn heading_fit(rotations: impl Iterator<Item = Quat>) -> Quat {
         yy += q.j * q.j;
         wy += q.w * q.j;
     }
-    let half = 0.5 * libm::atan2f(2.0 * wy, ww - yy);
-    Quat::from_axis_angle(&Vec3::y_axis(), 2.0 * half)
+    let (sin, cos) = math::sin_cos(0.5 * libm::atan2f(2.0 * wy, ww - yy));
+    Quat::new_unchecked(nalgebra::Quaternion::new(cos, 0.0, sin, 0.0))
 }
 
 /// The turn of `q` about +Y: its twist about the vertical, which for a segment bent or leaned

@@ -52,7 +52,7 @@ use posecoach_core::math::norm;
 use posecoach_core::plausible;
 use posecoach_core::resample;
 use posecoach_core::wire::{PoseFrame, MAX_WIRE_JOINTS};
-use posecoach_core::Vec3;
+use posecoach_core::{Quat, Vec3};
 
 /// A gap between frames longer than this breaks the stream, seconds.
 pub const MAX_GAP_S: f32 = 0.25;
@@ -431,11 +431,10 @@ impl PoseStream {
             // Turned as the parent's own bone turned since the last frame.
             let turn = parent(p)
                 .filter(|&g| g < p)
-                .and_then(|g| {
+                .map_or_else(Quat::identity, |g| {
                     let (was, is) = (self.previous[p] - self.previous[g], current[p] - current[g]);
-                    nalgebra::UnitQuaternion::rotation_between(&was, &is)
-                })
-                .unwrap_or_else(nalgebra::UnitQuaternion::identity);
+                    posecoach_core::kinematics::swing(was, is)
+                });
             current[k] = current[p] + turn * offset;
             // An unsure keypoint the estimator still placed at about its bone's length from the
             // parent is the better guess.
@@ -594,7 +593,7 @@ impl PoseStream {
         let around = sum_last / n as f32;
         let dt = t_us.saturating_sub(last.t_us) as f32 * 1e-6;
         let angle = self.spin.unwrap_or(0.0) * dt;
-        let (sin, cos) = libm::sincosf(angle);
+        let (sin, cos) = posecoach_core::math::sin_cos(angle);
         let turned = |q: &Vec3| {
             let d = q - around;
             Vec3::new(

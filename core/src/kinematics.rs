@@ -182,7 +182,7 @@ fn fit(
         return swung;
     }
     let half = 0.5 * libm::atan2f(sin, cos);
-    let (s, c) = libm::sincosf(half);
+    let (s, c) = crate::math::sin_cos(half);
     let twist = Quat::new_unchecked(Quaternion::new(c, axis.x * s, axis.y * s, axis.z * s));
     twist * swung
 }
