@@ -857,7 +857,7 @@ fn axes(lateral: Vec3, long: Vec3) -> [Vec3; 3] {
 fn angles([l, u, f]: [Vec3; 3]) -> Angles {
     Angles {
         turn: turn([l, u, f]),
-        bend: degrees(libm::atan2f(-f.z, libm::hypotf(f.x, f.y))),
+        bend: degrees(libm::atan2f(-f.z, crate::math::hypot(f.x, f.y))),
         side_bend: degrees(libm::atan2f(l.z, u.z)),
     }
 }

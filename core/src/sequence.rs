@@ -461,7 +461,7 @@ pub fn gaps(
             then,
             student_s: b - a,
             coach_s: cb - ca,
-            uncertainty_s: libm::hypotf(sa, sb),
+            uncertainty_s: crate::math::hypot(sa, sb),
         });
     }
     out

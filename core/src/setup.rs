@@ -61,7 +61,7 @@ impl Setup {
             let at = |k: usize| frames.at(f, k);
             let apart = at(feet[0]) - at(feet[1]);
             let hands = stance.local((at(wrists[0]) + at(wrists[1])) * 0.5);
-            sum[0] += libm::hypotf(apart.x, apart.z);
+            sum[0] += crate::math::hypot(apart.x, apart.z);
             sum[1] += hands.y;
             sum[2] += head.map_or(0.0, |k| stance.local(at(k)).y);
             count += 1.0;

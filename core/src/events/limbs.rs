@@ -92,7 +92,7 @@ impl Arms<'_> {
 
 /// Elevation of `v` above the horizontal plane, degrees.
 pub(super) fn elevation(v: Vec3) -> f32 {
-    libm::atan2f(v.y, libm::hypotf(v.x, v.z)).to_degrees()
+    libm::atan2f(v.y, crate::math::hypot(v.x, v.z)).to_degrees()
 }
 
 #[cfg(test)]

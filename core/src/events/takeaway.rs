@@ -44,7 +44,7 @@ pub(super) fn onset(
     // weighted by p^(4/3), the inverse of that variance.
     let (mut sw, mut st, mut sy, mut stt, mut sty) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
     for t in first..=last {
-        let (x, y) = ((t - first) as f32, libm::cbrtf(progress(t).max(0.0)));
+        let (x, y) = ((t - first) as f32, crate::math::cbrt(progress(t).max(0.0)));
         let w = y * y * y * y;
         sw += w;
         st += w * x;

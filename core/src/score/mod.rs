@@ -277,7 +277,7 @@ pub fn facing(
     let (from, to) = (stance.toward_target(), toward_target);
     // The angle about +Y taking `from` to `to` (both horizontal).
     let (sin, cos) = (from.cross(&to).y, from.x * to.x + from.z * to.z);
-    let norm = libm::hypotf(sin, cos);
+    let norm = crate::math::hypot(sin, cos);
     // Already facing that way (to a micro-radian), or no line to turn: leave it bit for bit.
     if norm.is_nan() || norm <= 0.0 || (cos > 0.0 && libm::fabsf(sin) <= 1e-6 * norm) {
         return None;

@@ -208,12 +208,12 @@ fn at_event(
             - pair.stance_c.local(pair.coach_at(k, c - h, half_c)))
             * 0.5;
         if let Some(sink) = sink.as_deref_mut() {
-            let per_axis = sigma.zip_map(&along, libm::hypotf);
+            let per_axis = sigma.zip_map(&along, crate::math::hypot);
             sink.offset((event, k, joint), o, per_axis);
         }
         let uncertainty_m = match o.try_normalize(f32::MIN_POSITIVE) {
-            Some(u) => libm::hypotf(norm(&sigma.component_mul(&u)), along.dot(&u)),
-            None => libm::hypotf(norm(sigma), norm(&along)) / crate::math::sqrt(3.0),
+            Some(u) => crate::math::hypot(norm(&sigma.component_mul(&u)), along.dot(&u)),
+            None => crate::math::hypot(norm(sigma), norm(&along)) / crate::math::sqrt(3.0),
         };
         let threshold = SPATIAL_THRESHOLD_M.max(NOISE_FACTOR * uncertainty_m);
         event_excess = event_excess.max(excess(distance_m, threshold, SPATIAL_SOFTNESS_M));

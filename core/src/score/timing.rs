@@ -76,8 +76,11 @@ pub(super) fn timing(
             true => arrival,
             false => event[Event::Top as usize],
         };
-        event[a] = libm::hypotf(libm::hypotf(event[a], t.top_gain * arrival), t.spread / hz)
-            .clamp(EVENT_TIMING_S, MAX_EVENT_TIMING_S);
+        event[a] = crate::math::hypot(
+            crate::math::hypot(event[a], t.top_gain * arrival),
+            t.spread / hz,
+        )
+        .clamp(EVENT_TIMING_S, MAX_EVENT_TIMING_S);
     }
     Timing {
         event,

@@ -443,7 +443,7 @@ impl<'a> Tendencies<'a> {
                 let residual = Estimate {
                     n: e.n.min(eg.n),
                     value: e.value - p,
-                    uncertainty: libm::hypotf(e.uncertainty, rate * eg.uncertainty),
+                    uncertainty: crate::math::hypot(e.uncertainty, rate * eg.uncertainty),
                     ..e
                 };
                 !residual.clears(q.tolerance())
