@@ -4,7 +4,6 @@
 #![cfg(test)]
 
 use crate::Vec3;
-use std::vec::Vec;
 
 /// The frame rate of every synthetic motion.
 pub(super) const RATE_HZ: f32 = 30.0;
