@@ -303,8 +303,8 @@ impl Mahony {
         let inverse = self.q.inverse();
         let up = inverse * Vec3::y();
         let mut error = Vec3::zeros();
-        let norm = math::norm(&accel);
-        if (norm / G - 1.0).abs() <= ACCEL_GATE && math::norm(&gyro) <= TURN_GATE {
+        let (norm, rate) = (math::norm(&accel), math::norm(&gyro));
+        if (norm / G - 1.0).abs() <= ACCEL_GATE && rate <= TURN_GATE {
             error += (accel / norm).cross(&up);
         }
         if let Some(m) = mag.filter(|m| self.magnetic && m.norm_squared() > 0.0) {
@@ -318,7 +318,7 @@ impl Mahony {
         // (an arm swinging through a turn) is in part the motion's, and the integral, a vector
         // in the sensor's frame, carries it into whatever axis the sensor later turns toward,
         // the vertical too, where nothing without a magnetometer corrects it.
-        if math::norm(&gyro) < STILL_GYRO && (norm / G - 1.0).abs() < STILL_ACCEL {
+        if rate < STILL_GYRO && (norm / G - 1.0).abs() < STILL_ACCEL {
             self.integral += error * (self.gains.ki * dt);
         }
         let bias_norm = math::norm(&self.integral);

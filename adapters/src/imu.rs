@@ -494,12 +494,12 @@ impl ImuAdapter {
         let gyro = reading.gyro - track.bias;
         if let Some(dt) = dt {
             track.filter.update(gyro, reading.accel, reading.mag, dt);
+            let rate = math::norm(&gyro);
             if track.activity {
-                self.activity = self.activity.max(math::norm(&gyro));
+                self.activity = self.activity.max(rate);
             }
             if usize::from(self.trunk) == t {
-                self.quiet_since =
-                    (math::norm(&gyro) < QUIET_RAD_S).then(|| self.quiet_since.unwrap_or(t_us));
+                self.quiet_since = (rate < QUIET_RAD_S).then(|| self.quiet_since.unwrap_or(t_us));
                 if self
                     .quiet_since
                     .is_some_and(|s| t_us.saturating_sub(s) >= QUIET_US)
