@@ -20,13 +20,18 @@
 //! **Tracking.** Every sample updates its sensor's filter. Outputs lie on a fixed grid at the
 //! adapter's rate, starting one period after calibration; each sensor's orientation is
 //! interpolated to a grid time when a sample passes it, and once every sensor has passed it
-//! one frame of positions goes out. A sensed bone's global rotation comes from its sensor;
-//! unsensed thighs, shins and feet stand vertical and planted, facing where the trunk last
-//! faced while still (the heading of the lowest trunk sensor's segment, pelvis, spine or thorax,
-//! once it has turned under [`QUIET_RAD_S`] for [`QUIET_S`]: the golfer's set-up, wherever the
-//! T-pose faced; a pelvis reversing at the top passes under that rate for a few hundredths of a
-//! second only); every other unsensed bone follows its parent (the hip bones move with the
-//! pelvis). The root stays at
+//! one frame of positions goes out. A sensed bone's global rotation comes from its sensor
+//! (what a sensor measures, and how unsensed trunk bones share the turn between two sensed
+//! ones: [`crate::segment`]); other unsensed bones follow their parent (the hip bones move
+//! with the pelvis, the shoulders with the chest). Unsensed legs stand planted: each foot flat
+//! where the T-pose turned to the stance has it, the thigh and shin leaning as one to reach it
+//! from the moving hip. The stance is where the trunk last faced while still: halfway between
+//! the headings of its sensors' segments (pelvis, spine, thorax), where a golfer set up square
+//! faces with the hips and shoulders turned about as far either way, taken once the lowest
+//! has turned under [`QUIET_RAD_S`] for [`QUIET_S`] with the sensed arms hanging (the golfer's
+//! set-up, wherever the T-pose faced; a pelvis reversing at the top passes under that rate for
+//! a few hundredths of a second, and at a pause there, at a held finish or in the T-pose the
+//! forearms do not hang: [`HANGING`]). The root stays at
 //! the skeleton's rest position. With each frame goes the activity for swing detection: the
 //! largest bias-free gyro rate (rad/s) of the wrist, hand and club sensors (of all sensors if
 //! there are none of those) since the previous frame.
@@ -61,9 +66,10 @@
 //! ```
 
 use crate::fusion::{self, FusionError, Gains, Mahony, Reading, StillPeriod};
+use crate::segment::Segments;
 use posecoach_core::config::MAX_JOINTS;
 use posecoach_core::joint::Joint;
-use posecoach_core::kinematics::{forward, inverse};
+use posecoach_core::kinematics::{forward, swing};
 use posecoach_core::math;
 use posecoach_core::skeleton::{Segment, Skeleton};
 use posecoach_core::wire::{SensorLayout, MAX_SENSORS};
@@ -85,6 +91,20 @@ pub const QUIET_RAD_S: f32 = 0.35;
 /// seconds: a golfer holds the set-up longer; a turning pelvis reverses (at the top) in far less.
 pub const QUIET_S: f32 = 0.2;
 const QUIET_US: u64 = 200_000;
+/// How far below the horizontal a sensed arm bone (upper arm, forearm, hand) points at least
+/// while the legs take the trunk's heading: the sine of 30°. At address the arms hang; at the
+/// top of a swing, at its finish and in the T-pose the forearms point up or sideways, and
+/// there a quiet trunk says nothing of where the feet stand.
+pub const HANGING: f32 = 0.5;
+/// Joints whose bones [`HANGING`] is about.
+const ARM_JOINTS: [Joint; 6] = [
+    Joint::LeftElbow,
+    Joint::RightElbow,
+    Joint::LeftWrist,
+    Joint::RightWrist,
+    Joint::LeftHand,
+    Joint::RightHand,
+];
 /// Joints whose sensor, the first the layout places, sets the legs' heading.
 const TRUNK_JOINTS: [Joint; 3] = [Joint::Pelvis, Joint::Spine, Joint::Thorax];
 /// Joints whose sensors give the activity.
@@ -199,8 +219,10 @@ pub struct ImuAdapter {
     len: u8,
     /// Track of each joint's sensor, [`NO_SENSOR`] where none.
     sensed: [u8; MAX_JOINTS],
-    /// Joints whose bones stand as in the T-pose, turned to `stance` (bit `i` = joint `i`).
-    planted: u64,
+    /// The legs, planted where the T-pose turned to `stance` stands.
+    legs: [Option<Leg>; 2],
+    /// What the sensors measure and how the unsensed bones between them turn.
+    segments: Segments,
     /// Track of the trunk sensor that sets `stance`, [`NO_SENSOR`] where none.
     trunk: u8,
     /// The planted bones' global rotation: the trunk's heading when it was last quiet.
@@ -284,11 +306,11 @@ impl ImuAdapter {
         for track in &mut tracks[..len] {
             track.activity = !any_activity || ACTIVITY_JOINTS.contains(&track.joint);
         }
-        let legs =
-            skeleton.segment_mask(Segment::LeftLeg) | skeleton.segment_mask(Segment::RightLeg);
-        let planted = (1..skeleton.len())
-            .filter(|&k| legs & (1 << k) != 0 && skeleton.parent(k) != Some(0))
-            .fold(0u64, |mask, k| mask | 1 << k);
+        let legs = [
+            Leg::new(skeleton, Segment::LeftLeg, Joint::LeftAnkle),
+            Leg::new(skeleton, Segment::RightLeg, Joint::RightAnkle),
+        ];
+        let segments = Segments::new(skeleton, |k| sensed[k] != NO_SENSOR);
         let trunk = TRUNK_JOINTS
             .iter()
             .find_map(|&j| tracks[..len].iter().position(|t| t.joint == j))
@@ -297,7 +319,8 @@ impl ImuAdapter {
             tracks,
             len: len as u8,
             sensed,
-            planted,
+            legs,
+            segments,
             trunk,
             stance: Quat::identity(),
             quiet_since: None,
@@ -500,12 +523,6 @@ impl ImuAdapter {
             }
             if usize::from(self.trunk) == t {
                 self.quiet_since = (rate < QUIET_RAD_S).then(|| self.quiet_since.unwrap_or(t_us));
-                if self
-                    .quiet_since
-                    .is_some_and(|s| t_us.saturating_sub(s) >= QUIET_US)
-                {
-                    self.stance = heading(track.left * track.filter.orientation() * track.right);
-                }
             }
         }
         let Some(due) = due.filter(|&due| t_us >= due) else {
@@ -580,7 +597,24 @@ impl ImuAdapter {
             let q = track.snapshot.unwrap_or_else(|| track.filter.orientation());
             Some(track.left * q * track.right)
         };
-        if self.compose(skeleton, sensed, self.stance, &mut positions[..n]) {
+        let quiet = self
+            .quiet_since
+            .zip(self.due)
+            .is_some_and(|(since, due)| due.saturating_sub(since) >= QUIET_US);
+        let hanging = || {
+            self.tracks()
+                .iter()
+                .filter(|t| ARM_JOINTS.contains(&t.joint))
+                .all(|t| {
+                    let k = usize::from(t.index);
+                    let bone = sensed(k).unwrap_or(Quat::identity()) * skeleton.offset(k);
+                    bone.y < -HANGING * math::norm(&bone)
+                })
+        };
+        if quiet && hanging() {
+            self.stance = self.trunk_heading(|k| sensed(k).unwrap_or(Quat::identity()));
+        }
+        if self.compose(skeleton, &sensed, self.stance, &mut positions[..n]) {
             emit(&positions[..n], self.activity);
         }
         self.activity = 0.0;
@@ -613,7 +647,7 @@ impl ImuAdapter {
                 .get(usize::from(self.sensed[k]))
                 .map(|_| global[k])
         };
-        self.compose(skeleton, sensed, stance, &mut out[..n])
+        self.compose(skeleton, &sensed, stance, &mut out[..n])
             .then_some(())
             .ok_or(ImuError::SkeletonMismatch)
     }
@@ -626,10 +660,22 @@ impl ImuAdapter {
     pub fn stance_of(&self, skeleton: &Skeleton, frame: &[Vec3]) -> Result<Quat, ImuError> {
         let mut global = [Quat::identity(); MAX_JOINTS];
         self.global(skeleton, frame, &mut global)?;
-        Ok(self
-            .tracks
-            .get(usize::from(self.trunk))
-            .map_or(Quat::identity(), |t| heading(global[usize::from(t.index)])))
+        Ok(self.trunk_heading(|k| global[k]))
+    }
+
+    /// The heading halfway between those of the trunk sensors' segments (`rotation(joint)`
+    /// each; the identity without one): where a golfer set up square faces, the hips and the
+    /// shoulders turned about as far from the feet either way.
+    fn trunk_heading(&self, rotation: impl Fn(usize) -> Quat) -> Quat {
+        if self.trunk == NO_SENSOR {
+            return Quat::identity();
+        }
+        heading_fit(
+            self.tracks()
+                .iter()
+                .filter(|t| TRUNK_JOINTS.contains(&t.joint))
+                .map(|t| heading(rotation(usize::from(t.index)))),
+        )
     }
 
     /// The global rotations of `frame`'s bones into `out`; the skeleton's joints.
@@ -643,12 +689,9 @@ impl ImuAdapter {
         if n != usize::from(self.joints) {
             return Err(ImuError::SkeletonMismatch);
         }
-        let mut local = [Quat::identity(); MAX_JOINTS];
-        inverse(skeleton, frame, &mut local[..n]).map_err(|_| ImuError::SkeletonMismatch)?;
-        for k in 0..n {
-            let parent = skeleton.parent(k).map_or(Quat::identity(), |p| out[p]);
-            out[k] = parent * local[k];
-        }
+        self.segments
+            .rotations(skeleton, frame, out)
+            .map_err(|_| ImuError::SkeletonMismatch)?;
         Ok(n)
     }
 
@@ -658,7 +701,7 @@ impl ImuAdapter {
     fn compose(
         &self,
         skeleton: &Skeleton,
-        sensed: impl Fn(usize) -> Option<Quat>,
+        sensed: &dyn Fn(usize) -> Option<Quat>,
         stance: Quat,
         out: &mut [Vec3],
     ) -> bool {
@@ -667,14 +710,77 @@ impl ImuAdapter {
         let mut local = [Quat::identity(); MAX_JOINTS];
         for k in 0..n {
             let parent = skeleton.parent(k).map_or(Quat::identity(), |p| global[p]);
-            global[k] = match sensed(k) {
-                Some(q) => q,
-                None if self.planted & (1 << k) != 0 => stance,
-                None => parent,
-            };
+            global[k] =
+                sensed(k).unwrap_or_else(|| self.segments.unsensed(skeleton, k, parent, sensed));
+        }
+        for leg in self.legs.iter().flatten() {
+            let lean = leg.lean(skeleton, self.root, global[usize::from(leg.hip)], stance);
+            for k in (0..n).filter(|&k| leg.joints & (1 << k) != 0 && sensed(k).is_none()) {
+                global[k] = if leg.leaning & (1 << k) != 0 {
+                    lean
+                } else {
+                    stance
+                };
+            }
+        }
+        for k in 0..n {
+            let parent = skeleton.parent(k).map_or(Quat::identity(), |p| global[p]);
             local[k] = parent.inverse() * global[k];
         }
         forward(skeleton, &local[..n], self.root, out).is_ok()
+    }
+}
+
+/// An unsensed leg: the hip it hangs from (a child of the root), the joint it stands on, and
+/// its joints below the hip: those down to the foot lean as one to reach the ground, and the
+/// foot's own stay flat (bit `i` for joint `i`).
+#[derive(Clone, Copy, Debug)]
+struct Leg {
+    hip: u8,
+    joints: u64,
+    leaning: u64,
+    /// From the hip to the foot in the T-pose.
+    reach: Vec3,
+}
+
+impl Leg {
+    /// `segment`'s leg on `skeleton`, standing on `ankle` (on its lowest joint without one);
+    /// `None` for a skeleton without that leg below its hip.
+    fn new(skeleton: &Skeleton, segment: Segment, ankle: Joint) -> Option<Leg> {
+        let n = skeleton.len();
+        let held = (1..n).filter(|&k| skeleton.segment_contains(segment, k));
+        let hip = held.clone().find(|&k| skeleton.parent(k) == Some(0))?;
+        let joints = held
+            .clone()
+            .filter(|&k| k != hip)
+            .fold(0u64, |mask, k| mask | 1 << k);
+        let foot = skeleton
+            .index_of(ankle)
+            .filter(|&k| joints & (1 << k) != 0)
+            .or_else(|| held.clone().rfind(|&k| k != hip))?;
+        let (mut leaning, mut reach) = (0u64, Vec3::zeros());
+        let mut j = foot;
+        while j != hip {
+            leaning |= 1 << j;
+            reach += skeleton.offset(j);
+            j = skeleton.parent(j)?;
+        }
+        Some(Leg {
+            hip: hip as u8,
+            joints,
+            leaning,
+            reach,
+        })
+    }
+
+    /// The rotation of the leg's leaning bones when its hip bone turns by `hip` about the root
+    /// at `root`: as in the T-pose turned to `stance`, then swung so the foot stands where the
+    /// T-pose turned to `stance` has it, whatever the pelvis does (the foot reaches it to
+    /// within the leg's lengthening on the lean).
+    fn lean(&self, skeleton: &Skeleton, root: Vec3, hip: Quat, stance: Quat) -> Quat {
+        let offset = skeleton.offset(usize::from(self.hip));
+        let planted = root + stance * (offset + self.reach);
+        swing(stance * self.reach, planted - (root + hip * offset)) * stance
     }
 }
 
@@ -703,7 +809,7 @@ fn heading(q: Quat) -> Quat {
 }
 
 /// The rotation a fraction `f` of the way from `a` to `b` (shortest arc).
-fn interpolate(a: Quat, b: Quat, f: f32) -> Quat {
+pub(crate) fn interpolate(a: Quat, b: Quat, f: f32) -> Quat {
     a * math::turn((a.inverse() * b).scaled_axis() * f.clamp(0.0, 1.0))
 }
 
@@ -809,6 +915,28 @@ mod tests {
         assert_eq!(frames, 24);
     }
 
+    /// A golfer set up with the hips 10° open and the shoulders 10° closed stands square: the
+    /// legs face halfway between the trunk sensors, or where the only one faces.
+    #[test]
+    fn the_stance_faces_halfway_between_the_hips_and_the_shoulders() {
+        let s = skeleton();
+        let mut rest = [Vec3::zeros(); MAX_JOINTS];
+        s.rest_positions(&mut rest);
+        let turn = |deg: f32| Quat::from_axis_angle(&Vec3::y_axis(), deg.to_radians());
+        let spine = s.index_of(Joint::Spine).unwrap();
+        let upper =
+            |k: usize| core::iter::successors(Some(k), |&j| s.parent(j)).any(|j| j == spine);
+        let frame: Vec<Vec3> = (0..s.len())
+            .map(|k| rest[0] + turn(if upper(k) { -10.0 } else { 10.0 }) * (rest[k] - rest[0]))
+            .collect();
+        let degrees = |q: Quat| q.scaled_axis().y.to_degrees();
+        let both = layout(&[(0, Joint::Pelvis), (1, Joint::Thorax)]);
+        let adapter = ImuAdapter::new(&both, &s, 60.0).unwrap();
+        assert!(degrees(adapter.stance_of(&s, &frame).unwrap()).abs() < 0.01);
+        let hips = ImuAdapter::new(&layout(&[(0, Joint::Pelvis)]), &s, 60.0).unwrap();
+        assert!((degrees(hips.stance_of(&s, &frame).unwrap()) - 10.0).abs() < 0.01);
+    }
+
     /// An adapter for the pelvis and wrist, tracking after a still second of samples 0..250.
     fn tracking() -> ImuAdapter {
         let s = skeleton();
@@ -822,40 +950,126 @@ mod tests {
         adapter
     }
 
-    /// The golfer turns 90° about the vertical from the T-pose (the pelvis sensor at 90 °/s
-    /// for a second, halting for 50 ms halfway as a pelvis reversing at the top would) and
-    /// stands still: while the pelvis turns the feet stay as they stood, and once it has been
-    /// quiet for [`QUIET_S`] they point where it faces.
-    #[test]
-    fn the_feet_face_where_the_trunk_last_faced_while_still() {
+    /// Sample `k` of the pelvis (sensor 3) turning about the vertical at 90 °/s over `turning`
+    /// but for `halted`, and of the left forearm (sensor 7) lowered from the T-pose to hang
+    /// straight down at 90 °/s over `lowering`; still otherwise, each accelerometer reading
+    /// gravity as its sensor is turned.
+    fn turn_and_lower(
+        sensor: u8,
+        k: u64,
+        turning: core::ops::Range<u64>,
+        halted: core::ops::Range<u64>,
+        lowering: core::ops::Range<u64>,
+    ) -> ImuSample {
+        let mut sample = still(sensor, k);
+        if sensor == 3 && turning.contains(&k) && !halted.contains(&k) {
+            sample.gyro_ddps = [0, 900, 0];
+        }
+        if sensor == 7 {
+            let done = k.clamp(lowering.start, lowering.end) - lowering.start;
+            let angle = -core::f32::consts::FRAC_PI_2 * done as f32 / 200.0;
+            let (sin, cos) = libm::sincosf(angle);
+            sample.accel_mg = [(1000.0 * sin) as i16, (1000.0 * cos) as i16, 0];
+            if lowering.contains(&k) {
+                sample.gyro_ddps = [0, 0, -900];
+            }
+        }
+        sample
+    }
+
+    /// The left toe's offset from the ankle in every frame of `samples` (`turn_and_lower`'s
+    /// sample `k` of a sensor) fed from sample 0 up to `end`, after a still T-pose, with `k`.
+    fn feet(samples: impl Fn(u8, u64) -> ImuSample, end: u64) -> Vec<(u64, Vec3)> {
         let s = Skeleton::standard(Format::Canonical).unwrap();
         let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 60.0).unwrap();
         let at = |j: Joint| s.index_of(j).unwrap();
         let (ankle, toe) = (at(Joint::LeftAnkle), at(Joint::LeftToe));
-        let mut rest = [Vec3::zeros(); MAX_JOINTS];
-        s.rest_positions(&mut rest);
         let mut feet = Vec::new();
-        for k in 0..610u64 {
-            let turning = (250..460).contains(&k);
-            let halted = (350..360).contains(&k);
+        for k in 0..end {
             for sensor in [3, 7] {
-                let mut sample = still(sensor, k);
-                if turning && !halted && sensor == 3 {
-                    sample.gyro_ddps = [0, 900, 0];
-                }
                 adapter
-                    .push(&s, &sample, |p, _| feet.push((turning, p[toe] - p[ankle])))
+                    .push(&s, &samples(sensor, k), |p, _| {
+                        feet.push((k, p[toe] - p[ankle]))
+                    })
                     .unwrap();
             }
         }
-        let foot = rest[toe] - rest[ankle];
+        feet
+    }
+
+    /// The T-pose's left foot, and turned 90° about the vertical.
+    fn foot() -> (Vec3, Vec3) {
+        let s = Skeleton::standard(Format::Canonical).unwrap();
+        let mut rest = [Vec3::zeros(); MAX_JOINTS];
+        s.rest_positions(&mut rest);
+        let at = |j: Joint| s.index_of(j).unwrap();
+        let foot = rest[at(Joint::LeftToe)] - rest[at(Joint::LeftAnkle)];
         let turned = Quat::from_axis_angle(&Vec3::y_axis(), core::f32::consts::FRAC_PI_2) * foot;
-        let (during, after): (Vec<_>, Vec<_>) = feet.iter().partition(|(turning, _)| *turning);
+        (foot, turned)
+    }
+
+    /// The golfer lowers the arms from the T-pose, then turns 90° about the vertical (the
+    /// pelvis sensor at 90 °/s for a second, halting for 50 ms halfway as a pelvis reversing at
+    /// the top would) and stands still: while the pelvis turns the feet stay flat where they
+    /// stood, pointing as they did (the legs lean to reach them from the moving hips), and once
+    /// it has been quiet for [`QUIET_S`] they point where it faces.
+    #[test]
+    fn the_feet_face_where_the_trunk_last_faced_while_still() {
+        let s = Skeleton::standard(Format::Canonical).unwrap();
+        let mut rest = [Vec3::zeros(); MAX_JOINTS];
+        s.rest_positions(&mut rest);
+        let at = |j: Joint| s.index_of(j).unwrap();
+        let (ankle, hip) = (at(Joint::LeftAnkle), at(Joint::LeftHip));
+        let (foot, turned) = foot();
+        let samples = |sensor, k| turn_and_lower(sensor, k, 450..660, 550..560, 250..450);
+        let all = feet(samples, 810);
+        let during: Vec<_> = all.iter().filter(|(k, _)| (450..660).contains(k)).collect();
         assert!(!during.is_empty());
         for (_, f) in &during {
             assert!((f - foot).norm() < 1e-4, "{f:?} against {foot:?}");
         }
-        let last = after.last().unwrap().1;
+        let last = all.last().unwrap().1;
+        assert!(
+            (last - turned).norm() < 0.01 * foot.norm(),
+            "{last:?} against {turned:?}"
+        );
+        // The ankle stays where it stood: the hip swings at most its distance from the root
+        // away, so the leg reaches it to within the leg's lengthening on that lean.
+        let mut adapter = ImuAdapter::new(&pelvis_and_wrist(), &s, 60.0).unwrap();
+        let mut ankles = Vec::new();
+        for k in 0..660u64 {
+            for sensor in [3, 7] {
+                adapter
+                    .push(&s, &samples(sensor, k), |p, _| ankles.push((k, p[ankle])))
+                    .unwrap();
+            }
+        }
+        let leg = rest[ankle] - rest[hip];
+        let lean = 2.0 * Vec3::new(rest[hip].x - rest[0].x, 0.0, rest[hip].z - rest[0].z).norm();
+        let reach = (leg.norm_squared() + lean * lean).sqrt() - leg.norm();
+        for (_, a) in ankles.iter().filter(|(k, _)| *k >= 450) {
+            assert!(
+                (a - rest[ankle]).norm() <= reach,
+                "{a:?} against {:?}",
+                rest[ankle]
+            );
+        }
+    }
+
+    /// The same turn with the arms still out as in the T-pose, as at the top of a swing or a
+    /// held finish: the trunk is quiet for longer than [`QUIET_S`], but the feet keep their
+    /// place until the arms hang.
+    #[test]
+    fn the_feet_stay_put_until_the_arms_hang() {
+        let (foot, turned) = foot();
+        let samples = |sensor, k| turn_and_lower(sensor, k, 250..450, 0..0, 600..800);
+        let all = feet(samples, 950);
+        let quiet = all.iter().filter(|(k, _)| (450..600).contains(k));
+        assert!(quiet.clone().count() > 10);
+        for (_, f) in quiet {
+            assert!((f - foot).norm() < 1e-4, "{f:?} against {foot:?}");
+        }
+        let last = all.last().unwrap().1;
         assert!(
             (last - turned).norm() < 0.01 * foot.norm(),
             "{last:?} against {turned:?}"

@@ -16,6 +16,7 @@
 //!
 //! - [`pose_stream`]: a phone's keypoint frames onto the model rate's time grid.
 //! - [`fusion`]: one IMU's attitude.
+//! - [`segment`]: what an IMU on a body segment measures.
 //! - [`imu`]: the pose of a skeleton from a layout of IMUs.
 //! - `lsm6ds3` (feature `lsm6ds3`): an IMU chip over any `embedded-hal` I²C bus.
 //! - [`log`]: recorded sessions (`.pclog`): a header and the wire frames a device received.
@@ -29,4 +30,5 @@ pub mod log;
 #[cfg(any(test, feature = "lsm6ds3"))]
 pub mod lsm6ds3;
 pub mod pose_stream;
+pub mod segment;
 pub mod session;
