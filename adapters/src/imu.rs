@@ -533,7 +533,7 @@ impl ImuAdapter {
             track.snapshot = Some(match dt {
                 Some(dt) => {
                     let behind = (t_us - due) as f32 * 1e-6;
-                    interpolate(before, after, 1.0 - behind / dt)
+                    math::interpolate(before, after, 1.0 - behind / dt)
                 }
                 None => after,
             });
@@ -806,11 +806,6 @@ fn heading(q: Quat) -> Quat {
         return Quat::identity();
     }
     Quat::new_unchecked(nalgebra::Quaternion::new(q.w / norm, 0.0, q.j / norm, 0.0))
-}
-
-/// The rotation a fraction `f` of the way from `a` to `b` (shortest arc).
-pub(crate) fn interpolate(a: Quat, b: Quat, f: f32) -> Quat {
-    a * math::turn((a.inverse() * b).scaled_axis() * f.clamp(0.0, 1.0))
 }
 
 #[cfg(test)]

@@ -129,7 +129,7 @@ impl Segments {
             j = p;
             d = d.saturating_add(1);
         }
-        crate::imu::interpolate(parent, target, 1.0 / f32::from(d + 1))
+        math::interpolate(parent, target, 1.0 / f32::from(d + 1))
     }
 
     /// The pelvis's rotation in `frame`, or `None` for a skeleton without both hips on the

@@ -128,6 +128,12 @@ pub fn turn(axis_angle: crate::Vec3) -> crate::Quat {
     crate::Quat::new_unchecked(nalgebra::Quaternion::from_parts(cos, half * sinc))
 }
 
+/// The rotation a fraction `f` of the way from `a` to `b` (the shortest arc; `f` clamped to
+/// 0..=1).
+pub fn interpolate(a: crate::Quat, b: crate::Quat, f: f32) -> crate::Quat {
+    a * turn((a.inverse() * b).scaled_axis() * f.clamp(0.0, 1.0))
+}
+
 /// The costs of `here` against consecutive frames of `here.len()` joints: for each whole frame
 /// `f` of `frames`, as many as `out` holds, `out[f] = scale · Σ |here[k] − (f[k] − f[0])|`, the
 /// sum over the joints added in order from 0.0, each length the square root of
@@ -543,6 +549,21 @@ mod tests {
             let (ours, theirs) = (turn(v), crate::Quat::from_scaled_axis(v));
             proptest::prop_assert!((ours.coords - theirs.coords).amax() <= 2.0 * f32::EPSILON);
             proptest::prop_assert!((ours.norm() - 1.0).abs() <= 2.0 * f32::EPSILON);
+        }
+
+        #[test]
+        fn interpolating_is_nalgebras_slerp(
+            a in proptest::array::uniform3(-3.0f32..3.0),
+            b in proptest::array::uniform3(-3.0f32..3.0),
+            f in 0.0f32..=1.0,
+        ) {
+            let (a, b) = (turn(crate::Vec3::from(a)), turn(crate::Vec3::from(b)));
+            // Not across a half turn, where the shortest arc is either way.
+            proptest::prop_assume!((a.inverse() * b).angle() < 3.0);
+            let (ours, theirs) = (interpolate(a, b, f), a.slerp(&b, f));
+            proptest::prop_assert!(ours.angle_to(&theirs) < 1e-3, "{} rad", ours.angle_to(&theirs));
+            proptest::prop_assert!(interpolate(a, b, 0.0).angle_to(&a) < 1e-3);
+            proptest::prop_assert!(interpolate(a, b, 2.0).angle_to(&b) < 1e-3);
         }
 
         #[test]
