@@ -141,26 +141,37 @@ impl Reading {
         if let Some(axis) = saturated_axis(sample.accel_mg) {
             return Err(FusionError::SaturatedAccel { axis });
         }
-        Ok(Reading {
-            accel: si(sample.accel_mg, MPS2_PER_MG),
-            ..Reading::without_accel(sample)?
-        })
-    }
-
-    /// Converts a wire sample but for its accelerometer, which reads zero (never taken for
-    /// gravity): for a sample whose accelerometer saturated in the fastest part of a swing.
-    ///
-    /// # Errors
-    /// [`FusionError::SaturatedGyro`] if a gyro axis sits at either end of its `i16` range.
-    pub fn without_accel(sample: &ImuSample) -> Result<Reading, FusionError> {
         if let Some(axis) = saturated_axis(sample.gyro_ddps) {
             return Err(FusionError::SaturatedGyro { axis });
         }
-        Ok(Reading {
-            accel: Vec3::zeros(),
-            gyro: si(sample.gyro_ddps, RADPS_PER_DDPS),
+        Ok(Reading::clipped(sample, [0; 3]).0)
+    }
+
+    /// Converts a wire sample taken while tracking, when arms and clubs pass the sensors'
+    /// ranges in the fastest part of a swing: a saturated accelerometer reads zero (never
+    /// taken for gravity), and a saturated gyro axis reads `held` on that axis (wire units:
+    /// the sensor's last unsaturated reading, a rate just under the range the true one is
+    /// past). Also says whether a gyro axis saturated.
+    pub fn clipped(sample: &ImuSample, held: [i16; 3]) -> (Reading, bool) {
+        let accel = match saturated_axis(sample.accel_mg) {
+            Some(_) => Vec3::zeros(),
+            None => si(sample.accel_mg, MPS2_PER_MG),
+        };
+        let mut gyro = sample.gyro_ddps;
+        let mut saturated = false;
+        for (x, held) in gyro.iter_mut().zip(held) {
+            if *x == i16::MIN || *x == i16::MAX {
+                *x = held;
+                saturated = true;
+            }
+        }
+        let gyro = si(gyro, RADPS_PER_DDPS);
+        let reading = Reading {
+            accel,
+            gyro,
             mag: sample.mag_dut.map(|m| si(m, UT_PER_DUT)),
-        })
+        };
+        (reading, saturated)
     }
 }
 
@@ -428,6 +439,35 @@ mod tests {
     use super::*;
 
     const DT: f32 = 0.005;
+
+    #[test]
+    fn a_clipped_sample_holds_its_saturated_gyro_axes_and_drops_a_saturated_accelerometer() {
+        let sample = ImuSample {
+            sensor: 0,
+            t_us: 0,
+            accel_mg: [0, i16::MIN, 500],
+            gyro_ddps: [i16::MAX, 100, i16::MIN],
+            mag_dut: Some([10, 20, 30]),
+        };
+        let held = [300, -1, -310];
+        let (reading, saturated) = Reading::clipped(&sample, held);
+        assert!(saturated);
+        assert_eq!(reading.accel, Vec3::zeros());
+        assert_eq!(reading.gyro, si([300, 100, -310], RADPS_PER_DDPS));
+        assert_eq!(reading.mag, Some(Vec3::new(1.0, 2.0, 3.0)));
+        assert_eq!(
+            Reading::from_wire(&sample),
+            Err(FusionError::SaturatedAccel { axis: 1 })
+        );
+        let unsaturated = ImuSample {
+            accel_mg: [0, 1000, 0],
+            gyro_ddps: [1, 2, 3],
+            ..sample
+        };
+        let (reading, saturated) = Reading::clipped(&unsaturated, held);
+        assert!(!saturated);
+        assert_eq!(Ok(reading), Reading::from_wire(&unsaturated));
+    }
     const RATE: f32 = 1.2;
     const TOLERANCE_RAD: f32 = 1e-3;
     /// Long enough for the default gains' slow (integral) pole, about 7 s, to settle.

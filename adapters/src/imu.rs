@@ -17,7 +17,11 @@
 //! to the layout's nominal one. Sensors with magnetometers share magnetic north, so one yaw,
 //! fitted over all of them, serves them all and their relative headings stay exact.
 //!
-//! **Tracking.** Every sample updates its sensor's filter. Outputs lie on a fixed grid at the
+//! **Tracking.** Every sample updates its sensor's filter; one with an axis at its sensor's
+//! full scale (sent as the `i16` extreme) reads a saturated accelerometer as not there and a
+//! saturated gyro axis at the sensor's last rate under the range, and is counted
+//! ([`ImuAdapter::saturated_samples`]): a wrist past 2 000 °/s turns on at its range rather than
+//! stopping, and turns less than it did while it lasts. Outputs lie on a fixed grid at the
 //! adapter's rate, starting one period after calibration; each sensor's orientation is
 //! interpolated to a grid time when a sample passes it, and once every sensor has passed it
 //! one frame of positions goes out. A sensed bone's global rotation comes from its sensor
@@ -202,6 +206,8 @@ struct Track {
     right: Quat,
     /// Filter orientation at the pending output time, once a sample has passed it.
     snapshot: Option<Quat>,
+    /// The last gyro reading with no axis saturated, in wire units.
+    held: [i16; 3],
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -237,6 +243,8 @@ pub struct ImuAdapter {
     /// division would cost every sample some thousand instructions.
     due: Option<u64>,
     activity: f32,
+    /// Samples taken while tracking with a gyro axis saturated.
+    saturated: u32,
 }
 
 impl ImuAdapter {
@@ -270,6 +278,7 @@ impl ImuAdapter {
             left: Quat::identity(),
             right: Quat::identity(),
             snapshot: None,
+            held: [0; 3],
         };
         let mut tracks = [unplaced; MAX_SENSORS];
         let mut sensed = [NO_SENSOR; MAX_JOINTS];
@@ -330,12 +339,20 @@ impl ImuAdapter {
             phase: Phase::Calibrating(None),
             due: None,
             activity: 0.0,
+            saturated: 0,
         })
     }
 
     /// Whether calibration is over and frames are being emitted.
     pub fn is_tracking(&self) -> bool {
         matches!(self.phase, Phase::Tracking { .. })
+    }
+
+    /// Samples taken while tracking with a gyro axis saturated, each axis at the range held at
+    /// its sensor's last unsaturated reading ([`Reading::clipped`]): the swing goes on, its
+    /// segments turned less than they did while it lasts.
+    pub fn saturated_samples(&self) -> u32 {
+        self.saturated
     }
 
     /// Global rotation of the segment of the sensor numbered `sensor` at its latest sample,
@@ -352,8 +369,9 @@ impl ImuAdapter {
     /// # Errors
     /// [`ImuError::SkeletonMismatch`] if `skeleton` is not the one given to
     /// [`ImuAdapter::new`], [`ImuError::UnknownSensor`], or [`ImuError::Sample`] for a sample
-    /// that is saturated (dropped; but once tracking, a saturated accelerometer is no error
-    /// and the gyro is used), out of time order (dropped), or that follows a gap longer than
+    /// that is saturated before tracking (dropped; once tracking, a saturated sample is read
+    /// as [`Reading::clipped`] says and counted, [`ImuAdapter::saturated_samples`]), out of
+    /// time order (dropped), or that follows a gap longer than
     /// [`fusion::MAX_STEP_US`] (its time is kept so the next sample is used, and its sensor's
     /// orientation is held over the gap).
     pub fn push(
@@ -377,15 +395,17 @@ impl ImuAdapter {
             .position(|t| t.sensor == sensor)
             .ok_or(ImuError::UnknownSensor { sensor })?;
         let fail = |error| ImuError::Sample { sensor, error };
-        let reading = match Reading::from_wire(sample) {
-            // Arms and clubs pass the accelerometer's range in a swing; tracking needs only
-            // the gyro then.
-            Err(FusionError::SaturatedAccel { .. }) if self.is_tracking() => {
-                Reading::without_accel(sample)
+        let reading = if self.is_tracking() {
+            let (reading, saturated) = Reading::clipped(sample, self.tracks[t].held);
+            if saturated {
+                self.saturated = self.saturated.saturating_add(1);
+            } else {
+                self.tracks[t].held = sample.gyro_ddps;
             }
-            reading => reading,
-        }
-        .map_err(fail)?;
+            reading
+        } else {
+            Reading::from_wire(sample).map_err(fail)?
+        };
         let t_us = sample.t_us;
         if self.tracks[t]
             .last_us
@@ -1069,6 +1089,32 @@ mod tests {
             (last - turned).norm() < 0.01 * foot.norm(),
             "{last:?} against {turned:?}"
         );
+    }
+
+    /// The wrist turns at 1000 °/s about its long axis for 50 ms, then for 50 ms past the gyro's
+    /// range, sent saturated: the swing goes on, the clipped samples are counted, and the
+    /// segment turns on at the held rate (100° in all) rather than stopping (50°).
+    #[test]
+    fn a_saturated_gyro_holds_its_last_rate_and_is_counted() {
+        let s = skeleton();
+        let mut adapter = tracking();
+        let before = adapter.segment_rotation(7).unwrap();
+        let mut frames = 0;
+        for k in 250..300u64 {
+            for sensor in [3, 7] {
+                let mut sample = still(sensor, k);
+                if sensor == 7 && k < 270 {
+                    sample.gyro_ddps = [0, if k < 260 { 10_000 } else { i16::MAX }, 0];
+                }
+                adapter.push(&s, &sample, |_, _| frames += 1).unwrap();
+            }
+        }
+        assert!(frames > 10);
+        assert_eq!(adapter.saturated_samples(), 10);
+        let turned = (before.inverse() * adapter.segment_rotation(7).unwrap())
+            .angle()
+            .to_degrees();
+        assert!((turned - 100.0).abs() < 2.0, "{turned}°");
     }
 
     /// Frames emitted by `samples` still samples of both sensors from `from_us` on, the clock

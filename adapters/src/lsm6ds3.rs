@@ -4,7 +4,8 @@
 //!
 //! [`Lsm6ds3::start`] checks the chip's identity and sets both sensors to 208 Hz with the
 //! widest ranges a golf swing needs (±16 g, ±2000 °/s); [`Lsm6ds3::sample`] returns a sample
-//! once both have new data.
+//! once both have new data, an axis at full scale sent as the `i16` extreme (saturated, in the
+//! wire's words).
 
 use embedded_hal::i2c::I2c;
 use posecoach_core::wire::ImuSample;
@@ -100,8 +101,13 @@ impl<B: I2c> Lsm6ds3<B> {
         }
         let mut raw = [0u8; 12];
         self.bus.write_read(self.address, &[OUTX_L_G], &mut raw)?;
-        let word = |k: usize| i32::from(i16::from_le_bytes([raw[2 * k], raw[2 * k + 1]]));
-        let scaled = |k: usize, (num, den): (i32, i32)| (word(k) * num / den) as i16;
+        let word = |k: usize| i16::from_le_bytes([raw[2 * k], raw[2 * k + 1]]);
+        // An axis at full scale has clipped: the wire's saturated mark says so (its scaled
+        // value would pass for a reading, 2 294 °/s and 15.99 g).
+        let scaled = |k: usize, (num, den): (i32, i32)| match word(k) {
+            clipped @ (i16::MIN | i16::MAX) => clipped,
+            w => (i32::from(w) * num / den) as i16,
+        };
         Ok(Some(ImuSample {
             sensor: self.sensor,
             t_us,
@@ -191,6 +197,15 @@ mod tests {
         assert_eq!(sample.t_us, 1234);
         assert_eq!(sample.accel_mg, [0, 999, -999]);
         assert_eq!(sample.gyro_ddps, [0, 0, 1000]);
+        // Full scale clips: the wire's extremes, not 2 294 °/s or 15.99 g.
+        let counts: [i16; 6] = [i16::MAX, i16::MIN, i16::MAX - 1, i16::MIN, 0, 0];
+        for (k, c) in counts.iter().enumerate() {
+            let at = usize::from(OUTX_L_G) + 2 * k;
+            imu.bus.registers[at..at + 2].copy_from_slice(&c.to_le_bytes());
+        }
+        let sample = imu.sample(1239).unwrap().unwrap();
+        assert_eq!(sample.gyro_ddps, [i16::MAX, i16::MIN, 22_936]);
+        assert_eq!(sample.accel_mg, [i16::MIN, 0, 0]);
     }
 
     #[test]

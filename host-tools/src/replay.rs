@@ -199,6 +199,7 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
         "pose_masked": stream.masked, "pose_swapped": stream.swapped, "pose_flipped": stream.flipped,
         "frames_at_model_rate": stream.emitted,
         "imu_stale": session.stale_samples(),
+        "imu_saturated": session.saturated_samples(),
         "cut_short": cut,
     });
     if swings.is_empty() {

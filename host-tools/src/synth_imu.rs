@@ -52,6 +52,9 @@ pub struct ImuNoise {
     pub mag_rms_ut: f32,
     /// Largest angle by which a strap is off its nominal mounting, degrees, about a random axis.
     pub mounting_error_deg: f32,
+    /// The gyro's range, °/s: an axis past it is sent saturated (the `i16` extreme), as the
+    /// LSM6DS3 driver sends an axis at full scale.
+    pub gyro_range_dps: f32,
 }
 
 impl ImuNoise {
@@ -64,6 +67,7 @@ impl ImuNoise {
         accel_density_mg: 0.16,
         mag_rms_ut: 0.4,
         mounting_error_deg: 10.0,
+        gyro_range_dps: 2000.0,
     };
 }
 
@@ -112,12 +116,24 @@ pub fn imu_samples(
                 sensor: sensor.number,
                 t_us: (f64::from(t) * 1e6).round() as u64,
                 accel_mg: quantize(accel_mg, 1.0),
-                gyro_ddps: quantize(gyro_dps, 10.0),
+                gyro_ddps: clipped(gyro_dps, noise.gyro_range_dps),
                 mag_dut: mag_ut.map(|m| quantize(m, 10.0)),
             });
         }
     }
     samples
+}
+
+/// `v` (°/s) in tenths as a gyro of `range` sends it: every axis past the range (either way)
+/// at the `i16` extreme of its sign.
+fn clipped(v: Vec3, range: f32) -> [i16; 3] {
+    let mut tenths = quantize(v, 10.0);
+    for (t, x) in tenths.iter_mut().zip([v.x, v.y, v.z]) {
+        if x.abs() >= range {
+            *t = if x > 0.0 { i16::MAX } else { i16::MIN };
+        }
+    }
+    tenths
 }
 
 /// `v · scale` rounded and clamped to `i16`.
@@ -498,6 +514,15 @@ mod tests {
             };
             assert!(rms < &bound, "{name}: RMS {rms} over {bound}");
         }
+    }
+
+    #[test]
+    fn a_gyro_past_its_range_is_sent_saturated() {
+        assert_eq!(
+            clipped(Vec3::new(2500.0, -1999.04, -2000.0), 2000.0),
+            [i16::MAX, -19990, i16::MIN]
+        );
+        assert_eq!(clipped(Vec3::new(0.04, 1.0, -3.0), 2000.0), [0, 10, -30]);
     }
 
     #[test]

@@ -245,6 +245,15 @@ impl<'b> Session<'b> {
         self.stale
     }
 
+    /// IMU samples with a gyro axis past its range, read at the sensor's last rate under it
+    /// ([`crate::imu::ImuAdapter::saturated_samples`]), for the student's current profile.
+    pub fn saturated_samples(&self) -> u32 {
+        self.student
+            .as_ref()
+            .and_then(|s| s.imu.as_ref())
+            .map_or(0, |imu| imu.saturated_samples())
+    }
+
     /// Frames given to swing detection since the session began (at most
     /// [`MAX_FRAMES_PER_MESSAGE`] per message).
     pub fn frames(&self) -> u64 {
