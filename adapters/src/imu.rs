@@ -38,7 +38,9 @@
 //! forearms do not hang: [`HANGING`]). The root stays at
 //! the skeleton's rest position. With each frame goes the activity for swing detection: the
 //! largest bias-free gyro rate (rad/s) of the wrist, hand and club sensors (of all sensors if
-//! there are none of those) since the previous frame.
+//! there are none of those) since the previous frame. What the layout leaves unmeasured
+//! (planted legs, a head on the chest, a limb below an unsensed bone:
+//! [`ImuAdapter::unmeasured`]) a session judges nothing from.
 //!
 //! ```
 //! use posecoach_adapters::imu::ImuAdapter;
@@ -346,6 +348,39 @@ impl ImuAdapter {
     /// Whether calibration is over and frames are being emitted.
     pub fn is_tracking(&self) -> bool {
         matches!(self.phase, Phase::Tracking { .. })
+    }
+
+    /// The joints of `skeleton` whose places these sensors do not measure (bit `k` for joint
+    /// `k`). A joint is measured where its parent is (the root where it is sensed) and its
+    /// bone is sensed, shares the turn between two sensed ones, or is a hip or a shoulder: the
+    /// rigid pelvis and chest carry those. Planted legs, a head following the chest and a limb
+    /// following an unsensed bone are not measured, and scoring says nothing of them.
+    pub fn unmeasured(&self, skeleton: &Skeleton) -> u64 {
+        const GIRDLES: [Joint; 4] = [
+            Joint::LeftHip,
+            Joint::RightHip,
+            Joint::LeftShoulder,
+            Joint::RightShoulder,
+        ];
+        let n = skeleton.len().min(usize::from(self.joints));
+        let mut measured = 0u64;
+        for k in 0..n {
+            let sensed = self.sensed[k] != NO_SENSOR;
+            let carried = match skeleton.parent(k) {
+                None => sensed,
+                Some(p) => {
+                    measured & (1 << p) != 0
+                        && (sensed
+                            || self.segments.is_bridged(k)
+                            || skeleton.joint(k).is_some_and(|j| GIRDLES.contains(&j)))
+                }
+            };
+            if carried {
+                measured |= 1 << k;
+            }
+        }
+        let all = if n >= 64 { u64::MAX } else { (1u64 << n) - 1 };
+        all & !measured
     }
 
     /// Samples taken while tracking with a gyro axis saturated, each axis at the range held at
@@ -1115,6 +1150,45 @@ mod tests {
             .angle()
             .to_degrees();
         assert!((turned - 100.0).abs() < 2.0, "{turned}°");
+    }
+
+    /// What each layout measures on the H3.6M skeleton: six sensors leave the planted legs and
+    /// the head; four (no trail arm) the trail elbow and wrist too; a wrist alone, whose
+    /// forearm hangs from no measured joint, nothing.
+    #[test]
+    fn each_layout_measures_what_its_sensors_carry() {
+        let s = skeleton();
+        let bits = |joints: &[Joint]| {
+            joints
+                .iter()
+                .fold(0u64, |m, &j| m | 1 << s.index_of(j).unwrap())
+        };
+        let unmeasured = |joints: &[(u8, Joint)]| {
+            ImuAdapter::new(&layout(joints), &s, 60.0)
+                .unwrap()
+                .unmeasured(&s)
+        };
+        use Joint::*;
+        let legs_and_head = bits(&[LeftKnee, LeftAnkle, RightKnee, RightAnkle, Neck, HeadTop]);
+        let six = [
+            (0, Pelvis),
+            (1, Thorax),
+            (2, LeftElbow),
+            (3, RightElbow),
+            (4, LeftWrist),
+            (5, RightWrist),
+        ];
+        assert_eq!(unmeasured(&six), legs_and_head);
+        assert_eq!(
+            unmeasured(&[six[0], six[1], six[2], six[4]]),
+            legs_and_head | bits(&[RightElbow, RightWrist])
+        );
+        assert_eq!(unmeasured(&[six[4]]), (1 << s.len()) - 1);
+        // Without a thorax sensor the spine shares nothing and the chest is not measured.
+        assert_eq!(
+            unmeasured(&[six[0]]) & bits(&[Spine, Thorax, LeftShoulder]),
+            bits(&[Spine, Thorax, LeftShoulder])
+        );
     }
 
     /// Frames emitted by `samples` still samples of both sensors from `from_us` on, the clock

@@ -104,6 +104,12 @@ impl Segments {
         Ok(())
     }
 
+    /// Whether unsensed joint `k` shares the turn between the sensed joints around it (see
+    /// the [module](self) docs).
+    pub fn is_bridged(&self, k: usize) -> bool {
+        self.bridged.get(k).is_some_and(|&j| j != NONE)
+    }
+
     /// The rotation of unsensed joint `k` whose parent turned by `parent`, given the sensed
     /// joints' rotations `sensed(j)`: its share toward the sensed joint it bridges to, else its
     /// parent's.

@@ -342,12 +342,40 @@ const GOLF_SENSORS: [(Joint, [f32; 3]); 6] = [
 // Collecting GOLF_SENSORS into a layout cannot overflow it.
 const _: () = assert!(GOLF_SENSORS.len() <= MAX_SENSORS);
 
+/// Which of the golf sensors a right-handed golfer (lead side left) wears.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Worn {
+    /// Pelvis, chest, both upper arms and both wrists.
+    Six,
+    /// Pelvis, chest, the lead upper arm and the lead wrist, as K-Vest's set.
+    Four,
+    /// The lead wrist alone, as HackMotion's.
+    One,
+}
+
+impl Worn {
+    /// Whether a sensor on `joint` is worn.
+    fn wears(self, joint: Joint) -> bool {
+        match self {
+            Worn::Six => true,
+            Worn::Four => !matches!(joint, Joint::RightElbow | Joint::RightWrist),
+            Worn::One => joint == Joint::LeftWrist,
+        }
+    }
+}
+
 /// A golf sensor set on the joints `skeleton` has: pelvis, thorax, both upper arms and both
 /// forearms, numbered from 0 in that order.
 pub fn default_layout(skeleton: &Skeleton) -> SensorLayout {
+    layout(skeleton, Worn::Six)
+}
+
+/// The golf sensors `worn` on the joints `skeleton` has, numbered from 0 in
+/// [`default_layout`]'s order.
+pub fn layout(skeleton: &Skeleton, worn: Worn) -> SensorLayout {
     let placed = GOLF_SENSORS
         .iter()
-        .filter(|(joint, _)| skeleton.index_of(*joint).is_some());
+        .filter(|(joint, _)| worn.wears(*joint) && skeleton.index_of(*joint).is_some());
     let sensors = (0u8..)
         .zip(placed)
         .map(|(sensor, &(joint, [roll, pitch, yaw]))| {

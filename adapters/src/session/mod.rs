@@ -743,7 +743,8 @@ impl<'b> Session<'b> {
                 positions: compared.student,
                 hz: rate,
                 events,
-                unsure: Unsure::new(unsure, window.start + span.start as u64, seen),
+                unsure: Unsure::new(unsure, window.start + span.start as u64, seen)
+                    .with_never(imu.as_ref().map_or(0, |a| a.unmeasured(skeleton))),
             };
             // A swing against another coach than the range session's starts a new one.
             if tendencies_coach.replace(swing.coach) != Some(swing.coach) {

@@ -54,6 +54,8 @@ pub(super) fn measure(skeleton: &Skeleton, pair: &Pair<'_>, events: &SwingEvents
     let mut usual = [Vec3::zeros(); MAX_JOINTS];
     let mut wander = [Vec3::zeros(); MAX_JOINTS];
     let mut series = [[0.0f32; WANDER_SAMPLES]; 3];
+    // The joints seen sure at least once: a joint the input never measures has no wander.
+    let mut seen = 0u64;
     for (k, (u, w)) in usual
         .iter_mut()
         .zip(wander.iter_mut())
@@ -74,6 +76,9 @@ pub(super) fn measure(skeleton: &Skeleton, pair: &Pair<'_>, events: &SwingEvents
             }
             count += 1;
         }
+        if count > 0 {
+            seen |= 1 << k;
+        }
         for (axis, values) in series.iter_mut().enumerate() {
             let values = &mut values[..count];
             u[axis] = median(values);
@@ -83,7 +88,7 @@ pub(super) fn measure(skeleton: &Skeleton, pair: &Pair<'_>, events: &SwingEvents
             w[axis] = MAD_SIGMA * median(values);
         }
     }
-    let (floor, input) = spread(skeleton, &wander);
+    let (floor, input) = spread(skeleton, &wander, seen);
     for w in wander.iter_mut().take(joints) {
         *w = w.sup(&floor);
     }
@@ -94,14 +99,15 @@ pub(super) fn measure(skeleton: &Skeleton, pair: &Pair<'_>, events: &SwingEvents
     }
 }
 
-/// Per axis, the median and the lower quartile of the judged joints' `wander`.
-fn spread(skeleton: &Skeleton, wander: &[Vec3; MAX_JOINTS]) -> (Vec3, Vec3) {
+/// Per axis, the median and the lower quartile of the `wander` of the judged joints among
+/// those `seen` (bit `k` for joint `k`).
+fn spread(skeleton: &Skeleton, wander: &[Vec3; MAX_JOINTS], seen: u64) -> (Vec3, Vec3) {
     let (mut floor, mut noise) = (Vec3::zeros(), Vec3::zeros());
     let mut values = [0.0f32; MAX_JOINTS];
     for axis in 0..3 {
         let mut count = 0;
         for (k, w) in wander.iter().enumerate().take(skeleton.len()) {
-            if judged(skeleton, k) {
+            if judged(skeleton, k) && seen & (1 << k) != 0 {
                 values[count] = w[axis];
                 count += 1;
             }
@@ -128,10 +134,14 @@ mod tests {
         for (k, w) in wander.iter_mut().enumerate().take(skeleton.len()) {
             *w = Vec3::new(k as f32, 2.0 * k as f32, 1.0);
         }
-        let (floor, noise) = spread(&skeleton, &wander);
+        let (floor, noise) = spread(&skeleton, &wander, u64::MAX);
         // 17 joints, none a club's: the median is the 9th smallest, the quartile the 5th.
         assert_eq!(floor, Vec3::new(8.0, 16.0, 1.0));
         assert_eq!(noise, Vec3::new(4.0, 8.0, 1.0));
+        // Joints never seen (0 to 8) are left out: of 9 to 16, the 5th and the 3rd smallest.
+        let (floor, noise) = spread(&skeleton, &wander, !0x1ff);
+        assert_eq!(floor, Vec3::new(13.0, 26.0, 1.0));
+        assert_eq!(noise, Vec3::new(11.0, 22.0, 1.0));
     }
 
     #[test]

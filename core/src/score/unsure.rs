@@ -10,6 +10,8 @@ pub struct Unsure<'a> {
     first: usize,
     /// The swing's frames whose masks the ring still holds, `from..to`.
     kept: (usize, usize),
+    /// Joints the input never measures, unsure at every frame.
+    never: u64,
 }
 
 impl<'a> Unsure<'a> {
@@ -27,17 +29,25 @@ impl<'a> Unsure<'a> {
             } else {
                 (frame(seen.saturating_sub(len)), frame(seen))
             },
+            never: 0,
         }
+    }
+
+    /// These masks, and the joints `never` (bit `k` for joint `k`) unsure at every frame: what
+    /// the input does not measure (an IMU layout's unsensed limbs), which scoring then leaves
+    /// out of every judgement as it does a joint the stream lost.
+    pub fn with_never(self, never: u64) -> Unsure<'a> {
+        Unsure { never, ..self }
     }
 
     /// The joints unsure at the swing's frame `frame`.
     pub fn at(&self, frame: usize) -> u64 {
         if !(self.kept.0..self.kept.1).contains(&frame) {
-            return 0;
+            return self.never;
         }
         // The slot of stream frame `start + frame`, without a 64-bit division.
         let len = self.ring.len();
-        self.ring[(self.first + frame % len) % len]
+        self.ring[(self.first + frame % len) % len] | self.never
     }
 }
 
@@ -55,6 +65,10 @@ mod tests {
         assert_eq!(swing.at(4), 0b10); // frame 9
         assert_eq!(swing.at(5), 0); // frame 10: not yet pushed
         assert_eq!(Unsure::default().at(3), 0);
+        let never = swing.with_never(0b1_0000);
+        assert_eq!(never.at(0), 0b1_0000);
+        assert_eq!(never.at(1), 0b1_0100);
+        assert_eq!(Unsure::default().with_never(0b11).at(7), 0b11);
     }
 
     proptest::proptest! {

@@ -39,7 +39,7 @@ use crate::coaches;
 use crate::phone::{self, Camera, Failure, PhoneNoise};
 use crate::progress::Progress;
 use crate::synth::{self, lay_out, Placed, Timeline};
-use crate::synth_imu::{self, ImuNoise};
+use crate::synth_imu::{self, ImuNoise, Worn};
 use crate::table::{self, KeyMetric, CM, DEG, KEY_METRICS};
 use anyhow::{bail, Context, Result};
 use flaws::{Body, Flaw, Times, Truth};
@@ -167,9 +167,9 @@ enum Input {
         face_on: bool,
         failures: bool,
     },
-    /// Six IMUs at [`IMU_HZ`] with or without magnetometers; the profile's T-pose turned to
-    /// any heading.
-    Imu { magnetometers: bool },
+    /// IMUs at [`IMU_HZ`], the layout `worn`, with or without magnetometers; the profile's
+    /// T-pose turned to any heading.
+    Imu { magnetometers: bool, worn: Worn },
 }
 
 impl Input {
@@ -178,11 +178,17 @@ impl Input {
         match *self {
             Input::Phone { level_mm, .. } => format!("{level_mm} mm"),
             Input::Imu {
-                magnetometers: true,
-            } => "IMU, mag".into(),
-            Input::Imu {
-                magnetometers: false,
-            } => "IMU".into(),
+                magnetometers,
+                worn,
+            } => {
+                let count = match worn {
+                    Worn::Six => "",
+                    Worn::Four => "4 ",
+                    Worn::One => "1 ",
+                };
+                let mag = if magnetometers { ", mag" } else { "" };
+                format!("{count}IMU{mag}")
+            }
         }
     }
 }
@@ -400,10 +406,30 @@ fn inputs(args: &Args) -> Vec<Input> {
         })
         .collect();
     if !args.no_imu {
-        out.extend([true, false].map(|magnetometers| Input::Imu { magnetometers }));
+        out.extend(IMU_INPUTS);
     }
     out
 }
+
+/// The IMU rows: six sensors with magnetometers and without, then four and one, with.
+const IMU_INPUTS: [Input; 4] = [
+    Input::Imu {
+        magnetometers: true,
+        worn: Worn::Six,
+    },
+    Input::Imu {
+        magnetometers: false,
+        worn: Worn::Six,
+    },
+    Input::Imu {
+        magnetometers: true,
+        worn: Worn::Four,
+    },
+    Input::Imu {
+        magnetometers: true,
+        worn: Worn::One,
+    },
+];
 
 /// `run` of every item on every core, in the items' order, with progress shown as `what`.
 fn parallel<C: Sync, O: Send + Default>(
@@ -462,11 +488,11 @@ fn cases(cleans: &[Clean], args: &Args) -> Vec<Case> {
         Direction::Up,
         Direction::Down,
     ];
-    let mut inputs: Vec<Option<f32>> = args.levels.iter().map(|&l| Some(l)).collect();
+    let mut inputs: Vec<Result<f32, Input>> = args.levels.iter().map(|&l| Ok(l)).collect();
     if !args.no_imu {
-        inputs.extend([None, None]);
+        inputs.extend(IMU_INPUTS.map(Err));
     }
-    for (i, level) in inputs.into_iter().enumerate() {
+    for level in inputs {
         for clean in 0..cleans.len() {
             let mut sets: Vec<Vec<Flaw>> = Vec::new();
             for _ in 0..unflawed {
@@ -511,16 +537,13 @@ fn cases(cleans: &[Clean], args: &Args) -> Vec<Case> {
             sets.push(vec![offset(&mut rng), offset(&mut rng)]);
             for flaws in sets {
                 let input = match level {
-                    Some(level_mm) => Input::Phone {
+                    Ok(level_mm) => Input::Phone {
                         level_mm,
                         rate_hz: if rng.random_bool(0.5) { 30.0 } else { 60.0 },
                         face_on: rng.random_bool(0.5),
                         failures: !args.no_failures,
                     },
-                    // The first IMU row with magnetometers, the second without.
-                    None => Input::Imu {
-                        magnetometers: i == args.levels.len(),
-                    },
+                    Err(imu) => imu,
                 };
                 cases.push(Case {
                     clean,
@@ -559,8 +582,11 @@ fn run_case(clean: &Clean, case: &Case, logs_out: Option<&Path>) -> Result<Outco
             };
             phone_messages(clean, &mut timeline, &placed, &camera, &mut rng)?
         }
-        Input::Imu { magnetometers } => (
-            imu_messages(&body, &timeline, magnetometers, &mut rng)?,
+        Input::Imu {
+            magnetometers,
+            worn,
+        } => (
+            imu_messages(&body, &timeline, magnetometers, worn, &mut rng)?,
             Vec::new(),
         ),
     };
@@ -837,6 +863,7 @@ fn imu_messages(
     body: &Motion,
     timeline: &Timeline,
     magnetometers: bool,
+    worn: Worn,
     rng: &mut ChaCha8Rng,
 ) -> Result<Vec<Message>> {
     let format = Format::H36m17;
@@ -855,7 +882,7 @@ fn imu_messages(
         missing: vec![false; timeline.positions.len()],
         positions: timeline.positions.clone(),
     };
-    let layout = synth_imu::default_layout(&body.skeleton);
+    let layout = synth_imu::layout(&body.skeleton, worn);
     let field = magnetometers.then_some(synth_imu::EARTH_FIELD_UT);
     let samples = synth_imu::imu_samples(&motion, &layout, IMU_HZ, &ImuNoise::MEMS, field, rng);
     let mut messages = vec![
@@ -1362,7 +1389,10 @@ mod tests {
                 let case = Case {
                     clean: 0,
                     flaws: Vec::new(),
-                    input: Input::Imu { magnetometers },
+                    input: Input::Imu {
+                        magnetometers,
+                        worn: Worn::Six,
+                    },
                     seed,
                 };
                 let outcome = run_case(&clean, &case, None).unwrap();

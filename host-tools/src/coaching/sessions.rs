@@ -284,7 +284,10 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
             };
             phone_messages(clean, &mut timeline, &placed, &view, &mut rng)?.0
         }
-        Input::Imu { magnetometers } => imu_messages(&body, &timeline, magnetometers, &mut rng)?,
+        Input::Imu {
+            magnetometers,
+            worn,
+        } => imu_messages(&body, &timeline, magnetometers, worn, &mut rng)?,
     };
     messages.insert(
         1,
