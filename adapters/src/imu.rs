@@ -38,7 +38,9 @@
 //! forearms do not hang: [`HANGING`]). The root stays at
 //! the skeleton's rest position. With each frame goes the activity for swing detection: the
 //! largest bias-free gyro rate (rad/s) of the wrist, hand and club sensors (of all sensors if
-//! there are none of those) since the previous frame. What the layout leaves unmeasured
+//! there are none of those) since the previous frame. A layout that carries one arm puts the
+//! other's hand on the grip by the first's (two-bone inverse kinematics, `contacts::Limb`). What
+//! the layout leaves unmeasured
 //! (planted legs, a head on the chest, a limb below an unsensed bone:
 //! [`ImuAdapter::unmeasured`]) a session judges nothing from.
 //!
@@ -74,6 +76,7 @@
 use crate::fusion::{self, FusionError, Gains, Mahony, Reading, StillPeriod};
 use crate::segment::Segments;
 use posecoach_core::config::MAX_JOINTS;
+use posecoach_core::contacts::Limb;
 use posecoach_core::joint::Joint;
 use posecoach_core::kinematics::{forward, swing};
 use posecoach_core::math;
@@ -231,6 +234,9 @@ pub struct ImuAdapter {
     legs: [Option<Leg>; 2],
     /// What the sensors measure and how the unsensed bones between them turn.
     segments: Segments,
+    /// The unsensed arm's wrist and the sensed one's ([`NO_SENSOR`] for none): a layout that
+    /// carries one arm puts the other's hand on the grip, by the first's.
+    grip: [u8; 2],
     /// Track of the trunk sensor that sets `stance`, [`NO_SENSOR`] where none.
     trunk: u8,
     /// The planted bones' global rotation: the trunk's heading when it was last quiet.
@@ -322,6 +328,7 @@ impl ImuAdapter {
             Leg::new(skeleton, Segment::RightLeg, Joint::RightAnkle),
         ];
         let segments = Segments::new(skeleton, |k| sensed[k] != NO_SENSOR);
+        let grip = grip(skeleton, |k| sensed[k] != NO_SENSOR);
         let trunk = TRUNK_JOINTS
             .iter()
             .find_map(|&j| tracks[..len].iter().position(|t| t.joint == j))
@@ -332,6 +339,7 @@ impl ImuAdapter {
             sensed,
             legs,
             segments,
+            grip,
             trunk,
             stance: Quat::identity(),
             quiet_since: None,
@@ -782,7 +790,40 @@ impl ImuAdapter {
             let parent = skeleton.parent(k).map_or(Quat::identity(), |p| global[p]);
             local[k] = parent.inverse() * global[k];
         }
-        forward(skeleton, &local[..n], self.root, out).is_ok()
+        if forward(skeleton, &local[..n], self.root, out).is_err() {
+            return false;
+        }
+        let [trail, lead] = self.grip.map(usize::from);
+        if let (Some(limb), Some(&hand)) = (
+            skeleton.joint(trail).and_then(|j| Limb::new(skeleton, j)),
+            out.get(lead),
+        ) {
+            limb.reach(out, hand);
+        }
+        true
+    }
+}
+
+/// The wrists of a layout that senses one arm down to its wrist and neither bone of the other
+/// (the other's wrist, then the sensed one), `[NO_SENSOR; 2]` for any other: the unsensed
+/// arm's hand holds the grip with the sensed one's, as both hands do in a golf swing.
+fn grip(skeleton: &Skeleton, sensed: impl Fn(usize) -> bool) -> [u8; 2] {
+    let arm = |elbow: Joint, wrist: Joint| {
+        let (e, w) = (skeleton.index_of(elbow)?, skeleton.index_of(wrist)?);
+        Some((e, w))
+    };
+    let (Some(left), Some(right)) = (
+        arm(Joint::LeftElbow, Joint::LeftWrist),
+        arm(Joint::RightElbow, Joint::RightWrist),
+    ) else {
+        return [NO_SENSOR; 2];
+    };
+    let carried = |(e, w): (usize, usize)| sensed(e) && sensed(w);
+    let bare = |(e, w): (usize, usize)| !sensed(e) && !sensed(w);
+    match (carried(left), carried(right)) {
+        (true, false) if bare(right) => [right.1 as u8, left.1 as u8],
+        (false, true) if bare(left) => [left.1 as u8, right.1 as u8],
+        _ => [NO_SENSOR; 2],
     }
 }
 
@@ -1189,6 +1230,45 @@ mod tests {
             unmeasured(&[six[0]]) & bits(&[Spine, Thorax, LeftShoulder]),
             bits(&[Spine, Thorax, LeftShoulder])
         );
+    }
+
+    /// Four sensors, one arm: the other's hand holds the grip by the sensed one's, as far as
+    /// its arm reaches.
+    #[test]
+    fn an_unsensed_arm_puts_its_hand_on_the_grip() {
+        use Joint::*;
+        let s = skeleton();
+        let four = layout(&[(0, Pelvis), (1, Thorax), (2, LeftElbow), (3, LeftWrist)]);
+        let adapter = ImuAdapter::new(&four, &s, 60.0).unwrap();
+        let at = |j: Joint| s.index_of(j).unwrap();
+        let mut frame = [Vec3::zeros(); MAX_JOINTS];
+        s.rest_positions(&mut frame);
+        // The lead arm hangs, its forearm across the chest.
+        let (shoulder, elbow, wrist) = (at(LeftShoulder), at(LeftElbow), at(LeftWrist));
+        let upper = s.offset(elbow).norm();
+        frame[elbow] = frame[shoulder] - Vec3::y() * upper;
+        frame[wrist] =
+            frame[elbow] + Vec3::new(-0.7, 0.0, 0.7).normalize() * s.offset(wrist).norm();
+        let mut out = [Vec3::zeros(); MAX_JOINTS];
+        let n = s.len();
+        adapter
+            .view(&s, &frame[..n], Quat::identity(), &mut out[..n])
+            .unwrap();
+        assert!((out[at(RightWrist)] - out[wrist]).norm() < 1e-3);
+        // Out of reach in the T-pose: as far toward it as the arm goes.
+        s.rest_positions(&mut frame);
+        adapter
+            .view(&s, &frame[..n], Quat::identity(), &mut out[..n])
+            .unwrap();
+        let from = out[at(RightShoulder)];
+        let arm = s.offset(at(RightElbow)).norm() + s.offset(at(RightWrist)).norm();
+        let toward = from + (out[wrist] - from).normalize() * arm;
+        assert!((out[at(RightWrist)] - toward).norm() < 1e-3);
+        // With a sensor on each forearm, each arm is its own.
+        let both = ImuAdapter::new(&layout(&[(0, LeftWrist), (1, RightWrist)]), &s, 60.0).unwrap();
+        both.view(&s, &frame[..n], Quat::identity(), &mut out[..n])
+            .unwrap();
+        assert!((out[at(RightWrist)] - frame[at(RightWrist)]).norm() < 1e-3);
     }
 
     /// Frames emitted by `samples` still samples of both sensors from `from_us` on, the clock

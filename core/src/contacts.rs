@@ -161,9 +161,10 @@ impl From<&SwingEvents> for Swing {
     }
 }
 
-/// Two bones, `root → middle → end`, turned as one by [`Limb::reach`].
+/// Two bones, `root → middle → end`, turned as one by [`Limb::reach`]: two-bone inverse
+/// kinematics.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Limb {
+pub struct Limb {
     root: usize,
     middle: usize,
     end: usize,
@@ -174,7 +175,7 @@ struct Limb {
 impl Limb {
     /// The limb ending at `end`, if `end`'s parent's parent is its root and the middle joint
     /// has no other child (so turning the two bones moves nothing else).
-    fn new(skeleton: &Skeleton, end: Joint) -> Option<Limb> {
+    pub fn new(skeleton: &Skeleton, end: Joint) -> Option<Limb> {
         let end = skeleton.index_of(end)?;
         let middle = skeleton.parent(end)?;
         let root = skeleton.parent(middle)?;
@@ -190,9 +191,12 @@ impl Limb {
 
     /// Turns the two bones so that `end` reaches `goal`, or comes as near as the bones'
     /// lengths allow, keeping the plane the limb bends in; the joints below `end` are moved
-    /// by the same amount as `end`.
-    fn reach(&self, frame: &mut [Vec3], goal: Vec3) {
-        let (s, m, e) = (frame[self.root], frame[self.middle], frame[self.end]);
+    /// by the same amount as `end`. A `frame` shorter than the limb is left as it is.
+    pub fn reach(&self, frame: &mut [Vec3], goal: Vec3) {
+        let at = |k: usize| frame.get(k).copied();
+        let (Some(s), Some(m), Some(e)) = (at(self.root), at(self.middle), at(self.end)) else {
+            return;
+        };
         let (a, b) = (norm(&(m - s)), norm(&(e - m)));
         let to = goal - s;
         let distance = norm(&to);
