@@ -20,7 +20,7 @@ use serde::Serialize;
 /// Alignment of the payload within a blob, bytes.
 pub const ALIGN: usize = 16;
 /// Bytes before the header: magic and header length.
-const PREFIX: usize = 8;
+pub(crate) const PREFIX: usize = 8;
 /// Bytes of the CRC.
 const CRC_LEN: usize = 4;
 const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);

@@ -16,6 +16,7 @@ use crate::config::MAX_JOINTS;
 use crate::format::Format;
 use crate::frames::{self, Frames, Mm};
 use crate::joint::Joint;
+use crate::resample;
 use crate::skeleton::{Skeleton, SkeletonError};
 use crate::Vec3;
 use heapless::{String as HString, Vec as HVec};
@@ -232,6 +233,59 @@ impl<'a> Reference<'a> {
     }
 }
 
+/// Frames the reference blob `blob` holds once resampled to `model_rate_hz`, read from its
+/// header in a const context, so that a firmware sizes its virtual coach from the references
+/// it embeds; 0 for bytes that do not begin as a reference. Only the header's leading fields
+/// are read: [`Reference::from_bytes`] checks the whole blob when the firmware starts.
+pub const fn frames_at(blob: &[u8], model_rate_hz: f32) -> usize {
+    // After the blob's prefix (magic, header length), the header's postcard: version and name
+    // length (varints), the name's bytes, format (a varint), rate (f32, little-endian),
+    // frames (a varint).
+    if blob.len() < blob::PREFIX
+        || blob[0] != MAGIC[0]
+        || blob[1] != MAGIC[1]
+        || blob[2] != MAGIC[2]
+        || blob[3] != MAGIC[3]
+    {
+        return 0;
+    }
+    let Some((_, at)) = varint(blob, blob::PREFIX) else {
+        return 0;
+    };
+    let Some((name, at)) = varint(blob, at) else {
+        return 0;
+    };
+    let Some((_, at)) = varint(blob, at.saturating_add(name as usize)) else {
+        return 0;
+    };
+    if blob.len() < at.saturating_add(4) {
+        return 0;
+    }
+    let rate = f32::from_le_bytes([blob[at], blob[at + 1], blob[at + 2], blob[at + 3]]);
+    let Some((frames, _)) = varint(blob, at + 4) else {
+        return 0;
+    };
+    if !(rate > 0.0 && rate.is_finite() && model_rate_hz > 0.0) || frames > u32::MAX as u64 {
+        return 0;
+    }
+    resample::frames(frames as usize, rate, model_rate_hz)
+}
+
+/// A postcard varint at `at` in `bytes`: its value and where the next field starts.
+const fn varint(bytes: &[u8], mut at: usize) -> Option<(u64, usize)> {
+    let (mut value, mut shift) = (0u64, 0);
+    while at < bytes.len() && shift < 64 {
+        let byte = bytes[at];
+        value |= ((byte & 0x7f) as u64) << shift;
+        at += 1;
+        if byte & 0x80 == 0 {
+            return Some((value, at));
+        }
+        shift += 7;
+    }
+    None
+}
+
 /// Bytes [`write()`] may need for a reference of `joints` joints and `frames` frames, in
 /// either [`Units`].
 pub const fn max_len(joints: usize, frames: usize) -> usize {
@@ -355,6 +409,50 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_firmware_reads_the_frames_it_needs_from_the_header_at_compile_time() {
+        // The frame counts and names of these (5 to 300 frames, a name of 0 to the most
+        // bytes) move the header's varints through their one- and two-byte forms.
+        let (skeleton, one) = swing();
+        let long_name = "n".repeat(MAX_NAME);
+        for (frames, name, rate) in [
+            (5, "driver", 60.0),
+            (130, "", 240.0),
+            (300, long_name.as_str(), 29.97),
+        ] {
+            let positions: Vec<Vec3> = one.iter().cycle().take(17 * frames).copied().collect();
+            for units in UNITS {
+                let mut out = Aligned([0u8; max_len(17, 300)]);
+                let stored = Frames::metres(&positions, 17);
+                let n = write(name, &skeleton, rate, stored, units, &mut out.0).unwrap();
+                let blob = &out.0[..n];
+                let reference = Reference::from_bytes(blob).unwrap();
+                for model in [30.0, 60.0, rate] {
+                    let expected = resample::frames(reference.frames(), reference.rate_hz(), model);
+                    assert_eq!(
+                        frames_at(blob, model),
+                        expected,
+                        "{frames} frames at {rate} Hz"
+                    );
+                }
+                // Cut before its frames field, or not a reference: nothing, and no panic.
+                let whole = frames_at(blob, 30.0);
+                for cut in 0..n {
+                    let got = frames_at(&blob[..cut], 30.0);
+                    assert!(got == 0 || got == whole, "cut at {cut}: {got}");
+                }
+                assert_eq!(frames_at(&blob[..blob::PREFIX + 2], 30.0), 0);
+                let mut other = blob.to_vec();
+                other[2] = b'X';
+                assert_eq!(frames_at(&other, 30.0), 0);
+            }
+        }
+        const DRIVER: &Aligned<[u8]> = &Aligned(*include_bytes!("../../coaches/driver.pcr"));
+        const DRIVER_FRAMES: usize = frames_at(&DRIVER.0, 60.0);
+        let driver = Reference::from_bytes(&DRIVER.0).unwrap();
+        assert_eq!(DRIVER_FRAMES, driver.frames());
     }
 
     #[test]

@@ -26,16 +26,14 @@ use posecoach_adapters::lsm6ds3::{Lsm6ds3, ADDRESS};
 use posecoach_adapters::session::{BufferLens, Buffers, Coach, Session, DEFAULT_CONFIG};
 use posecoach_core::blob::Aligned;
 use posecoach_core::frames::Mm;
-use posecoach_core::reference::Reference;
-use posecoach_core::resample;
+use posecoach_core::reference::{self, Reference};
 use posecoach_core::session::JointTallies;
 use posecoach_core::wire::{encode, Config, Decoder, Message, MAX_FRAME};
 use static_cell::ConstStaticCell;
 
-static COACHES: [&Aligned<[u8]>; 2] = [
-    &Aligned(*include_bytes!("../../../coaches/driver.pcr")),
-    &Aligned(*include_bytes!("../../../coaches/iron.pcr")),
-];
+const DRIVER: &Aligned<[u8]> = &Aligned(*include_bytes!("../../../coaches/driver.pcr"));
+const IRON: &Aligned<[u8]> = &Aligned(*include_bytes!("../../../coaches/iron.pcr"));
+static COACHES: [&Aligned<[u8]>; 2] = [DRIVER, IRON];
 
 /// This board's sensor number in the layout the phone sends (the lead wrist's, by convention).
 const SENSOR: u8 = 5;
@@ -43,8 +41,16 @@ const SENSOR: u8 = 5;
 const STUDENT_JOINTS: usize = 17;
 /// The model rate this board has buffers for (a phone asking for more gets a `Nack`), Hz.
 const MODEL_RATE_HZ: u16 = 30;
-/// Frames of the longest bundled coach reference (110 at 60 Hz) at the model rate.
-const COACH_FRAMES: usize = resample::frames(110, 60.0, MODEL_RATE_HZ as f32);
+/// Frames of the longest bundled coach reference at the model rate, read from the references.
+const COACH_FRAMES: usize = {
+    let driver = reference::frames_at(&DRIVER.0, MODEL_RATE_HZ as f32);
+    let iron = reference::frames_at(&IRON.0, MODEL_RATE_HZ as f32);
+    if driver > iron {
+        driver
+    } else {
+        iron
+    }
+};
 const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RATE_HZ);
 /// Microseconds a UART read waits for a byte before the loop polls the IMU again.
 const UART_WAIT_US: u32 = 200;

@@ -39,8 +39,7 @@ use posecoach_adapters::log::LogReader;
 use posecoach_adapters::session::{BufferLens, Buffers, Coach, Outcome, Session, DEFAULT_CONFIG};
 use posecoach_core::blob::Aligned;
 use posecoach_core::frames::Mm;
-use posecoach_core::reference::Reference;
-use posecoach_core::resample;
+use posecoach_core::reference::{self, Reference};
 use posecoach_core::session::JointTallies;
 use posecoach_core::weights::Weights;
 #[cfg(feature = "network")]
@@ -73,17 +72,24 @@ static IMU_EXPECTED: &[u8] = include_bytes!("../../../tests/logs/imu_device_200h
 static IMU_RECORDING: Option<(&[u8], &[u8])> = Some((&IMU.0, IMU_EXPECTED));
 #[cfg(feature = "network")]
 static IMU_RECORDING: Option<(&[u8], &[u8])> = None;
-static COACHES: [&Aligned<[u8]>; 2] = [
-    &Aligned(*include_bytes!("../../../coaches/driver.pcr")),
-    &Aligned(*include_bytes!("../../../coaches/iron.pcr")),
-];
+const DRIVER: &Aligned<[u8]> = &Aligned(*include_bytes!("../../../coaches/driver.pcr"));
+const IRON: &Aligned<[u8]> = &Aligned(*include_bytes!("../../../coaches/iron.pcr"));
+static COACHES: [&Aligned<[u8]>; 2] = [DRIVER, IRON];
 
 /// Joints of the log's student (H3.6M-17 keypoints).
 const STUDENT_JOINTS: usize = 17;
 /// The model rate the log's `Config` asks for, Hz.
 const MODEL_RATE_HZ: u16 = 30;
-/// Frames of the longest bundled coach reference (110 at 60 Hz) at the model rate.
-const COACH_FRAMES: usize = resample::frames(110, 60.0, MODEL_RATE_HZ as f32);
+/// Frames of the longest bundled coach reference at the model rate, read from the references.
+const COACH_FRAMES: usize = {
+    let driver = reference::frames_at(&DRIVER.0, MODEL_RATE_HZ as f32);
+    let iron = reference::frames_at(&IRON.0, MODEL_RATE_HZ as f32);
+    if driver > iron {
+        driver
+    } else {
+        iron
+    }
+};
 /// Joints of the bundled coaches (the canonical 22): the network's input.
 #[cfg(feature = "network")]
 const COACH_JOINTS: usize = 22;
