@@ -131,19 +131,38 @@ impl<'a> LogReader<'a> {
     pub fn remaining(&self) -> usize {
         self.bytes.len()
     }
+
+    /// Reads to the end of the next good frame and lends its message to `on_message`, as a
+    /// device's decoder does ([`Decoder::push`]); `false` once the log holds no more.
+    pub fn read(&mut self, on_message: impl FnOnce(&Message)) -> bool {
+        let mut on_message = Some(on_message);
+        while on_message.is_some() && !self.bytes.is_empty() {
+            // Up to and with the next delimiter: at most one frame.
+            let end = self
+                .bytes
+                .iter()
+                .position(|&b| b == 0)
+                .map_or(self.bytes.len(), |at| at + 1);
+            let (frame, rest) = self.bytes.split_at(end);
+            self.bytes = rest;
+            self.decoder.push_all(frame, |m| {
+                if let Some(f) = on_message.take() {
+                    f(m);
+                }
+            });
+        }
+        on_message.is_none()
+    }
 }
 
+/// Owned messages, for the host: each is a clone of the one [`LogReader::read`] lends.
 impl Iterator for LogReader<'_> {
     type Item = Message;
 
     fn next(&mut self) -> Option<Message> {
-        while let Some((&byte, rest)) = self.bytes.split_first() {
-            self.bytes = rest;
-            if let Some(message) = self.decoder.push(byte) {
-                return Some(message);
-            }
-        }
-        None
+        let mut got = None;
+        self.read(|m| got = Some(m.clone()));
+        got
     }
 }
 

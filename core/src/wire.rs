@@ -22,9 +22,7 @@
 //! let mut decoder = Decoder::new();
 //! let mut got = None;
 //! for &byte in &frame[..n] {
-//!     if let Some(message) = decoder.push(byte) {
-//!         got = Some(message);
-//!     }
+//!     decoder.push(byte, |message| got = Some(message.clone()));
 //! }
 //! assert_eq!(got, Some(Message::Ack { seq: 7 }));
 //! assert_eq!(decoder.counters().frames_ok, 1);
@@ -36,6 +34,12 @@ use crate::format::Format;
 use crate::joint::Joint;
 use heapless::Vec as HVec;
 use serde::{Deserialize, Serialize};
+
+/// The postcard variant index of [`Message::PoseFrame`] (a varint of one byte), which every
+/// pose frame's message starts with.
+const POSE_FRAME: u8 = 0;
+/// The postcard variant index of [`Message::ImuSample`].
+const IMU_SAMPLE: u8 = 1;
 
 /// Protocol version carried in every frame.
 pub const VERSION: u8 = 6;
@@ -563,46 +567,66 @@ impl Decoder {
         self.counters
     }
 
-    /// Takes one byte; returns a message when it completes a good frame.
-    pub fn push(&mut self, byte: u8) -> Option<Message> {
-        if byte != 0 {
-            if self.skipping {
-                return None;
+    /// Takes one byte; when it completes a good frame, hands the frame's message to
+    /// `on_message`. The message is lent, not returned: a [`Message`] is as large as its largest
+    /// variant (the `SwingReport`, some 470 bytes), and each move of one out of the decoder cost
+    /// more than decoding an IMU sample (its 31-byte frame: COBS, CRC and postcard, about 1 200
+    /// instructions on a Cortex-M4F).
+    pub fn push(&mut self, byte: u8, on_message: impl FnOnce(&Message)) {
+        if byte == 0 {
+            self.end(on_message);
+        } else {
+            self.extend(&[byte]);
+        }
+    }
+
+    /// Takes a chunk of bytes and hands `on_message` each good frame's message in it, copying
+    /// the bytes between delimiters as runs (a byte at a time cost some 20 instructions).
+    pub fn push_all(&mut self, bytes: &[u8], mut on_message: impl FnMut(&Message)) {
+        let mut rest = bytes;
+        while let Some(at) = rest.iter().position(|&b| b == 0) {
+            self.extend(&rest[..at]);
+            self.end(&mut on_message);
+            rest = &rest[at + 1..];
+        }
+        self.extend(rest);
+    }
+
+    /// Appends bytes of a frame (no delimiter among them); a frame grown past [`MAX_FRAME`] is
+    /// counted once and skipped to its delimiter.
+    fn extend(&mut self, bytes: &[u8]) {
+        if self.skipping || bytes.is_empty() {
+            return;
+        }
+        match self.buffer.get_mut(self.len..self.len + bytes.len()) {
+            Some(free) if self.len + bytes.len() < MAX_FRAME => {
+                free.copy_from_slice(bytes);
+                self.len += bytes.len();
             }
-            if self.len == MAX_FRAME - 1 {
+            _ => {
                 self.counters.overflows = self.counters.overflows.saturating_add(1);
                 self.skipping = true;
                 self.len = 0;
-                return None;
             }
-            self.buffer[self.len] = byte;
-            self.len += 1;
-            return None;
         }
+    }
+
+    /// A delimiter: the frame it ends is checked and decoded, and counted by its fate.
+    fn end(&mut self, on_message: impl FnOnce(&Message)) {
         let len = core::mem::take(&mut self.len);
         if core::mem::take(&mut self.skipping) || len == 0 {
-            return None;
+            return;
         }
-        let message = self.frame(len);
-        match message {
-            Ok(m) => {
-                self.counters.frames_ok = self.counters.frames_ok.saturating_add(1);
-                Some(m)
-            }
-            Err(FrameFault::Crc) => {
-                self.counters.crc_errors = self.counters.crc_errors.saturating_add(1);
-                None
-            }
-            Err(FrameFault::Malformed) => {
-                self.counters.malformed = self.counters.malformed.saturating_add(1);
-                None
-            }
+        let counter = match self.frame(len, on_message) {
+            Ok(()) => &mut self.counters.frames_ok,
+            Err(FrameFault::Crc) => &mut self.counters.crc_errors,
+            Err(FrameFault::Malformed) => &mut self.counters.malformed,
             Err(FrameFault::Version) => {
-                self.counters.versions = self.counters.versions.saturating_add(1);
                 self.owed = true;
-                None
+                &mut self.counters.versions
             }
-        }
+        };
+        *counter = counter.saturating_add(1);
     }
 
     /// What a device owes its peer for the frames refused since it last asked: one `Nack` (seq
@@ -615,16 +639,9 @@ impl Decoder {
         })
     }
 
-    /// Takes a chunk of bytes and calls `on_message` for each good frame in it.
-    pub fn push_all(&mut self, bytes: &[u8], mut on_message: impl FnMut(Message)) {
-        for &b in bytes {
-            if let Some(m) = self.push(b) {
-                on_message(m);
-            }
-        }
-    }
-
-    fn frame(&mut self, len: usize) -> Result<Message, FrameFault> {
+    /// Checks and decodes the frame of `len` bytes in the buffer, and lends its message to
+    /// `on_message`, decoded in place.
+    fn frame(&mut self, len: usize, on_message: impl FnOnce(&Message)) -> Result<(), FrameFault> {
         let payload = &mut self.buffer[..len];
         let n = cobs::decode_in_place(payload).map_err(|_| FrameFault::Malformed)?;
         let payload = payload.get(..n).ok_or(FrameFault::Malformed)?;
@@ -642,10 +659,26 @@ impl Decoder {
         // Without the `phone` feature a device cannot decode the reports it sends; with it, a
         // device's decoder drops them (and `Status`) all the same, so it counts them alike
         // either way.
-        match postcard::from_bytes::<Message>(&body[1..]) {
-            Ok(m) if self.phone || !m.from_device() => Ok(m),
+        match &decode(&body[1..]) {
+            Ok(m) if self.phone || !m.from_device() => {
+                on_message(m);
+                Ok(())
+            }
             _ => Err(FrameFault::Malformed),
         }
+    }
+}
+
+/// A frame's message from its postcard bytes. The stream's two messages are decoded as their
+/// variant's fields: decoding the enum moves a whole [`Message`] (some 470 bytes) through
+/// serde's layers, two thirds of an IMU sample's cost. Kept out of line so that its
+/// temporaries are off the stack by the time the message is handled.
+#[inline(never)]
+fn decode(message: &[u8]) -> Result<Message, postcard::Error> {
+    match message {
+        [POSE_FRAME, fields @ ..] => postcard::from_bytes(fields).map(Message::PoseFrame),
+        [IMU_SAMPLE, fields @ ..] => postcard::from_bytes(fields).map(Message::ImuSample),
+        _ => postcard::from_bytes(message),
     }
 }
 
@@ -671,7 +704,7 @@ mod tests {
     fn decode_all(bytes: &[u8]) -> (Vec<Message>, Counters) {
         let mut decoder = Decoder::phone();
         let mut got = Vec::new();
-        decoder.push_all(bytes, |m| got.push(m));
+        decoder.push_all(bytes, |m| got.push(m.clone()));
         (got, decoder.counters())
     }
 
@@ -952,6 +985,21 @@ mod tests {
         }
 
         #[test]
+        fn the_stream_messages_decode_as_the_enum_does(message in message(), tail in prop::collection::vec(any::<u8>(), 0..8), junk in prop::collection::vec(any::<u8>(), 0..60), tag in 0u8..2) {
+            // A message's postcard bytes (with trailing bytes, which both ignore), and junk
+            // after either stream variant's tag: the variant's own decoding must agree.
+            let mut buffer = [0u8; MAX_PAYLOAD];
+            let mut bytes = postcard::to_slice(&message, &mut buffer).unwrap().to_vec();
+            bytes.extend(&tail);
+            let mut junk = junk;
+            junk.insert(0, tag);
+            for b in [bytes, junk] {
+                let (fast, generic) = (decode(&b), postcard::from_bytes::<Message>(&b));
+                prop_assert_eq!(fast.ok(), generic.ok());
+            }
+        }
+
+        #[test]
         fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..2000)) {
             let (_, counters) = decode_all(&bytes);
             let delimiters = bytes.iter().filter(|&&b| b == 0).count() as u32;
@@ -994,7 +1042,7 @@ mod tests {
         stream.extend(frame(&Message::CoachSelect { seq: 1, coach: 4 }));
         let mut decoder = Decoder::new();
         let mut got = Vec::new();
-        decoder.push_all(&stream, |m| got.push(m));
+        decoder.push_all(&stream, |m| got.push(m.clone()));
         assert_eq!(got, [Message::CoachSelect { seq: 1, coach: 4 }]);
         let counters = decoder.counters();
         assert_eq!(
@@ -1034,7 +1082,7 @@ mod tests {
         let stream: Vec<u8> = sent.iter().flat_map(frame).collect();
         let mut device = Decoder::new();
         let mut got = Vec::new();
-        device.push_all(&stream, |m| got.push(m));
+        device.push_all(&stream, |m| got.push(m.clone()));
         assert_eq!(got, sent[2..]);
         assert_eq!(
             (device.counters().frames_ok, device.counters().malformed),

@@ -180,7 +180,7 @@ fn serve<L: Read + Write>(
                 }
             };
             let mut messages = Vec::new();
-            decoder.push_all(&buf[..n], |m| messages.push(m));
+            decoder.push_all(&buf[..n], |m| messages.push(m.clone()));
             // Frames of another protocol version are told so, once per read.
             if let Some(nack) = decoder.reply() {
                 totals.refused += 1;

@@ -298,7 +298,7 @@ fn make() -> (Vec<u8>, usize) {
     let mut decoder = Decoder::new();
     let mut messages = Vec::new();
     for &b in &clean[HEADER_LEN..] {
-        messages.extend(decoder.push(b));
+        decoder.push(b, |m| messages.push(m.clone()));
     }
     let setup: Vec<Message> = messages
         .iter()

@@ -180,7 +180,11 @@ fn frames(log: &[u8]) -> Vec<&[u8]> {
 
 fn decode(frame: &[u8]) -> Option<Message> {
     let mut decoder = Decoder::new();
-    frame.iter().find_map(|&b| decoder.push(b))
+    let mut got = None;
+    for &b in frame {
+        decoder.push(b, |m| got = Some(m.clone()));
+    }
+    got
 }
 
 /// What the injector did.

@@ -201,6 +201,6 @@ fn the_bytes_of_every_message_are_pinned() {
     );
     let mut decoder = Decoder::phone();
     let mut got = Vec::new();
-    decoder.push_all(&stream, |m| got.push(m));
+    decoder.push_all(&stream, |m| got.push(m.clone()));
     assert_eq!(got, every_message());
 }

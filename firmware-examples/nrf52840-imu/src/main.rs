@@ -157,9 +157,7 @@ fn main() -> ! {
             .read_timeout(&mut byte, &mut wait, UART_WAIT_US)
             .is_ok()
         {
-            if let Some(message) = decoder.push(byte[0]) {
-                handle(&mut session, &mut uart, &message);
-            }
+            decoder.push(byte[0], |message| handle(&mut session, &mut uart, message));
             // A frame of another protocol version is told so.
             if let Some(nack) = decoder.reply() {
                 send(&mut uart, &nack);

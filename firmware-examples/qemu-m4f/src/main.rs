@@ -336,52 +336,60 @@ fn replay(
         stack::in_use(),
         core::mem::size_of_val(&session)
     );
+    // Each message is handled where the decoder lends it, as on a device
+    // ([`LogReader::read`]): its stack figures include the decoder's frames.
     loop {
         stack::repaint();
         let start = count::now();
-        let Some(message) = reader.next() else { break };
-        let decoded = count::now() - start;
-        stages.decode.add(decoded);
-        if let Message::PoseFrame(wire::PoseFrame { t_us, .. })
-        | Message::ImuSample(wire::ImuSample { t_us, .. }) = &message
-        {
-            stages.stream_decode += decoded;
-            let (first, _) = stages.stream_us.get_or_insert((*t_us, *t_us));
-            stages.stream_us = Some((*first, *t_us));
-        }
-        stages.decode.reached(stack::high_water());
-        stack::repaint();
-        let mut scored = false;
-        let start = count::now();
-        session.handle(&message, |outcome| {
-            let at = count::now();
-            scored |= matches!(outcome, Outcome::Scored { .. });
-            match &outcome {
-                Outcome::Scored { report, .. } => defmt::println!("swing scored: {}", report.score),
-                Outcome::Unscored { swing, error } => {
-                    defmt::println!("swing {} not scored: {}", swing.number, error)
-                }
-                Outcome::Refused(why) => defmt::println!("refused: {}", why),
-                Outcome::Accepted | Outcome::Session { .. } => {}
+        let more = reader.read(|message| {
+            let decoded = count::now() - start;
+            stages.decode.add(decoded);
+            if let Message::PoseFrame(wire::PoseFrame { t_us, .. })
+            | Message::ImuSample(wire::ImuSample { t_us, .. }) = message
+            {
+                stages.stream_decode += decoded;
+                let (first, _) = stages.stream_us.get_or_insert((*t_us, *t_us));
+                stages.stream_us = Some((*first, *t_us));
             }
-            if let Some(reply) = outcome.reply(&message) {
-                let mut frame = [0u8; MAX_FRAME];
-                match encode(&reply, &mut frame) {
-                    Ok(n) if expected.starts_with(&frame[..n]) => expected = &expected[n..],
-                    _ => mismatch = true,
+            stages.decode.reached(stack::high_water());
+            stack::repaint();
+            let mut scored = false;
+            let start = count::now();
+            session.handle(message, |outcome| {
+                let at = count::now();
+                scored |= matches!(outcome, Outcome::Scored { .. });
+                match &outcome {
+                    Outcome::Scored { report, .. } => {
+                        defmt::println!("swing scored: {}", report.score)
+                    }
+                    Outcome::Unscored { swing, error } => {
+                        defmt::println!("swing {} not scored: {}", swing.number, error)
+                    }
+                    Outcome::Refused(why) => defmt::println!("refused: {}", why),
+                    Outcome::Accepted | Outcome::Session { .. } => {}
                 }
-            }
-            stages.reply.add(count::now() - at);
+                if let Some(reply) = outcome.reply(message) {
+                    let mut frame = [0u8; MAX_FRAME];
+                    match encode(&reply, &mut frame) {
+                        Ok(n) if expected.starts_with(&frame[..n]) => expected = &expected[n..],
+                        _ => mismatch = true,
+                    }
+                }
+                stages.reply.add(count::now() - at);
+            });
+            let spent = count::now() - start;
+            let stage = match message {
+                Message::PoseFrame(_) | Message::ImuSample(_) if scored => &mut stages.swing,
+                Message::PoseFrame(_) => &mut stages.frame,
+                Message::ImuSample(_) => &mut stages.imu,
+                _ => &mut stages.setup,
+            };
+            stage.add(spent);
+            stage.reached(stack::high_water());
         });
-        let spent = count::now() - start;
-        let stage = match message {
-            Message::PoseFrame(_) | Message::ImuSample(_) if scored => &mut stages.swing,
-            Message::PoseFrame(_) => &mut stages.frame,
-            Message::ImuSample(_) => &mut stages.imu,
-            _ => &mut stages.setup,
-        };
-        stage.add(spent);
-        stage.reached(stack::high_water());
+        if !more {
+            break;
+        }
     }
     Ok(Replayed {
         stages,
