@@ -233,11 +233,25 @@ impl<'a> Reference<'a> {
     }
 }
 
-/// Frames the reference blob `blob` holds once resampled to `model_rate_hz`, read from its
-/// header in a const context, so that a firmware sizes its virtual coach from the references
-/// it embeds; 0 for bytes that do not begin as a reference. Only the header's leading fields
-/// are read: [`Reference::from_bytes`] checks the whole blob when the firmware starts.
-pub const fn frames_at(blob: &[u8], model_rate_hz: f32) -> usize {
+/// Frames the longest of the reference blobs `blobs` holds once resampled to `model_rate_hz`,
+/// read from their headers in a const context, so that a firmware sizes its virtual coach from
+/// the references it embeds; bytes that do not begin as a reference count 0. Only the
+/// headers' leading fields are read: [`Reference::from_bytes`] checks each whole blob when
+/// the firmware starts.
+pub const fn frames_at(blobs: &[&[u8]], model_rate_hz: f32) -> usize {
+    let (mut most, mut k) = (0, 0);
+    while k < blobs.len() {
+        let frames = blob_frames_at(blobs[k], model_rate_hz);
+        if frames > most {
+            most = frames;
+        }
+        k += 1;
+    }
+    most
+}
+
+/// [`frames_at`] of one blob.
+const fn blob_frames_at(blob: &[u8], model_rate_hz: f32) -> usize {
     // After the blob's prefix (magic, header length), the header's postcard: version and name
     // length (varints), the name's bytes, format (a varint), rate (f32, little-endian),
     // frames (a varint).
@@ -432,27 +446,30 @@ mod tests {
                 for model in [30.0, 60.0, rate] {
                     let expected = resample::frames(reference.frames(), reference.rate_hz(), model);
                     assert_eq!(
-                        frames_at(blob, model),
+                        frames_at(&[blob], model),
                         expected,
                         "{frames} frames at {rate} Hz"
                     );
                 }
                 // Cut before its frames field, or not a reference: nothing, and no panic.
-                let whole = frames_at(blob, 30.0);
+                let whole = frames_at(&[blob], 30.0);
                 for cut in 0..n {
-                    let got = frames_at(&blob[..cut], 30.0);
+                    let got = frames_at(&[&blob[..cut]], 30.0);
                     assert!(got == 0 || got == whole, "cut at {cut}: {got}");
                 }
-                assert_eq!(frames_at(&blob[..blob::PREFIX + 2], 30.0), 0);
+                assert_eq!(frames_at(&[&blob[..blob::PREFIX + 2]], 30.0), 0);
                 let mut other = blob.to_vec();
                 other[2] = b'X';
-                assert_eq!(frames_at(&other, 30.0), 0);
+                assert_eq!(frames_at(&[&other], 30.0), 0);
             }
         }
+        // The bundled coaches: the longer one's frames, and none for no blob.
         const DRIVER: &Aligned<[u8]> = &Aligned(*include_bytes!("../../coaches/driver.pcr"));
-        const DRIVER_FRAMES: usize = frames_at(&DRIVER.0, 60.0);
-        let driver = Reference::from_bytes(&DRIVER.0).unwrap();
-        assert_eq!(DRIVER_FRAMES, driver.frames());
+        const IRON: &Aligned<[u8]> = &Aligned(*include_bytes!("../../coaches/iron.pcr"));
+        const LONGEST: usize = frames_at(&[&DRIVER.0, &IRON.0], 60.0);
+        let frames = [&DRIVER.0, &IRON.0].map(|b| Reference::from_bytes(b).unwrap().frames());
+        assert_eq!(LONGEST, frames[0].max(frames[1]));
+        assert_eq!(frames_at(&[], 60.0), 0);
     }
 
     #[test]

@@ -42,15 +42,7 @@ const STUDENT_JOINTS: usize = 17;
 /// The model rate this board has buffers for (a phone asking for more gets a `Nack`), Hz.
 const MODEL_RATE_HZ: u16 = 30;
 /// Frames of the longest bundled coach reference at the model rate, read from the references.
-const COACH_FRAMES: usize = {
-    let driver = reference::frames_at(&DRIVER.0, MODEL_RATE_HZ as f32);
-    let iron = reference::frames_at(&IRON.0, MODEL_RATE_HZ as f32);
-    if driver > iron {
-        driver
-    } else {
-        iron
-    }
-};
+const COACH_FRAMES: usize = reference::frames_at(&[&DRIVER.0, &IRON.0], MODEL_RATE_HZ as f32);
 const LENS: BufferLens = BufferLens::new(STUDENT_JOINTS, COACH_FRAMES, MODEL_RATE_HZ);
 /// Microseconds a UART read waits for a byte before the loop polls the IMU again.
 const UART_WAIT_US: u32 = 200;

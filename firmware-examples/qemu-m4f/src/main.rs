@@ -81,15 +81,7 @@ const STUDENT_JOINTS: usize = 17;
 /// The model rate the log's `Config` asks for, Hz.
 const MODEL_RATE_HZ: u16 = 30;
 /// Frames of the longest bundled coach reference at the model rate, read from the references.
-const COACH_FRAMES: usize = {
-    let driver = reference::frames_at(&DRIVER.0, MODEL_RATE_HZ as f32);
-    let iron = reference::frames_at(&IRON.0, MODEL_RATE_HZ as f32);
-    if driver > iron {
-        driver
-    } else {
-        iron
-    }
-};
+const COACH_FRAMES: usize = reference::frames_at(&[&DRIVER.0, &IRON.0], MODEL_RATE_HZ as f32);
 /// Joints of the bundled coaches (the canonical 22): the network's input.
 #[cfg(feature = "network")]
 const COACH_JOINTS: usize = 22;
