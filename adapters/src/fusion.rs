@@ -311,8 +311,10 @@ impl Mahony {
     /// and, where given and the
     /// heading is magnetic, the heading of `mag` (µT).
     pub fn update(&mut self, gyro: Vec3, accel: Vec3, mag: Option<Vec3>, dt: f32) {
-        let inverse = self.q.inverse();
-        let up = inverse * Vec3::y();
+        // The rotation's matrix, sensor to world, made once: its rows are the world's axes in
+        // the sensor's frame (the middle one is up), and it turns the field both ways.
+        let rotation = *self.q.to_rotation_matrix().matrix();
+        let up = Vec3::new(rotation.m21, rotation.m22, rotation.m23);
         let mut error = Vec3::zeros();
         let (norm, rate) = (math::norm(&accel), math::norm(&gyro));
         if (norm / G - 1.0).abs() <= ACCEL_GATE && rate <= TURN_GATE {
@@ -320,9 +322,9 @@ impl Mahony {
         }
         if let Some(m) = mag.filter(|m| self.magnetic && m.norm_squared() > 0.0) {
             let m = m / math::norm(&m);
-            let h = self.q * m;
+            let h = rotation * m;
             let horizontal = math::sqrt(h.x * h.x + h.z * h.z);
-            let expected = inverse * Vec3::new(0.0, h.y, horizontal);
+            let expected = rotation.tr_mul(&Vec3::new(0.0, h.y, horizontal));
             error += up * up.dot(&m.cross(&expected));
         }
         // The bias is learned only while the sensor lies still: a correction taken in motion
