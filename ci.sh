@@ -4,7 +4,9 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 
-step() { printf '\n==> %s\n' "$*"; }
+# Each step prints the minutes since the start, so a slow step shows in the log.
+start=$SECONDS
+step() { printf '\n==> [%d min] %s\n' "$(((SECONDS - start) / 60))" "$*"; }
 
 step "toolchain (rust-toolchain.toml: pinned version, rustfmt, clippy, thumbv7em-none-eabihf)"
 rustup toolchain install
@@ -38,8 +40,8 @@ fi
 step "tests"
 cargo test --workspace
 
-step "coaching benchmark, small configuration (planted flaws, phone noise, the device's session)"
-cargo run -q -p posecoach-cli -- bench coaching --quick
+step "coaching benchmark, small configuration (planted flaws, phone noise, the device's session), optimized: unoptimized it takes some 19 min"
+cargo run -q --release -p posecoach-cli -- bench coaching --quick
 
 step "tests of the learned retargeter's commands (the learn feature: train, export, eval, --weights)"
 # --workspace keeps every dependency's features as in the step above: only our two crates rebuild.
