@@ -13,7 +13,7 @@
 //! stands still at address from `still_from_s`, an address found anywhere after that is right.
 
 use crate::phone::{self, to_mm, Camera, PhoneNoise};
-use crate::synth_imu::{self, ImuNoise};
+use crate::synth_imu::{self, ImuNoise, SteelClub};
 use anyhow::{bail, Context, Result};
 use nalgebra::Rotation3;
 use posecoach_adapters::log;
@@ -95,6 +95,10 @@ pub struct Args {
     /// IMUs without magnetometers.
     #[arg(long)]
     no_mag: bool,
+    /// A steel club's field at the wrist sensors' magnetometers, µT, fixed in each sensor's
+    /// frame (drawn per sensor), from when the golfer leaves the T-pose to take the club.
+    #[arg(long, value_name = "UT")]
+    steel_club: Option<f32>,
     /// Share of frames (or IMU samples) lost before they reach the device.
     #[arg(long, default_value_t = 0.03)]
     drop: f64,
@@ -218,6 +222,14 @@ pub fn run(args: &Args) -> Result<String> {
         .is_some_and(|r| !(200.0..=1000.0).contains(&r))
     {
         bail!("--imu-rate must be between 200 and 1000 Hz");
+    }
+    if let Some(ut) = args.steel_club {
+        if args.imu_rate.is_none() || args.no_mag {
+            bail!("--steel-club needs IMUs with magnetometers (--imu-rate, without --no-mag)");
+        }
+        if !(0.0..=1000.0).contains(&ut) {
+            bail!("--steel-club {ut} must be between 0 and 1000 µT");
+        }
     }
     if !(10.0..=120.0).contains(&args.pose_rate) {
         bail!(
@@ -357,7 +369,7 @@ pub fn run(args: &Args) -> Result<String> {
     let doc = json!({
         "log": args.out.file_name().map(|n| n.to_string_lossy().into_owned()),
         "kind": if args.imu_rate.is_some() { "imu" } else { "pose" },
-        "rate_hz": args.imu_rate.unwrap_or(args.pose_rate), "magnetometers": args.imu_rate.map(|_| !args.no_mag), "seed": args.seed, "noise_mm": args.noise_mm,
+        "rate_hz": args.imu_rate.unwrap_or(args.pose_rate), "magnetometers": args.imu_rate.map(|_| !args.no_mag), "steel_club_ut": args.steel_club, "seed": args.seed, "noise_mm": args.noise_mm,
         "drift_mm": args.drift_mm, "bias_mm": args.bias_mm, "occluded": args.occluded,
         "jitter_ms": args.jitter_ms, "drop": args.drop, "swaps_per_s": args.swaps_per_s,
         "flips_per_s": args.flips_per_s, "lean_mm_per_m": args.lean_mm_per_m,
@@ -475,7 +487,10 @@ impl Placed {
     }
 }
 
-/// Lays a session out at `rate` on `body`: a still T-pose, then per swing (at `rate` on the
+/// How long a laid-out session's T-pose is held, seconds: the golfer takes the club after it.
+pub const T_POSE_S: f32 = 1.5;
+
+/// Lays a session out at `rate` on `body`: a still T-pose ([`T_POSE_S`]), then per swing (at `rate` on the
 /// body) the walk up to it if given, a set-up, a waggle, the swing and the return; a practice
 /// half swing between swings.
 ///
@@ -506,7 +521,7 @@ pub fn lay_out(
         bail!("the student's body has no hips to turn about");
     };
     let hips = (left, right);
-    t.hold(&place(&rest, first[0]), 1.5);
+    t.hold(&place(&rest, first[0]), T_POSE_S);
     // Walking up to where the next swing's set-up stands.
     let walk_to = |t: &mut Timeline, at: Vec3| {
         if let Some(walk) = walk {
@@ -640,7 +655,14 @@ fn record_imu(
         },
     )?;
     let field = (!args.no_mag).then_some(synth_imu::EARTH_FIELD_UT);
-    let samples = synth_imu::imu_samples(&motion, &layout, rate_hz, &ImuNoise::MEMS, field, rng);
+    let noise = ImuNoise {
+        steel_club: args.steel_club.map(|field_ut| SteelClub {
+            field_ut,
+            from_s: T_POSE_S,
+        }),
+        ..ImuNoise::MEMS
+    };
+    let samples = synth_imu::imu_samples(&motion, &layout, rate_hz, &noise, field, rng);
     let mut sent = 0;
     for sample in samples {
         if rng.random_bool(args.drop) {

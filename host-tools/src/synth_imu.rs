@@ -13,7 +13,8 @@
 //! - gyro: the body rate that turns the previous sample's orientation into this one's (what
 //!   a filter integrating over the step needs), plus a constant bias and white noise;
 //! - accelerometer: `Rᵀ(a − g)` plus white noise;
-//! - magnetometer (optional): `Rᵀ B` plus white noise, `B` e.g. [`EARTH_FIELD_UT`].
+//! - magnetometer (optional): `Rᵀ B` plus white noise, `B` e.g. [`EARTH_FIELD_UT`], and on
+//!   the wrist and hand sensors a steel club's field once it is taken ([`SteelClub`]).
 //!
 //! Values are rounded to wire units and clamped to the `i16` range, as a saturating sensor
 //! would. Sample `k` of every sensor is stamped `k / rate` seconds, in layout order.
@@ -55,6 +56,21 @@ pub struct ImuNoise {
     /// The gyro's range, °/s: an axis past it is sent saturated (the `i16` extreme), as the
     /// LSM6DS3 driver sends an axis at full scale.
     pub gyro_range_dps: f32,
+    /// A steel club near the wrist and hand sensors' magnetometers, where there is one.
+    pub steel_club: Option<SteelClub>,
+}
+
+/// A steel club in the golfer's hands, as the magnetometers of the sensors on the wrists and
+/// hands feel it: its magnetized shaft moves with the hands, so to each of those sensors it
+/// is a constant field in the sensor's own frame (a hard-iron offset), in a direction drawn
+/// per sensor. The earth's field as the steel bends it (soft iron) is not modelled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SteelClub {
+    /// The club's field at a sensor, µT.
+    pub field_ut: f32,
+    /// When the golfer takes the club, seconds from the recording's start (the T-pose is
+    /// held without it).
+    pub from_s: f32,
 }
 
 impl ImuNoise {
@@ -68,6 +84,7 @@ impl ImuNoise {
         mag_rms_ut: 0.4,
         mounting_error_deg: 10.0,
         gyro_range_dps: 2000.0,
+        steel_club: None,
     };
 }
 
@@ -111,7 +128,11 @@ pub fn imu_samples(
             let mut draw = |d: &Normal<f32>| Vec3::from_fn(|_, _| d.sample(rng));
             let gyro_dps = rate.map(f32::to_degrees) + sensor.bias_dps + draw(&gyro_noise);
             let accel_mg = specific * (1000.0 / G) + draw(&accel_noise);
-            let mag_ut = field.map(|b| inverse * b + draw(&mag_noise));
+            let club = noise
+                .steel_club
+                .filter(|club| t >= club.from_s)
+                .map_or(Vec3::zeros(), |_| sensor.club_ut);
+            let mag_ut = field.map(|b| inverse * b + club + draw(&mag_noise));
             samples.push(ImuSample {
                 sensor: sensor.number,
                 t_us: (f64::from(t) * 1e6).round() as u64,
@@ -152,6 +173,9 @@ struct Sensor {
     /// Sensor frame to segment frame, the strap's error included.
     mounting: Quat,
     bias_dps: Vec3,
+    /// A steel club's field in the sensor's frame once it is taken, µT (zero but on the wrists
+    /// and hands).
+    club_ut: Vec3,
     /// Positions of the sensor per frame.
     site: Vec<Vec3>,
 }
@@ -175,6 +199,14 @@ impl Sensor {
             .random_range(0.0..=noise.mounting_error_deg)
             .to_radians();
         let bias = noise.gyro_bias_dps;
+        let near_club = matches!(
+            placement.joint,
+            Joint::LeftWrist | Joint::RightWrist | Joint::LeftHand | Joint::RightHand
+        );
+        let club_ut = match noise.steel_club {
+            Some(club) if near_club => Vec3::from(UnitSphere.sample(rng)) * club.field_ut,
+            _ => Vec3::zeros(),
+        };
         let site = (0..motion.frames())
             .map(|f| {
                 let frame = motion.frame(f);
@@ -189,6 +221,7 @@ impl Sensor {
             joint,
             mounting: heading * Quat::from_scaled_axis(axis * angle) * nominal,
             bias_dps: Vec3::from_fn(|_, _| rng.random_range(-bias..=bias)),
+            club_ut,
             site,
         })
     }

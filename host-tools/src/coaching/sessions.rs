@@ -287,7 +287,8 @@ pub(super) fn run_case(clean: &Clean, case: &SessionCase, ns: &[usize]) -> Resul
         Input::Imu {
             magnetometers,
             worn,
-        } => imu_messages(&body, &timeline, magnetometers, worn, &mut rng)?,
+            steel_club,
+        } => imu_messages(&body, &timeline, magnetometers, worn, steel_club, &mut rng)?,
     };
     messages.insert(
         1,
