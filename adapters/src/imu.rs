@@ -21,7 +21,9 @@
 //! full scale (sent as the `i16` extreme) reads a saturated accelerometer as not there and a
 //! saturated gyro axis at the sensor's last rate under the range, and is counted
 //! ([`ImuAdapter::saturated_samples`]): a wrist past 2 000 °/s turns on at its range rather than
-//! stopping, and turns less than it did while it lasts. Outputs lie on a fixed grid at the
+//! stopping, and turns less than it did while it lasts. A magnetometer reading that is not the
+//! earth's field the T-pose saw (a steel club by the wrist) corrects no heading, and is counted
+//! ([`ImuAdapter::disturbed_samples`]). Outputs lie on a fixed grid at the
 //! adapter's rate, starting one period after calibration; each sensor's orientation is
 //! interpolated to a grid time when a sample passes it, and once every sensor has passed it
 //! one frame of positions goes out. A sensed bone's global rotation comes from its sensor
@@ -253,6 +255,8 @@ pub struct ImuAdapter {
     activity: f32,
     /// Samples taken while tracking with a gyro axis saturated.
     saturated: u32,
+    /// Samples taken while tracking whose field was not the earth's.
+    disturbed: u32,
 }
 
 impl ImuAdapter {
@@ -281,7 +285,7 @@ impl ImuAdapter {
             nominal: Quat::identity(),
             still: StillPeriod::new(),
             bias: Vec3::zeros(),
-            filter: Mahony::starting_at(Gains::DEFAULT, Quat::identity()),
+            filter: Mahony::starting_at(Quat::identity()),
             last_us: None,
             left: Quat::identity(),
             right: Quat::identity(),
@@ -350,6 +354,7 @@ impl ImuAdapter {
             due: None,
             activity: 0.0,
             saturated: 0,
+            disturbed: 0,
         })
     }
 
@@ -396,6 +401,13 @@ impl ImuAdapter {
     /// segments turned less than they did while it lasts.
     pub fn saturated_samples(&self) -> u32 {
         self.saturated
+    }
+
+    /// Samples taken while tracking whose magnetic field was set aside as not the earth's
+    /// ([`fusion::Field::matches`]: steel near the sensor, a club in the hand): their
+    /// sensors' headings followed the gyro alone meanwhile.
+    pub fn disturbed_samples(&self) -> u32 {
+        self.disturbed
     }
 
     /// Global rotation of the segment of the sensor numbered `sensor` at its latest sample,
@@ -544,7 +556,7 @@ impl ImuAdapter {
     fn finish_calibration(&mut self) -> Result<(), FusionError> {
         let len = usize::from(self.len);
         for track in &mut self.tracks[..len] {
-            track.filter = track.still.filter(Gains::DEFAULT)?;
+            track.filter = track.still.filter()?;
             track.bias = track.still.gyro_bias();
         }
         // In the T-pose the filter reads `yaw · mounting`: compare it with the nominal one.
@@ -579,7 +591,12 @@ impl ImuAdapter {
         let before = track.filter.orientation();
         let gyro = reading.gyro - track.bias;
         if let Some(dt) = dt {
-            track.filter.update(gyro, reading.accel, reading.mag, dt);
+            if track
+                .filter
+                .update(Gains::DEFAULT, gyro, reading.accel, reading.mag, dt)
+            {
+                self.disturbed = self.disturbed.saturating_add(1);
+            }
             let rate = math::norm(&gyro);
             if track.activity {
                 self.activity = self.activity.max(rate);

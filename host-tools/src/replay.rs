@@ -200,10 +200,27 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
         "frames_at_model_rate": stream.emitted,
         "imu_stale": session.stale_samples(),
         "imu_saturated": session.saturated_samples(),
+        "imu_disturbed": session.disturbed_samples(),
         "cut_short": cut,
     });
     if swings.is_empty() {
         text.push_str("no swing found\n");
+    }
+    let (saturated, disturbed) = (session.saturated_samples(), session.disturbed_samples());
+    if saturated > 0 {
+        let _ = writeln!(
+            text,
+            "{saturated} IMU samples had a gyro past its range: their segments turned faster \
+             than measured, and angles after them read short"
+        );
+    }
+    if disturbed > 0 {
+        let _ = writeln!(
+            text,
+            "{disturbed} IMU samples read a magnetic field unlike the earth's the T-pose saw \
+             (steel near the sensor, such as the club, or a fast turn's tilt): their sensors' \
+             headings followed the gyros alone then, as without magnetometers"
+        );
     }
     if cut {
         text.push_str(

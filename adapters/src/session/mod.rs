@@ -248,10 +248,18 @@ impl<'b> Session<'b> {
     /// IMU samples with a gyro axis past its range, read at the sensor's last rate under it
     /// ([`crate::imu::ImuAdapter::saturated_samples`]), for the student's current profile.
     pub fn saturated_samples(&self) -> u32 {
-        self.student
-            .as_ref()
-            .and_then(|s| s.imu.as_ref())
-            .map_or(0, |imu| imu.saturated_samples())
+        self.imu_adapter().map_or(0, ImuAdapter::saturated_samples)
+    }
+
+    /// IMU samples whose magnetic field was set aside as not the earth's
+    /// ([`crate::imu::ImuAdapter::disturbed_samples`]), for the student's current profile.
+    pub fn disturbed_samples(&self) -> u32 {
+        self.imu_adapter().map_or(0, ImuAdapter::disturbed_samples)
+    }
+
+    /// The student's IMU adapter, where the layout is set.
+    fn imu_adapter(&self) -> Option<&ImuAdapter> {
+        self.student.as_ref().and_then(|s| s.imu.as_ref())
     }
 
     /// Frames given to swing detection since the session began (at most
