@@ -119,8 +119,6 @@ struct Student<'b> {
     /// Each of the first [`MAX_COACHES`] coaches' set-ups on the student's skeleton, while no
     /// coach is selected (the virtual coach follows each swing's club).
     setups: [Option<Setup>; MAX_COACHES],
-    /// The IMUs' fusion, in a session with a sensor layout.
-    imu: Option<ImuAdapter>,
 }
 
 /// The student as the phone set them up: the profile's skeleton and, in a session with IMUs,
@@ -144,6 +142,10 @@ pub struct Session<'b> {
     selected: Option<u16>,
     body: Option<Body>,
     student: Option<Student<'b>>,
+    /// The IMUs' fusion, while the student is set up with a sensor layout. Kept beside the
+    /// student rather than in it: built where it stays, not copied with the student's other
+    /// parts on their way in (each of its 1.9 KiB was some 15 bytes of the set-up's stack).
+    imu: Option<ImuAdapter>,
     /// The ring while no detector holds it.
     spare: &'b mut [Mm],
     /// The virtual coach, in millimetres, as it was made: each swing reads it turned toward its
@@ -210,6 +212,7 @@ impl<'b> Session<'b> {
             selected: None,
             body: None,
             student: None,
+            imu: None,
             spare: buffers.ring,
             virtual_coach: buffers.coach,
             floats: buffers.floats,
@@ -259,7 +262,7 @@ impl<'b> Session<'b> {
 
     /// The student's IMU adapter, where the layout is set.
     fn imu_adapter(&self) -> Option<&ImuAdapter> {
-        self.student.as_ref().and_then(|s| s.imu.as_ref())
+        self.student.as_ref().and(self.imu.as_ref())
     }
 
     /// Frames given to swing detection since the session began (at most
@@ -441,10 +444,13 @@ impl<'b> Session<'b> {
                     && self.floats.len() >= needed.floats
                     && self.bytes.len() >= needed.bytes;
                 fits.then_some(()).ok_or(Refusal::Buffers)?;
-                let imu = layout
-                    .map(|layout| ImuAdapter::new(layout, &skeleton, f32::from(rate)))
-                    .transpose()
-                    .map_err(Refusal::Imu)?;
+                self.imu = match layout {
+                    Some(layout) => Some(
+                        ImuAdapter::new(layout, &skeleton, f32::from(rate))
+                            .map_err(Refusal::Imu)?,
+                    ),
+                    None => None,
+                };
                 if self.selected.is_none() {
                     // A coach that cannot be made for this student is never chosen.
                     for (setup, c) in setups.iter_mut().zip(candidates) {
@@ -453,7 +459,7 @@ impl<'b> Session<'b> {
                             &skeleton,
                             rate,
                             None,
-                            imu.as_ref(),
+                            self.imu.as_ref(),
                             self.virtual_coach,
                         );
                         *setup = made.ok().and_then(|(swing, events, _)| {
@@ -470,16 +476,17 @@ impl<'b> Session<'b> {
                     &skeleton,
                     rate,
                     network,
-                    imu.as_ref(),
+                    self.imu.as_ref(),
                     self.virtual_coach,
                 )?;
                 let stream = PoseStream::new(StreamConfig::new(rate)).map_err(Refusal::Stream)?;
-                Ok((stream, swing, events, lag, imu))
+                Ok((stream, swing, events, lag))
             });
-        let (stream, coach_swing, coach_events, lag, imu) = match checked {
+        let (stream, coach_swing, coach_events, lag) = match checked {
             Ok(done) => done,
             Err(e) => {
                 self.spare = ring;
+                self.imu = None;
                 return Err(e);
             }
         };
@@ -497,7 +504,6 @@ impl<'b> Session<'b> {
             lag,
             coach: first,
             setups,
-            imu,
         });
         Ok(())
     }
@@ -505,7 +511,7 @@ impl<'b> Session<'b> {
     #[inline(never)]
     fn pose(&mut self, frame: &PoseFrame, on: &mut impl FnMut(Outcome<'_>)) -> Result<(), Refusal> {
         let student = self.student.as_mut().ok_or(Refusal::NoProfile)?;
-        if student.imu.is_some() {
+        if self.imu.is_some() {
             return Err(Refusal::Input);
         }
         // The fit follows the first frame the stream takes: a refused frame before it (a
@@ -590,10 +596,9 @@ impl<'b> Session<'b> {
             skeleton,
             detector,
             t0_us,
-            imu,
             ..
         } = student;
-        let adapter = imu.as_mut().ok_or(Refusal::Input)?;
+        let adapter = self.imu.as_mut().ok_or(Refusal::Input)?;
         let mut closed: Option<(SwingWindow, u64)> = None;
         let frames = &mut self.frames;
         let pushed = adapter
@@ -644,9 +649,9 @@ impl<'b> Session<'b> {
             lag,
             coach: made,
             setups,
-            imu,
             ..
         } = student;
+        let imu = &self.imu;
         let joints = skeleton.len();
         let (swings, config, coaches, selected) =
             (&mut self.swings, self.config, self.coaches, self.selected);
