@@ -5,9 +5,11 @@
 //! score it alike.
 #![allow(clippy::unwrap_used)] // test helpers fail the test by unwrapping
 
+mod common;
+
+use common::{fixture, posecoach};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 /// Events found within this many seconds of the moments made: three frames at the 60 Hz
 /// model rate, as `tests/replay.rs` allows.
@@ -18,22 +20,6 @@ const SCORE_SPREAD: f64 = 1.0;
 /// target is 1 %; measured 2026-12-07: within 3 % at every heading, with magnetometers and
 /// without).
 const BACKSWING: f64 = 0.04;
-
-fn posecoach(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_posecoach"))
-        .args(args)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "posecoach {args:?}: {err}");
-    String::from_utf8(out.stdout).unwrap()
-}
-
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/fixtures")
-        .join(name)
-}
 
 /// The bundled T-pose turned `degrees` about the vertical (+Y), written to `out`.
 fn turned_tpose(degrees: f64, out: &Path) {

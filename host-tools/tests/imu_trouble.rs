@@ -2,19 +2,10 @@
 //! or said.
 #![allow(clippy::unwrap_used)] // test helpers fail the test by unwrapping
 
-use serde_json::Value;
-use std::path::Path;
-use std::process::Command;
+mod common;
 
-fn posecoach(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_posecoach"))
-        .args(args)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "posecoach {args:?}: {err}");
-    String::from_utf8(out.stdout).unwrap()
-}
+use common::{fixture, posecoach};
+use serde_json::Value;
 
 /// The bundled iron swing, made as the iron coach made it, recorded by six IMUs with
 /// magnetometers whose wrist sensors feel a steel club of 60 µT from the set-up on (a field
@@ -24,14 +15,10 @@ fn posecoach(args: &[&str]) -> String {
 /// counts the set-aside samples and says what they limit.
 #[test]
 fn a_steel_club_by_the_wrists_is_set_aside_not_followed() {
-    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures");
     let dir = std::env::temp_dir().join(format!("posecoach-steel-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let log = dir.join("steel_club.pclog");
-    let (iron, tpose) = (
-        fixtures.join("golf_iron_60hz.csv"),
-        fixtures.join("h36m17_tpose.csv"),
-    );
+    let (iron, tpose) = (fixture("golf_iron_60hz.csv"), fixture("h36m17_tpose.csv"));
     posecoach(&[
         "synth-log",
         "--swing",
