@@ -5,6 +5,9 @@
 mod common;
 
 use common::{fixture, posecoach};
+use posecoach_adapters::log::{header, LogReader};
+use posecoach_cli::device_sim::frame;
+use posecoach_core::wire::Message;
 use serde_json::Value;
 
 /// The bundled iron swing, made as the iron coach made it, recorded by six IMUs with
@@ -56,6 +59,66 @@ fn a_steel_club_by_the_wrists_is_set_aside_not_followed() {
     assert!(
         text.contains(&format!(
             "{disturbed} IMU samples read a magnetic field unlike"
+        )),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A gyro past its range: synth-log's iron swing with the lead wrist's gyro (sensor 4) sent
+/// at full scale on one axis, as the LSM6DS3 sends it, for 50 ms from the top. The swing is
+/// still found and scored, and the replay counts those samples and says what they limit.
+#[test]
+fn a_saturated_gyro_is_counted_and_said() {
+    let dir = std::env::temp_dir().join(format!("posecoach-saturated-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (clean, log) = (dir.join("clean.pclog"), dir.join("saturated.pclog"));
+    let (iron, tpose) = (fixture("golf_iron_60hz.csv"), fixture("h36m17_tpose.csv"));
+    let made: Value = serde_json::from_str(&posecoach(&[
+        "synth-log",
+        "--swing",
+        iron.to_str().unwrap(),
+        "--student-tpose",
+        tpose.to_str().unwrap(),
+        "--imu-rate",
+        "200",
+        "--coach",
+        "1",
+        "--seed",
+        "3",
+        "--out",
+        clean.to_str().unwrap(),
+        "--json",
+    ]))
+    .unwrap();
+    let top_us = (made["expected"]["swings"][0]["events_s"]["top"]
+        .as_f64()
+        .unwrap()
+        * 1e6) as u64;
+    let bytes = std::fs::read(&clean).unwrap();
+    let mut out = header().to_vec();
+    let mut saturated = 0;
+    for mut message in LogReader::new(&bytes).unwrap() {
+        if let Message::ImuSample(sample) = &mut message {
+            if sample.sensor == 4 && (top_us..top_us + 50_000).contains(&sample.t_us) {
+                sample.gyro_ddps[0] = i16::MAX;
+                saturated += 1;
+            }
+        }
+        out.extend(frame(&message).unwrap());
+    }
+    assert!(saturated >= 8, "{saturated} samples saturated");
+    std::fs::write(&log, out).unwrap();
+    let replay: Value =
+        serde_json::from_str(&posecoach(&["replay", "--json", log.to_str().unwrap()])).unwrap();
+    let swings = replay["swings"].as_array().unwrap();
+    assert_eq!(swings.len(), 1, "{replay}");
+    assert!(swings[0]["report"].is_object(), "not scored: {}", swings[0]);
+    assert_eq!(replay["counters"]["imu_saturated"], saturated);
+    let text = posecoach(&["replay", log.to_str().unwrap()]);
+    assert!(
+        text.contains(&format!(
+            "{saturated} IMU samples had a gyro past its range"
         )),
         "{text}"
     );
