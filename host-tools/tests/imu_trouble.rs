@@ -9,6 +9,41 @@ use posecoach_adapters::log::{header, LogReader};
 use posecoach_cli::device_sim::frame;
 use posecoach_core::wire::Message;
 use serde_json::Value;
+use std::path::Path;
+
+/// The bundled iron swing as the iron coach made it, recorded by synth-log's six IMUs with
+/// magnetometers into `log`, with `extra` options: what synth-log says it made.
+fn iron_log(log: &Path, extra: &[&str]) -> Value {
+    let (iron, tpose) = (fixture("golf_iron_60hz.csv"), fixture("h36m17_tpose.csv"));
+    let mut args = vec![
+        "synth-log",
+        "--swing",
+        iron.to_str().unwrap(),
+        "--student-tpose",
+        tpose.to_str().unwrap(),
+        "--imu-rate",
+        "200",
+        "--coach",
+        "1",
+        "--seed",
+        "3",
+        "--out",
+        log.to_str().unwrap(),
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    serde_json::from_str(&posecoach(&args)).unwrap()
+}
+
+/// `log` replayed (`--json`), which must find one swing and score it; and its text.
+fn replayed(log: &Path) -> (Value, String) {
+    let replay: Value =
+        serde_json::from_str(&posecoach(&["replay", "--json", log.to_str().unwrap()])).unwrap();
+    let swings = replay["swings"].as_array().unwrap();
+    assert_eq!(swings.len(), 1, "{replay}");
+    assert!(swings[0]["report"].is_object(), "not scored: {}", swings[0]);
+    (replay, posecoach(&["replay", log.to_str().unwrap()]))
+}
 
 /// The bundled iron swing, made as the iron coach made it, recorded by six IMUs with
 /// magnetometers whose wrist sensors feel a steel club of 60 µT from the set-up on (a field
@@ -21,30 +56,9 @@ fn a_steel_club_by_the_wrists_is_set_aside_not_followed() {
     let dir = std::env::temp_dir().join(format!("posecoach-steel-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let log = dir.join("steel_club.pclog");
-    let (iron, tpose) = (fixture("golf_iron_60hz.csv"), fixture("h36m17_tpose.csv"));
-    posecoach(&[
-        "synth-log",
-        "--swing",
-        iron.to_str().unwrap(),
-        "--student-tpose",
-        tpose.to_str().unwrap(),
-        "--imu-rate",
-        "200",
-        "--coach",
-        "1",
-        "--seed",
-        "3",
-        "--steel-club",
-        "60",
-        "--out",
-        log.to_str().unwrap(),
-    ]);
-    let replay: Value =
-        serde_json::from_str(&posecoach(&["replay", "--json", log.to_str().unwrap()])).unwrap();
-    let swings = replay["swings"].as_array().unwrap();
-    assert_eq!(swings.len(), 1, "{replay}");
-    let report = &swings[0]["report"];
-    assert!(report.is_object(), "not scored: {}", swings[0]);
+    iron_log(&log, &["--steel-club", "60"]);
+    let (replay, text) = replayed(&log);
+    let report = &replay["swings"][0]["report"];
     assert_eq!(
         report["advice"],
         serde_json::json!([]),
@@ -55,7 +69,6 @@ fn a_steel_club_by_the_wrists_is_set_aside_not_followed() {
     // aside.
     let disturbed = replay["counters"]["imu_disturbed"].as_u64().unwrap();
     assert!(disturbed > 2_000, "{disturbed} samples set aside");
-    let text = posecoach(&["replay", log.to_str().unwrap()]);
     assert!(
         text.contains(&format!(
             "{disturbed} IMU samples read a magnetic field unlike"
@@ -73,24 +86,7 @@ fn a_saturated_gyro_is_counted_and_said() {
     let dir = std::env::temp_dir().join(format!("posecoach-saturated-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (clean, log) = (dir.join("clean.pclog"), dir.join("saturated.pclog"));
-    let (iron, tpose) = (fixture("golf_iron_60hz.csv"), fixture("h36m17_tpose.csv"));
-    let made: Value = serde_json::from_str(&posecoach(&[
-        "synth-log",
-        "--swing",
-        iron.to_str().unwrap(),
-        "--student-tpose",
-        tpose.to_str().unwrap(),
-        "--imu-rate",
-        "200",
-        "--coach",
-        "1",
-        "--seed",
-        "3",
-        "--out",
-        clean.to_str().unwrap(),
-        "--json",
-    ]))
-    .unwrap();
+    let made = iron_log(&clean, &[]);
     let top_us = (made["expected"]["swings"][0]["events_s"]["top"]
         .as_f64()
         .unwrap()
@@ -109,13 +105,8 @@ fn a_saturated_gyro_is_counted_and_said() {
     }
     assert!(saturated >= 8, "{saturated} samples saturated");
     std::fs::write(&log, out).unwrap();
-    let replay: Value =
-        serde_json::from_str(&posecoach(&["replay", "--json", log.to_str().unwrap()])).unwrap();
-    let swings = replay["swings"].as_array().unwrap();
-    assert_eq!(swings.len(), 1, "{replay}");
-    assert!(swings[0]["report"].is_object(), "not scored: {}", swings[0]);
+    let (replay, text) = replayed(&log);
     assert_eq!(replay["counters"]["imu_saturated"], saturated);
-    let text = posecoach(&["replay", log.to_str().unwrap()]);
     assert!(
         text.contains(&format!(
             "{saturated} IMU samples had a gyro past its range"
