@@ -92,7 +92,7 @@ pub struct Args {
     /// at most three swings on the first body.
     #[arg(long)]
     quick: bool,
-    /// Leave out the two IMU rows (six IMUs at 200 Hz, with and without magnetometers).
+    /// Leave out the IMU rows (every layout, with and without magnetometers, the steel club).
     #[arg(long)]
     no_imu: bool,
     /// Film with a phone whose estimator makes no left/right swaps, front/back flips or lean
