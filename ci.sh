@@ -47,7 +47,7 @@ step "tests of the learned retargeter's commands (the learn feature: train, expo
 # --workspace keeps every dependency's features as in the step above: only our two crates rebuild.
 cargo test --workspace --features posecoach-cli/learn,posecoach-tests/learn --test learned --test int8
 
-step "installs as a Rust tool: cargo install --path host-tools, then the installed posecoach runs the demo"
+step "installs as a Rust tool: cargo install --locked --path host-tools, then the installed posecoach runs the demo"
 install_root="$(mktemp -d)"
 cargo install --quiet --locked --path host-tools --root "$install_root" --target-dir target
 "$install_root/bin/posecoach" demo --out-dir "$install_root/demo" >/dev/null
