@@ -41,6 +41,26 @@ pub fn motion(n: usize) -> Result<posecoach_io::Motion> {
     posecoach_io::Motion::from_reference(&blob.0).with_context(|| format!("bundled coach {n}"))
 }
 
+/// The bundled reference named `name` (`driver`, `iron`: the names `posecoach reference
+/// --name` gave them) as a motion, if there is one.
+///
+/// # Errors
+/// Only if a bundled file were damaged.
+pub fn named(name: &str) -> Result<Option<posecoach_io::Motion>> {
+    match all()?.iter().position(|r| r.name() == name) {
+        Some(n) => motion(n).map(Some),
+        None => Ok(None),
+    }
+}
+
+/// The bundled references' names, in order.
+///
+/// # Errors
+/// Only if a bundled file were damaged.
+pub fn names() -> Result<Vec<String>> {
+    Ok(all()?.iter().map(|r| r.name().to_owned()).collect())
+}
+
 /// A weights blob read from a file, kept aligned for the core's in-place view.
 #[derive(Clone, Debug)]
 pub struct Network {
@@ -147,5 +167,13 @@ mod tests {
                 "{name}"
             );
         }
+    }
+
+    #[test]
+    fn a_bundled_coach_is_found_by_its_name() {
+        assert_eq!(names().unwrap(), ["driver", "iron"]);
+        let iron = named("iron").unwrap().unwrap();
+        assert_eq!(iron.frames(), motion(1).unwrap().frames());
+        assert!(named("putter").unwrap().is_none());
     }
 }

@@ -2,7 +2,8 @@
 //! themselves (`--units`, `--up`, `--rate`), and a note of how a keypoint file was read when
 //! anything was converted.
 
-use anyhow::Result;
+use crate::coaches;
+use anyhow::{bail, Result};
 use posecoach_io::keypoints::Clock;
 use posecoach_io::landmarks::Landmarks;
 use posecoach_io::units::{Units, Up};
@@ -47,6 +48,27 @@ impl Args {
             eprintln!("note: {}: {note}", path.display());
         }
         Ok(motion)
+    }
+
+    /// Loads a coach: a bundled coach by its name (`driver`, `iron`: a bare name, no
+    /// extension), or a motion file as [`Args::load`] does.
+    ///
+    /// # Errors
+    /// As [`Args::load`]; a bare name that is neither a file nor a bundled coach is told the
+    /// bundled names.
+    pub fn load_coach(&self, path: &Path) -> Result<Motion> {
+        let bare = path.extension().is_none() && path.components().count() == 1;
+        if bare && !path.exists() {
+            let name = path.to_string_lossy();
+            return match coaches::named(&name)? {
+                Some(coach) => Ok(coach),
+                None => bail!(
+                    "{name}: no such file, and no bundled coach of that name (bundled: {})",
+                    coaches::names()?.join(", ")
+                ),
+            };
+        }
+        self.load(path)
     }
 
     /// Loads a motion with the hints given, and how it was read.

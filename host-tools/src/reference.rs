@@ -8,7 +8,8 @@ use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The coach's swing (.csv, .json, .bvh or .c3d).
+    /// The coach's swing (.csv, .json, .bvh, .c3d, .pcr), or a bundled coach by name:
+    /// `driver` or `iron`.
     #[arg(long)]
     coach: PathBuf,
     /// The name it is stored under (at most 32 bytes); the file's stem by default.
@@ -25,7 +26,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<String> {
-    let motion = args.input.load(&args.coach)?;
+    let motion = args.input.load_coach(&args.coach)?;
     if motion.rate_hz <= 0.0 {
         bail!(
             "{} is a single pose; a coach reference is a swing",

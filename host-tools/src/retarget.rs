@@ -9,7 +9,8 @@ use std::path::PathBuf;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The coach's motion (.bvh, .c3d, .csv or .json).
+    /// The coach's motion (.bvh, .c3d, .csv, .json, .pcr), or a bundled coach by name:
+    /// `driver` or `iron`.
     #[arg(long)]
     coach: PathBuf,
     /// The student's T-pose: a one-row CSV, or any motion file whose skeleton is used.
@@ -45,7 +46,7 @@ pub fn run(args: &Args) -> Result<String> {
         ))
         .into());
     }
-    let coach = args.input.load(&args.coach)?;
+    let coach = args.input.load_coach(&args.coach)?;
     let student = args.input.load(&args.student_tpose)?;
     let (mut virtual_swing, method) = match &args.weights {
         Some(path) => (

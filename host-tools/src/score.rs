@@ -18,7 +18,8 @@ use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The coach's swing (.bvh, .c3d, .csv or .json).
+    /// The coach's swing (.bvh, .c3d, .csv, .json, .pcr), or a bundled coach by name:
+    /// `driver` or `iron`.
     #[arg(long)]
     coach: PathBuf,
     /// The student's swing (.bvh, .c3d, .csv or .json); more than once for a session: each
@@ -72,7 +73,7 @@ pub fn run(args: &Args) -> Result<String> {
     if let Some(path) = &args.report {
         ReportFormat::of(path)?;
     }
-    let coach = args.input.load(&args.coach)?;
+    let coach = args.input.load_coach(&args.coach)?;
     let first = args.input.load(&args.student[0])?;
     // The student's body: the T-pose if given, else the skeleton measured from the (first)
     // swing. Both swings are compared on it, as rigid bones: the coach's retargeted, the
