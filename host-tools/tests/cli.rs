@@ -108,6 +108,25 @@ fn a_swing_against_itself_scores_100() {
 }
 
 #[test]
+fn a_bundled_coach_is_named_without_a_file() {
+    // The binary carries the device's coaches: `--coach iron` is `coaches/iron.pcr`.
+    let student = fixture("golf_iron_60hz.csv");
+    let student = student.to_str().unwrap();
+    let bundled = fixture("../../coaches/iron.pcr");
+    let scored = |coach: &str| {
+        let (ok, out, err) =
+            posecoach(&["score", "--coach", coach, "--student", student, "--json"]);
+        assert!(ok, "{err}");
+        let mut r: Value = serde_json::from_str(&out).unwrap();
+        r.as_object_mut().unwrap().remove("files");
+        r
+    };
+    assert_eq!(scored("iron"), scored(bundled.to_str().unwrap()));
+    let (ok, _, err) = posecoach(&["score", "--coach", "putter", "--student", student]);
+    assert!(!ok && err.contains("bundled: driver, iron"), "{err}");
+}
+
+#[test]
 fn driver_against_iron_matches_its_golden_report() {
     let mut r = score_json("golf_driver_60hz.csv", "golf_iron_60hz.csv", &[]);
     // The files as given (this checkout's paths), then the rest against the golden report.
@@ -530,6 +549,43 @@ fn every_bring_your_own_data_example_reads_as_its_tool_writes_it() {
             scored["score"]
         );
     }
+}
+
+/// The README's bring-your-own-data table states each example's score against the bundled
+/// iron; `score` must print it, or the README is stale.
+#[test]
+fn the_readmes_bring_your_own_data_scores_are_what_score_prints() {
+    let readme = std::fs::read_to_string(fixture("../../README.md")).unwrap();
+    let section = readme.split("## Bring your own data").nth(1).unwrap();
+    let mut rows = 0;
+    for row in section.lines().take_while(|l| !l.starts_with("## ")) {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let Some(file) = cells.get(1).and_then(|c| c.strip_prefix('`')) else {
+            continue;
+        };
+        let file = file.trim_end_matches('`');
+        let stated: f64 = cells[3].split([' ', ':']).next().unwrap().parse().unwrap();
+        let path = fixture(&format!("byod/{file}"));
+        let (ok, out, err) = posecoach(&[
+            "score",
+            "--coach",
+            "iron",
+            "--student",
+            path.to_str().unwrap(),
+            "--rate",
+            "60",
+            "--json",
+        ]);
+        assert!(ok, "{file}: {err}");
+        let r: Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(
+            r["score"].as_f64(),
+            Some(stated),
+            "{file}: the README says {stated}"
+        );
+        rows += 1;
+    }
+    assert_eq!(rows, 4, "the README's table has one row per example");
 }
 
 #[test]
