@@ -58,7 +58,25 @@ grep -q '#\[cfg(feature = "learn")\]' <(grep -B1 '^pub mod learn;' host-tools/sr
     fail "host-tools/src/lib.rs declares learn without the feature"
 
 # Import circles: every `crate::module` / `super::module` a module names outside comments and
-# tests is an edge; tsort finds the loops.
+# tests is an edge, grouped ones too (`use crate::{a, b::c}` names a and b); tsort finds the
+# loops.
+# The first path segment after each `crate::` or `super::` on standard input, one a line; a
+# group `{a, b::{c, d}}` gives a and b.
+named_modules() {
+    perl -0777 -ne '
+        while (/\b(?:crate|super)::(\{|[a-z_0-9]+)/g) {
+            if ($1 ne "{") { print "$1\n"; next }
+            my ($depth, $at) = (1, pos);
+            my $end = $at;
+            while ($depth && $end < length) {
+                my $c = substr($_, $end++, 1);
+                $depth += ($c eq "{") - ($c eq "}");
+            }
+            my $group = substr($_, $at, $end - $at - 1);
+            1 while $group =~ s/\{[^{}]*\}//g;
+            print "$1\n" while $group =~ /(?:^|,)\s*([a-z_0-9]+)/g;
+        }'
+}
 module_edges() {
     local dir=$1 file module target
     for file in $(find "$dir" -name '*.rs'); do
@@ -67,8 +85,7 @@ module_edges() {
         module=${module%/mod}
         module=${module%%/*}
         [ "$module" = lib ] || [ "$module" = main ] && continue
-        sed '/#\[cfg(test)\]/,$d' "$file" | grep -v '^ *//' |
-            grep -oE '\b(crate|super)::[a-z_0-9]+' | sed 's/.*:://' | sort -u |
+        sed '/#\[cfg(test)\]/,$d' "$file" | grep -v '^ *//' | named_modules | sort -u |
             while read -r target; do
                 if [ "$target" != "$module" ] && { [ -e "$dir/$target.rs" ] || [ -e "$dir/$target/mod.rs" ]; }; then
                     echo "$module $target"

@@ -3,7 +3,7 @@
 //! checkpoint, `posecoach_teachfile`; read without the `learn` feature).
 
 use crate::input;
-use crate::score::decimal;
+use crate::table::decimal;
 use anyhow::{Context, Result};
 use posecoach_core::skeleton::Segment;
 use posecoach_core::weights::{self, Dense, Table, Weights};

@@ -21,6 +21,7 @@ pub mod phone;
 pub mod progress;
 pub mod reference;
 pub mod replay;
+pub mod report;
 pub mod retarget;
 pub mod score;
 pub mod session;

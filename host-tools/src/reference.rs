@@ -49,13 +49,13 @@ pub fn run(args: &Args) -> Result<String> {
     if args.json {
         let doc = serde_json::json!({
             "out": args.out.display().to_string(), "name": name, "joints": joints,
-            "frames": frames, "rate_hz": crate::score::decimal(motion.rate_hz, 3), "bytes": bytes.len(),
+            "frames": frames, "rate_hz": crate::table::decimal(motion.rate_hz, 3), "bytes": bytes.len(),
         });
         return Ok(format!("{doc}\n"));
     }
     Ok(format!(
         "wrote coach reference `{name}` ({joints} joints, {frames} frames at {} Hz, {} bytes) to {}\n",
-        crate::score::decimal(motion.rate_hz, 3),
+        crate::table::decimal(motion.rate_hz, 3),
         bytes.len(),
         args.out.display()
     ))

@@ -1,7 +1,7 @@
 //! `posecoach replay`: a recorded session through the device's pipeline, swing by swing.
 
 use crate::failure::NothingFound;
-use crate::{coaches, device_sim, html, score};
+use crate::{coaches, device_sim, html, report};
 use anyhow::{Context, Result};
 use posecoach_adapters::log::LogReader;
 use posecoach_adapters::session::{Outcome, Session};
@@ -70,7 +70,7 @@ impl Replay {
 
 pub fn run(args: &Args) -> Result<String> {
     if let Some(path) = &args.report {
-        score::ReportFormat::of(path)?;
+        report::ReportFormat::of(path)?;
     }
     let bytes =
         std::fs::read(&args.log).with_context(|| format!("reading {}", args.log.display()))?;
@@ -84,7 +84,7 @@ pub fn run(args: &Args) -> Result<String> {
     }
     if let Some(path) = &args.report {
         let notes = [format!("Recorded session: {}", args.log.display())];
-        score::write_report(path, &json, || {
+        report::write_report(path, &json, || {
             html::page(
                 "posecoach session report",
                 &notes,
@@ -177,8 +177,8 @@ fn replay_on(session: &mut Session<'_>, log: &[u8]) -> Result<Replay> {
             match &outcome {
                 Ok(scored) => {
                     text.push('\n');
-                    text.push_str(&score::to_text(scored));
-                    entry["report"] = score::to_json(scored);
+                    text.push_str(&report::to_text(scored));
+                    entry["report"] = report::to_json(scored);
                 }
                 Err(error) => {
                     let _ = writeln!(text, " not scored: {error}");

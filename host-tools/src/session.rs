@@ -2,7 +2,7 @@
 //! shape as a swing's report, its values the session's estimates, with how many swings were
 //! used, which were set aside and why, and each metric's swing-to-swing spread.
 
-use crate::score::decimal;
+use crate::table::decimal;
 use posecoach_core::checks::CHECKS;
 use posecoach_core::score::{Advice, Phase, Verdict};
 use posecoach_core::sequence::GAPS;

@@ -124,6 +124,13 @@ pub fn peak_text(p: &Peak, top: f32, hz: f32, exact: bool) -> (String, bool) {
     }
 }
 
+/// `value` rounded to `places` decimals, as reports print a measured number: to what it means
+/// (a score to 0.1 point, seconds to the ms), not as a widened `f32`'s digits.
+pub fn decimal(value: f32, places: i32) -> f64 {
+    let scale = 10f64.powi(places);
+    (f64::from(value) * scale).round() / scale
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
