@@ -207,19 +207,8 @@ fn samples(bytes: &[u8]) -> Result<Samples, CsvError> {
     let header_line = line_of(header.position()).max(1);
     // Text as the parser holds it, in place: a wide header's cells are many.
     let cells = ::csv::StringRecord::from_byte_record_lossy(header);
-    // The time column: one whose name says time, before one that only counts frames (pandas
-    // writes its row index first, unnamed, before a file's own time column).
-    let clocks = || {
-        cells
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| column(c).is_none())
-            .filter_map(|(i, c)| keypoints::clock_of(c).map(|clock| (i, clock)))
-    };
-    let clock = clocks()
-        .find(|(_, clock)| *clock != Some(keypoints::Clock::Frames))
-        .or_else(|| clocks().next())
-        .map(|(i, _)| i);
+    // The time column ([`keypoints::time_among`]), of the cells that are no landmark's.
+    let clock = keypoints::time_among(cells.iter().map(|c| column(c).is_none().then_some(c)));
     let mut landmarks: Vec<Columns> = Vec::new();
     // Each landmark's place in `landmarks`, by its key.
     let mut by_key = Places::default();

@@ -1,8 +1,9 @@
 //! Keypoint JSON as pose-estimator scripts write it: one object per frame.
 //!
 //! The frames are a JSON array, an object's `frames` array, or one object per line (JSON
-//! Lines). In a frame, the time is the first key that names one ([`keypoints::clock_of`]:
-//! `time`, `t`, `timestamp`, `time_ms`, `frame`, ...), and the landmarks are the value of
+//! Lines). In a frame, the time is the key that says time, before one that counts frames
+//! ([`keypoints::time_among`]: `time`, `t`, `timestamp`, `time_ms`, then `frame`, ...), and
+//! the landmarks are the value of
 //! `keypoints`, `landmarks`, `joints`, `pose_world_landmarks`, `pose_landmarks`, `landmark` or
 //! `keypoints_3d` (inside the first of `people` or `instances` where those hold them), else
 //! the frame's other keys. They may be:
@@ -251,9 +252,8 @@ impl Reader {
     /// Reads frame `at` (1-based): its time, then its landmarks.
     fn frame(&mut self, at: usize, frame: Option<Object>) -> Result<(), JsonError> {
         let frame = frame.ok_or(err(at, JsonErrorKind::NotAnObject))?;
-        let clock = frame
-            .keys()
-            .find(|k| keypoints::clock_of(k).is_some())
+        let clock = keypoints::time_among(frame.keys().map(|k| Some(&**k)))
+            .and_then(|i| frame.keys().nth(i))
             .map(|k| k.to_string());
         if at == 1 {
             self.out.clock.clone_from(&clock);

@@ -187,6 +187,24 @@ pub fn clock_of(name: &str) -> Option<Option<Clock>> {
     Some(clock)
 }
 
+/// Which of `names` (a header's cells, a frame's keys, in order; `None` for one that cannot be
+/// the time) is the time: the first whose name says time ([`clock_of`]), before the first that
+/// only counts frames (pandas writes its row index first, unnamed; a frame may carry its
+/// counter beside its timestamp).
+pub fn time_among<'a>(names: impl IntoIterator<Item = Option<&'a str>>) -> Option<usize> {
+    let mut counter = None;
+    for (i, name) in names.into_iter().enumerate() {
+        match name.and_then(clock_of) {
+            Some(Some(Clock::Frames)) => {
+                counter.get_or_insert(i);
+            }
+            Some(_) => return Some(i),
+            None => {}
+        }
+    }
+    counter
+}
+
 /// The samples as a motion in metres, +Y up, at an even rate, with how they were read.
 ///
 /// # Errors
@@ -359,30 +377,51 @@ fn timing(
     if clock == Clock::Rows {
         return Ok((clock, rate_hz, (0..rows).collect()));
     }
-    let slots = place(times, seconds_per_unit, rate_hz);
-    // Times stepped unevenly (rounded to the millisecond, jittered) give the rate of the
-    // frames they fill over their span: integer milliseconds at 60 Hz step 16, 17, 17, and
-    // the median step alone would say 58.8 Hz. Even steps keep their own.
+    // Times stepped unevenly (rounded to the millisecond, jittered) give the rate of the line
+    // through them: each row's frame counted in median steps (a step of about two is a skipped
+    // frame), the period the least-squares slope of time over frame. Whole milliseconds at
+    // 30 Hz step 33, 33, 34 and are 30 Hz, where the median step alone says 30.3 and a
+    // skipped frame would appear every 3 s. Even steps keep their own.
     let (low, high) = steps
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &s| {
             (l.min(s), h.max(s))
         });
-    let span = match (times.first(), times.last()) {
-        (Some(first), Some(last)) => (last - first) * seconds_per_unit,
-        _ => 0.0,
-    };
-    let last = slots.last().copied().unwrap_or(0);
     if matches!(clock, Clock::Seconds | Clock::Milliseconds)
         && high - low > 1e-6 * median
-        && span > 0.0
+        && median > 0.0
     {
-        let rate_hz = (last as f64 / span) as f32;
-        if (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz) {
-            return Ok((clock, rate_hz, place(times, seconds_per_unit, rate_hz)));
+        if let Some(period) = fitted_period(times, median) {
+            let rate_hz = (1.0 / (period * seconds_per_unit)) as f32;
+            if (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate_hz) {
+                return Ok((clock, rate_hz, place(times, seconds_per_unit, rate_hz)));
+            }
         }
     }
-    Ok((clock, rate_hz, slots))
+    Ok((clock, rate_hz, place(times, seconds_per_unit, rate_hz)))
+}
+
+/// The period of `times` (increasing, in their unit): the least-squares slope of each time over
+/// its frame, frames counted in steps of `median` (each step at least one frame). `None` for
+/// fewer than two times.
+fn fitted_period(times: &[f64], median: f64) -> Option<f64> {
+    let t0 = *times.first()?;
+    let (mut frame, mut last) = (0.0, t0);
+    let (mut n, mut sk, mut st, mut skk, mut skt) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (i, &t) in times.iter().enumerate() {
+        if i > 0 {
+            frame += ((t - last) / median).round().max(1.0);
+        }
+        last = t;
+        let t = t - t0;
+        n += 1.0;
+        sk += frame;
+        st += t;
+        skk += frame * frame;
+        skt += frame * t;
+    }
+    let spread = n * skk - sk * sk;
+    (n >= 2.0 && spread > 0.0).then(|| (n * skt - sk * st) / spread)
 }
 
 /// Each time's frame at `rate_hz`: the nearest, and at least one after the one before, so a
@@ -543,15 +582,23 @@ mod tests {
     }
 
     #[test]
-    fn millisecond_timestamps_give_the_rate_of_their_span() {
-        // 60 Hz written as whole milliseconds (16, 17, 17, ...), one frame dropped.
-        let mut s = samples(40, 1.0, |v| v, Some(("timestamp_ms", 1.0)));
-        s.times = (0..40)
-            .map(|f| ((f + usize::from(f >= 20)) as f64 * 1000.0 / 60.0).round())
-            .collect();
-        let (m, r) = motion(&s, &Hints::default()).unwrap();
-        assert!((m.rate_hz - 60.0).abs() < 0.05, "{}", m.rate_hz);
-        assert_eq!((m.frames(), r.skipped), (41, 1));
+    fn whole_millisecond_timestamps_are_read_at_their_true_rate() {
+        // Whole milliseconds (30 Hz: 0, 33, 67, 100, ...; 60 Hz: 16, 17, 17, ...) over 10 s,
+        // one frame dropped: the rate the clock ran at, and only that frame skipped.
+        for rate in [24.0, 25.0, 30.0, 50.0, 60.0, 120.0] {
+            let rows = (10.0 * rate) as usize;
+            let mut s = samples(rows, 1.0, |v| v, Some(("timestamp_ms", 1.0)));
+            s.times = (0..rows)
+                .map(|f| ((f + usize::from(f >= rows / 2)) as f64 * 1000.0 / rate).round())
+                .collect();
+            let (m, r) = motion(&s, &Hints::default()).unwrap();
+            assert!(
+                (f64::from(m.rate_hz) - rate).abs() < 0.01,
+                "{rate}: {}",
+                m.rate_hz
+            );
+            assert_eq!((m.frames(), r.skipped), (rows + 1, 1), "{rate}");
+        }
     }
 
     #[test]
