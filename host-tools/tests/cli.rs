@@ -588,6 +588,67 @@ fn the_readmes_bring_your_own_data_scores_are_what_score_prints() {
     assert_eq!(rows, 4, "the README's table has one row per example");
 }
 
+/// The OpenPose example written as OpenPose's `--write_json` writes a clip: a folder of
+/// per-frame files, BODY_25 flat inside `people` (2D always, 3D with a score where `three_d`).
+fn openpose_folder(name: &str, three_d: bool) -> PathBuf {
+    let text = std::fs::read_to_string(fixture("byod/openpose_iron.csv")).unwrap();
+    let dir = std::env::temp_dir().join(format!("posecoach-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (f, row) in text.lines().skip(1).enumerate() {
+        let xyz: Vec<&str> = row.split(',').skip(1).collect();
+        let (mut two, mut three) = (Vec::new(), Vec::new());
+        for p in xyz.chunks(3) {
+            two.extend([p[0], p[1], "0.9"]);
+            three.extend([p[0], p[1], p[2], "0.9"]);
+        }
+        let three = if three_d {
+            three.join(",")
+        } else {
+            String::new()
+        };
+        let frame = format!(
+            "{{\"version\":1.3,\"people\":[{{\"person_id\":[-1],\"pose_keypoints_2d\":[{}],\
+             \"face_keypoints_2d\":[],\"pose_keypoints_3d\":[{three}],\"face_keypoints_3d\":[]}}]}}",
+            two.join(",")
+        );
+        std::fs::write(dir.join(format!("iron_{f:012}_keypoints.json")), frame).unwrap();
+    }
+    dir
+}
+
+#[test]
+fn an_openpose_folder_is_scored_as_its_frames_and_2d_is_refused() {
+    let score = |student: &PathBuf| {
+        posecoach(&[
+            "score",
+            "--coach",
+            "iron",
+            "--student",
+            student.to_str().unwrap(),
+            "--rate",
+            "60",
+            "--json",
+        ])
+    };
+    let (ok, csv, err) = score(&fixture("byod/openpose_iron.csv"));
+    assert!(ok, "{err}");
+    let folder = openpose_folder("openpose3d", true);
+    let (ok, out, err) = score(&folder);
+    assert!(ok, "{err}");
+    let [a, b]: [Value; 2] = [csv, out].map(|o| serde_json::from_str(&o).unwrap());
+    assert_eq!(a["score"], b["score"]);
+    let flat = openpose_folder("openpose2d", false);
+    let (ok, _, err) = score(&flat);
+    assert!(
+        !ok && err.contains("2D keypoints: posecoach needs 3D (x, y, z)"),
+        "{err}"
+    );
+    assert!(err.contains("iron_000000000000_keypoints.json"), "{err}");
+    for dir in [folder, flat] {
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+}
+
 #[test]
 fn a_pause_at_the_top_is_reported_with_the_backswing() {
     // The driver held still at its top for 0.3 s (18 frames at 60 Hz).

@@ -3,10 +3,11 @@
 //! The frames are a JSON array, an object's `frames` array, or one object per line (JSON
 //! Lines). In a frame, the time is the key that says time, before one that counts frames
 //! ([`keypoints::time_among`]: `time`, `t`, `timestamp`, `time_ms`, then `frame`, ...), and
-//! the landmarks are the value of
-//! `keypoints`, `landmarks`, `joints`, `pose_world_landmarks`, `pose_landmarks`, `landmark` or
-//! `keypoints_3d` (inside the first of `people` or `instances` where those hold them), else
-//! the frame's other keys. They may be:
+//! the landmarks are the value of `keypoints`, `landmarks`, `joints`, `pose_world_landmarks`,
+//! `pose_landmarks`, `landmark` or `keypoints_3d` (inside the first of `people` or
+//! `instances` where those hold them; the first pose of a list of poses), else the frame's
+//! other keys. A frame where nobody was found is missing; one with only 2D keypoints is
+//! refused. They may be:
 //!
 //! - an object of name → point;
 //! - an array of points that name themselves (`name`, `label`, `type` or `joint`);
@@ -71,6 +72,10 @@ pub enum JsonErrorKind {
     BadTime,
     /// Time does not increase.
     TimeNotIncreasing,
+    /// Only 2D keypoints (OpenPose's `pose_keypoints_2d`, a `keypoints_2d`), no 3D ones.
+    TwoD,
+    /// No frame holds a pose (every landmark list empty, nobody in `people`).
+    NoPose,
     /// The samples are not a motion (the whole file).
     Keypoints(KeypointError),
 }
@@ -104,6 +109,11 @@ impl fmt::Display for JsonError {
             ),
             JsonErrorKind::BadTime => f.write_str("the time is not a finite number"),
             JsonErrorKind::TimeNotIncreasing => f.write_str("time must increase from frame to frame"),
+            JsonErrorKind::TwoD => f.write_str(
+                "2D keypoints: posecoach needs 3D (x, y, z): a 3D pose estimator's output \
+                 (MediaPipe's world landmarks, OpenPose with --3d, a lifter such as MotionBERT)",
+            ),
+            JsonErrorKind::NoPose => f.write_str("no frame holds a pose: every landmark list is empty"),
             JsonErrorKind::Keypoints(e) => e.fmt(f),
         }
     }
@@ -178,20 +188,47 @@ enum Found<'a> {
     Named(Object<'a>),
     /// An array of points, named or not, or of numbers.
     List(&'a RawValue),
+    /// Nobody in the frame: an empty list of landmarks or of poses, or an empty `people`.
+    Empty,
+    /// Only 2D keypoints.
+    TwoD,
     /// Neither.
     None,
 }
 
 /// A frame's landmarks: the value under a [`LANDMARK_KEYS`] key (inside the first of `people`
-/// or `instances`), else the frame's other keys.
+/// or `instances`; the first pose of a list of poses, as MediaPipe's results hold them), else
+/// the frame's other keys.
 fn landmarks_of<'a>(frame: Object<'a>, clock: Option<&str>) -> Found<'a> {
     for holder in ["people", "instances"] {
-        let first = frame.get(holder).and_then(|v| value::first(v));
-        if let Some(first) = first.and_then(value::object) {
-            return landmarks_of(first, None);
-        }
+        let Some(held) = frame.get(holder) else {
+            continue;
+        };
+        return match value::first(held).and_then(value::object) {
+            Some(first) => landmarks_of(first, None),
+            None if value::kind(held) == Kind::Array => Found::Empty,
+            None => Found::None,
+        };
     }
-    if let Some(v) = LANDMARK_KEYS.iter().find_map(|k| frame.get(*k)) {
+    // A 2D tool's output: 2D keypoints, and no 3D ones (OpenPose writes `pose_keypoints_3d`
+    // empty beside them).
+    let two_d = || {
+        frame
+            .iter()
+            .any(|(k, v)| crate::landmarks::key(k).ends_with("2d") && value::first(v).is_some())
+    };
+    if let Some(mut v) = LANDMARK_KEYS.iter().find_map(|k| frame.get(*k).copied()) {
+        // A list of poses (its first item a list of points, each an array or an object): the
+        // first pose's.
+        while let Some(pose) = value::first(v).filter(|p| value::kind(p) == Kind::Array) {
+            match value::first(pose).map(value::kind) {
+                Some(Kind::Array | Kind::Object) => v = pose,
+                _ => break,
+            }
+        }
+        if value::kind(v) == Kind::Array && value::first(v).is_none() {
+            return if two_d() { Found::TwoD } else { Found::Empty };
+        }
         return match (value::kind(v), value::object(v)) {
             (Kind::Array, _) => Found::List(v),
             (_, Some(inner)) => match (inner.len(), inner.get("landmark")) {
@@ -201,6 +238,9 @@ fn landmarks_of<'a>(frame: Object<'a>, clock: Option<&str>) -> Found<'a> {
             },
             _ => Found::None,
         };
+    }
+    if two_d() {
+        return Found::TwoD;
     }
     // Only values that may be points: a frame's other numbers and strings (a rate, a source)
     // are not landmarks.
@@ -279,6 +319,21 @@ impl Reader {
                 Ok(())
             }
             Found::List(list) => self.list(at, list),
+            // Nobody found: the frame's landmarks are missing, and frames before the first
+            // pose are not the recording's (their names are not known yet).
+            Found::Empty => match &self.names {
+                Some(names) => {
+                    let width = names.names.len();
+                    self.start(at, width, false, Vec::new).map(|_| ())
+                }
+                None => {
+                    if self.out.clock.is_some() {
+                        self.out.times.pop();
+                    }
+                    Ok(())
+                }
+            },
+            Found::TwoD => Err(err(at, JsonErrorKind::TwoD)),
             Found::None => Err(err(at, JsonErrorKind::NoLandmarks)),
         }
     }
@@ -427,7 +482,8 @@ fn samples(bytes: &[u8]) -> Result<Samples, JsonError> {
             }
         }
     }
-    reader.out.names = reader.names.map(|n| n.names).unwrap_or_default();
+    let names = reader.names.ok_or(err(0, JsonErrorKind::NoPose))?;
+    reader.out.names = names.names;
     Ok(reader.out)
 }
 
@@ -534,6 +590,135 @@ mod tests {
             "{}",
             a.skeleton.height()
         );
+    }
+
+    #[test]
+    fn mediapipe_results_as_dumped_read_as_their_first_pose() {
+        // A PoseLandmarkerResult per frame, dumped as it comes: a list of poses under each key,
+        // the frame's counter beside its timestamp, nobody found in the first two frames and in
+        // frame 20.
+        let dumped = |f: usize, points: &[(&str, [f32; 3])], as_lists: bool| {
+            let pose: Vec<String> = points
+                .iter()
+                .map(|(_, [x, y, z])| match as_lists {
+                    true => format!("[{x}, {y}, {z}, 0.9]"),
+                    false => format!(
+                        "{{\"x\": {x}, \"y\": {y}, \"z\": {z}, \"visibility\": 0.9, \"presence\": 0.9}}"
+                    ),
+                })
+                .collect();
+            let poses = match f {
+                0 | 1 | 20 => String::new(),
+                _ => format!("[{}]", pose.join(", ")),
+            };
+            format!(
+                "{{\"frame\": {f}, \"timestamp_ms\": {}, \"pose_landmarks\": [{poses}], \
+                 \"pose_world_landmarks\": [{poses}]}}",
+                (f as f64 * 1000.0 / 30.0).round()
+            )
+        };
+        let hints = Hints::default();
+        let by_name = |f: usize, points: &[(&str, [f32; 3])]| {
+            let body: Vec<String> = points
+                .iter()
+                .map(|(n, [x, y, z])| format!("\"{n}\": [{x}, {y}, {z}]"))
+                .collect();
+            format!("{{\"t\": {}, {}}}", f as f64 / 30.0, body.join(", "))
+        };
+        let (plain, _) = read_with(blazepose(38, by_name).as_bytes(), &hints).unwrap();
+        let n = plain.skeleton.len();
+        for as_lists in [false, true] {
+            let text = blazepose(40, |f, p| dumped(f, p, as_lists));
+            let (m, reading) = read_with(text.as_bytes(), &hints).unwrap();
+            assert_eq!(reading.landmarks, Landmarks::BlazePose33);
+            // The timestamp, not the counter; whole milliseconds at their 30 Hz.
+            assert_eq!(reading.clock.0, keypoints::Clock::Milliseconds);
+            assert!((m.rate_hz - 30.0).abs() < 0.01, "{}", m.rate_hz);
+            assert_eq!(m.frames(), 38, "the recording starts at its first pose");
+            assert!(m.missing[18 * n..19 * n].iter().all(|&gone| gone));
+            assert_eq!(m.positions[..18 * n], plain.positions[..18 * n]);
+            assert_eq!(reading.skipped, 0);
+        }
+        let nobody = "{\"timestamp_ms\": 0, \"pose_world_landmarks\": []}";
+        let e = read_with(nobody.as_bytes(), &hints).unwrap_err();
+        assert_eq!(e.kind, JsonErrorKind::NoPose);
+    }
+
+    #[test]
+    fn openpose_frames_are_read_in_3d_and_refused_in_2d() {
+        // OpenPose's --write_json: BODY_25 as flat numbers inside `people`, 2D always, 3D with
+        // --3d (x, y, z and a score), the other model's lists empty.
+        let joint = |name: &str| {
+            let side = |l: Joint, r: Joint| if name.starts_with('L') { l } else { r };
+            match name {
+                "MidHip" => Joint::Pelvis,
+                "Neck" => Joint::Thorax,
+                n if n.ends_with("Shoulder") => side(Joint::LeftShoulder, Joint::RightShoulder),
+                n if n.ends_with("Elbow") => side(Joint::LeftElbow, Joint::RightElbow),
+                n if n.ends_with("Wrist") => side(Joint::LeftWrist, Joint::RightWrist),
+                n if n.ends_with("Hip") => side(Joint::LeftHip, Joint::RightHip),
+                n if n.ends_with("Knee") => side(Joint::LeftKnee, Joint::RightKnee),
+                n if n.ends_with("Ankle") || n.ends_with("Heel") => {
+                    side(Joint::LeftAnkle, Joint::RightAnkle)
+                }
+                n if n.ends_with("Toe") => side(Joint::LeftToe, Joint::RightToe),
+                _ => Joint::Head,
+            }
+        };
+        let body: Vec<[f32; 3]> = Landmarks::OpenPose25
+            .names()
+            .iter()
+            .map(|n| t_pose(joint(n)).into())
+            .collect();
+        let flat = |per: usize| {
+            let numbers: Vec<String> = body
+                .iter()
+                .flat_map(|p| {
+                    let mut v = vec![p[0] * 1000.0, -p[1] * 1000.0, p[2] * 1000.0];
+                    v.truncate(per.min(3));
+                    v.resize(per, 0.9);
+                    v
+                })
+                .map(|x| x.to_string())
+                .collect();
+            numbers.join(", ")
+        };
+        let frame = |three: bool| {
+            format!(
+                "{{\"version\": 1.3, \"people\": [{{\"person_id\": [-1], \
+                 \"pose_keypoints_2d\": [{}], \"face_keypoints_2d\": [], \
+                 \"pose_keypoints_3d\": [{}], \"face_keypoints_3d\": []}}]}}",
+                flat(3),
+                if three { flat(4) } else { String::new() }
+            )
+        };
+        let hints = Hints {
+            rate_hz: Some(30.0),
+            ..Hints::default()
+        };
+        let two_d = [frame(false), frame(false)].join("\n");
+        let e = read_with(two_d.as_bytes(), &hints).unwrap_err();
+        assert_eq!((e.frame, &e.kind), (1, &JsonErrorKind::TwoD));
+        assert!(
+            e.to_string()
+                .contains("2D keypoints: posecoach needs 3D (x, y, z)"),
+            "{e}"
+        );
+        let three_d = [frame(true), frame(true)].join("\n");
+        let (m, reading) = read_with(three_d.as_bytes(), &hints).unwrap();
+        assert_eq!(reading.landmarks, Landmarks::OpenPose25);
+        assert_eq!(m.frames(), 2);
+        // Nobody in a frame: missing there.
+        let empty = "{\"version\": 1.3, \"people\": []}";
+        let (m, _) = read_with(
+            [frame(true), empty.into(), frame(true)]
+                .join("\n")
+                .as_bytes(),
+            &hints,
+        )
+        .unwrap();
+        let n = m.skeleton.len();
+        assert!(m.missing[n..2 * n].iter().all(|&gone| gone) && !m.missing[0]);
     }
 
     #[test]

@@ -4,7 +4,8 @@
 //! out, `.c3d`, `.json` (keypoints, [`json`]) and `.pcr` (a coach reference,
 //! [`posecoach_core::reference`]) in. [`load_with`] takes what a person says about the files
 //! that do not say it themselves ([`Hints`]: units, up axis, rate) and says how a keypoint
-//! file was read ([`Reading`]).
+//! file was read ([`Reading`]). A folder is read as one keypoint JSON file per frame, in
+//! the order of their names (OpenPose's `--write_json`: [`folder`]).
 pub mod bvh;
 pub mod c3d;
 pub mod csv;
@@ -55,6 +56,10 @@ pub enum FileErrorKind {
     Golf(golf::GolfError),
     /// Joint centres that do not make a skeleton (a bone never measured).
     Skeleton(posecoach_core::skeleton::SkeletonError),
+    /// A folder without `.json` files.
+    EmptyFolder,
+    /// A folder of more `.json` files than [`limits::MAX_FOLDER_FILES`] (how many).
+    FolderTooLarge(usize),
     /// A coach reference that does not read.
     Reference(posecoach_core::reference::ReferenceError),
     /// A coach reference beyond the limits ([`limits::check_limits`]).
@@ -73,6 +78,15 @@ impl fmt::Display for FileError {
             FileErrorKind::UnknownExtension => {
                 f.write_str("unknown extension: expected .bvh, .c3d, .csv, .json (.jsonl) or .pcr")
             }
+            FileErrorKind::EmptyFolder => f.write_str(
+                "a folder is read as one keypoint JSON file per frame, and this one holds no .json file",
+            ),
+            FileErrorKind::FolderTooLarge(n) => write!(
+                f,
+                "{n} .json files, over the limit of {} frames a folder is read as; move the \
+                 swings' frames into folders of their own",
+                limits::MAX_FOLDER_FILES
+            ),
             FileErrorKind::Csv(e) => e.fmt(f),
             FileErrorKind::Json(e) => e.fmt(f),
             FileErrorKind::Bvh(e) => e.fmt(f),
@@ -161,6 +175,9 @@ fn read(path: &Path, hints: &Hints) -> Result<(Motion, Option<Reading>), FileErr
         path: path.to_path_buf(),
         kind,
     };
+    if path.is_dir() {
+        return folder(path, hints).map(|(motion, reading)| (motion, Some(reading)));
+    }
     let bytes = || std::fs::read(path).map_err(|e| fail(FileErrorKind::Io(e)));
     let text = || std::fs::read_to_string(path).map_err(|e| fail(FileErrorKind::Io(e)));
     let read = |(motion, reading)| (motion, Some(reading));
@@ -197,6 +214,71 @@ fn read(path: &Path, hints: &Hints) -> Result<(Motion, Option<Reading>), FileErr
     motion.map(|motion| (motion, None))
 }
 
+/// Reads a folder of keypoint JSON files, one frame each (OpenPose's `--write_json` writes
+/// `<name>_<frame>_keypoints.json`), as one motion: the files in the order of their names,
+/// numbers in them compared as numbers, so `frame2` comes before `frame10`. An error inside a
+/// frame names its file.
+///
+/// # Errors
+/// A [`FileError`] for a folder without `.json` files or with more than
+/// [`limits::MAX_FOLDER_FILES`], a file that cannot be read, or a frame that is not keypoints.
+pub fn folder(path: &Path, hints: &Hints) -> Result<(Motion, Reading), FileError> {
+    let fail = |path: &Path, kind| FileError {
+        path: path.to_path_buf(),
+        kind,
+    };
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(path).map_err(|e| fail(path, FileErrorKind::Io(e)))? {
+        let file = entry.map_err(|e| fail(path, FileErrorKind::Io(e)))?.path();
+        if extension(&file) == "json" && !file.is_dir() {
+            files.push(file);
+            if files.len() > limits::MAX_FOLDER_FILES {
+                return Err(fail(path, FileErrorKind::FolderTooLarge(files.len())));
+            }
+        }
+    }
+    if files.is_empty() {
+        return Err(fail(path, FileErrorKind::EmptyFolder));
+    }
+    files.sort_by(|a, b| natural(&a.to_string_lossy(), &b.to_string_lossy()));
+    let mut bytes = Vec::new();
+    for file in &files {
+        bytes.extend(std::fs::read(file).map_err(|e| fail(file, FileErrorKind::Io(e)))?);
+        bytes.push(b'\n');
+    }
+    json::read_with(&bytes, hints).map_err(|e| {
+        // Frame `n` is the `n`th file; a whole-file fault (frame 0) is the folder's.
+        let at = e.frame.checked_sub(1).and_then(|k| files.get(k));
+        fail(at.map_or(path, |f| f.as_path()), FileErrorKind::Json(e))
+    })
+}
+
+/// `a` and `b` in the order a person reads numbered names: runs of digits compared as
+/// numbers (without their leading zeros, then by length), the rest as text.
+fn natural(a: &str, b: &str) -> std::cmp::Ordering {
+    fn runs(s: &str) -> impl Iterator<Item = (bool, &str)> {
+        let mut rest = s;
+        std::iter::from_fn(move || {
+            let digits = rest.chars().next()?.is_ascii_digit();
+            let end = rest
+                .find(|c: char| c.is_ascii_digit() != digits)
+                .unwrap_or(rest.len());
+            let (run, tail) = rest.split_at(end);
+            rest = tail;
+            Some((digits, run))
+        })
+    }
+    let key = |(digits, run): (bool, &str)| {
+        let number = if digits {
+            run.trim_start_matches('0')
+        } else {
+            ""
+        };
+        (!digits, number.len(), number.to_owned(), run.to_owned())
+    };
+    runs(a).map(key).cmp(runs(b).map(key))
+}
+
 /// Writes a motion, choosing the writer by extension.
 ///
 /// # Errors
@@ -218,6 +300,71 @@ pub fn save(motion: &Motion, path: &Path) -> Result<(), FileError> {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn numbered_names_sort_as_numbers() {
+        let mut names = ["f10.json", "f2.json", "g0.json", "f1.json", "f0.json"];
+        names.sort_by(|a, b| natural(a, b));
+        assert_eq!(
+            names,
+            ["f0.json", "f1.json", "f2.json", "f10.json", "g0.json"]
+        );
+        // OpenPose's zero-padded counters keep their order.
+        let padded = [
+            "c_000000000010_keypoints.json",
+            "c_000000000009_keypoints.json",
+        ];
+        assert!(natural(padded[1], padded[0]).is_lt());
+    }
+
+    #[test]
+    fn a_folder_of_frame_files_reads_as_one_motion_in_frame_order() {
+        use posecoach_core::format::t_pose;
+        use posecoach_core::joint::Joint;
+        let dir = std::env::temp_dir().join(format!("posecoach-io-folder-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // Frame f: the T-pose moved f cm along x; written unpadded, so name order is not
+        // frame order.
+        let frame = |f: usize| {
+            let points: Vec<String> = Joint::ALL
+                .iter()
+                .filter(|j| !j.is_club())
+                .map(|&j| {
+                    let p = t_pose(j);
+                    format!("\"{j}\": [{}, {}, {}]", p.x + 0.01 * f as f32, p.y, p.z)
+                })
+                .collect();
+            format!("{{{}}}", points.join(", "))
+        };
+        for f in 0..12 {
+            std::fs::write(dir.join(format!("swing_{f}_keypoints.json")), frame(f)).unwrap();
+        }
+        std::fs::write(dir.join("notes.txt"), "not a frame").unwrap();
+        let hints = Hints {
+            rate_hz: Some(30.0),
+            ..Hints::default()
+        };
+        let (m, _) = folder(&dir, &hints).unwrap();
+        assert_eq!(m.frames(), 12);
+        let pelvis = |f: usize| m.frame(f)[0].x;
+        assert!((1..12).all(|f| (pelvis(f) - pelvis(f - 1) - 0.01).abs() < 1e-5));
+        // Without a rate the folder says so; a broken frame is named by its file.
+        let e = folder(&dir, &Hints::default()).unwrap_err();
+        assert!(e.to_string().contains("--rate"), "{e}");
+        std::fs::write(
+            dir.join("swing_7_keypoints.json"),
+            "{\"pelvis\": [0, \"a\", 0]}",
+        )
+        .unwrap();
+        let e = folder(&dir, &hints).unwrap_err();
+        assert!(e.path.ends_with("swing_7_keypoints.json"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+        let empty = std::env::temp_dir().join(format!("posecoach-io-empty-{}", std::process::id()));
+        std::fs::create_dir_all(&empty).unwrap();
+        let e = load(&empty).unwrap_err();
+        assert!(matches!(e.kind, FileErrorKind::EmptyFolder), "{e}");
+        std::fs::remove_dir_all(&empty).unwrap();
+    }
 
     /// `text` loaded as a file named `name`.
     fn load_text(name: &str, text: &str) -> Result<Motion, FileError> {

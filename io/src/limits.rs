@@ -20,6 +20,10 @@ pub const MAX_DURATION_S: f32 = 600.0;
 /// joints, fit.
 pub const MAX_SAMPLES: usize = 1 << 23;
 
+/// Most files a folder of per-frame keypoint files may hold: ten minutes at 60 Hz, checked
+/// before any is read.
+pub const MAX_FOLDER_FILES: usize = 36_000;
+
 /// A motion beyond the limits ([`MIN_RATE_HZ`], [`MAX_RATE_HZ`], [`MAX_DURATION_S`],
 /// [`MAX_SAMPLES`]), refused before it is allocated.
 #[derive(Clone, Debug, PartialEq)]
