@@ -100,6 +100,12 @@ pub fn note(r: &Reading) -> Option<String> {
             r.rate_hz
         ));
     }
+    if r.on_its_feet {
+        parts.push(
+            "the hips held at one place in every frame: the body placed on its planted feet"
+                .to_string(),
+        );
+    }
     if r.skipped > 0 {
         parts.push(format!("{} skipped frames kept as missing", r.skipped));
     }

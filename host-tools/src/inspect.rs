@@ -124,6 +124,7 @@ fn reading_json(r: &Reading) -> Value {
         "time": r.clock.0.title(),
         "time_column": r.clock.1,
         "skipped_frames": r.skipped,
+        "on_its_feet": r.on_its_feet,
         "not_read": r.ignored,
     })
 }
@@ -166,6 +167,12 @@ fn text(r: &Value) -> String {
         match reading["time_column"].as_str() {
             Some(column) => _ = writeln!(out, "time:     {} (column `{column}`)", field("time")),
             None => _ = writeln!(out, "time:     {}", field("time")),
+        }
+        if reading["on_its_feet"] == true {
+            _ = writeln!(
+                out,
+                "placed:   on its toes (the hips were held at one place in every frame)"
+            );
         }
         if let Some(n) = reading["skipped_frames"].as_u64().filter(|&n| n > 0) {
             _ = writeln!(out, "skipped:  {n} frames (kept as missing samples)");

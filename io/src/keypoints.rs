@@ -17,6 +17,7 @@ use crate::motion::{hold_missing, measured_skeleton, Motion};
 use crate::units::{StatureError, Units, Up};
 use posecoach_core::format::t_pose;
 use posecoach_core::joint::Joint;
+use posecoach_core::score::HELD_ROOT_M;
 use posecoach_core::skeleton::{Skeleton, SkeletonError};
 use posecoach_core::Vec3;
 use std::fmt;
@@ -98,6 +99,9 @@ pub struct Reading {
     pub skipped: usize,
     /// Columns or keys not read.
     pub ignored: Vec<String>,
+    /// The hips were held at one place in every frame (MediaPipe's world landmarks are
+    /// centred on them), and the body was placed on its feet ([`on_its_feet`]).
+    pub on_its_feet: bool,
 }
 
 /// Why keypoint samples are not a motion.
@@ -282,6 +286,7 @@ pub fn motion(samples: &Samples, hints: &Hints) -> Result<(Motion, Reading), Key
     }
     let skeleton = build(&positions)?;
     hold_missing(n, &mut positions, &missing);
+    let on_its_feet = !tpose && on_its_feet(&joints, &mut positions);
 
     let midpoints = made
         .iter()
@@ -313,6 +318,7 @@ pub fn motion(samples: &Samples, hints: &Hints) -> Result<(Motion, Reading), Key
         rate_hz,
         skipped: frames - rows,
         ignored,
+        on_its_feet,
     };
     let motion = Motion {
         skeleton,
@@ -423,6 +429,64 @@ fn fitted_period(times: &[f64], median: f64) -> Option<f64> {
     let spread = n * skk - sk * sk;
     (n >= 2.0 && spread > 0.0).then(|| (n * skt - sk * st) / spread)
 }
+
+/// A body whose root (`joints[0]`, the pelvis) stays within [`HELD_ROOT_M`] of one place in
+/// every frame, as MediaPipe's world landmarks hold it at the hips' midpoint, is put back on
+/// its feet: each frame moved so that its planted ankle stays where it was at the first frame
+/// (the address), then the whole motion raised or lowered so that the first frame's lowest foot
+/// joint stands on the floor (`y = 0`). Both ankles are planted at the address; once one rises
+/// against the other (a trail heel coming up through impact and the finish, a step) it is
+/// planted less, by the share its rise takes of [`HEEL_UP_M`], and the frame follows the other.
+/// Each frame is placed from the first, not from the frame before, so noise does not add up.
+/// Returns whether it moved the body (`positions`: frames of `joints`, metres, +Y up, every
+/// sample filled).
+fn on_its_feet(joints: &[Joint], positions: &mut [Vec3]) -> bool {
+    let n = joints.len();
+    let at = |j: Joint| joints.iter().position(|&k| k == j);
+    let (Some(left), Some(right)) = (at(Joint::LeftAnkle), at(Joint::RightAnkle)) else {
+        return false;
+    };
+    let feet: Vec<usize> = [Joint::LeftToe, Joint::RightToe]
+        .into_iter()
+        .filter_map(at)
+        .chain([left, right])
+        .collect();
+    let frames: Vec<&[Vec3]> = positions.chunks_exact(n).collect();
+    let Some(first) = frames.first() else {
+        return false;
+    };
+    if frames
+        .iter()
+        .any(|f| (f[0] - first[0]).norm() >= HELD_ROOT_M)
+    {
+        return false;
+    }
+    let floor = feet
+        .iter()
+        .map(|&k| first[k].y)
+        .fold(f32::INFINITY, f32::min);
+    let ground = Vec3::new(0.0, floor, 0.0);
+    let shifts: Vec<Vec3> = frames
+        .iter()
+        .map(|f| {
+            // How far the left ankle rose against the right since the address.
+            let rise = (f[left].y - f[right].y) - (first[left].y - first[right].y);
+            let w = (0.5 - rise / (2.0 * HEEL_UP_M)).clamp(0.0, 1.0);
+            let planted = |k: usize| first[k] - f[k];
+            planted(left) * w + planted(right) * (1.0 - w) - ground
+        })
+        .collect();
+    for (frame, shift) in positions.chunks_exact_mut(n).zip(shifts) {
+        for p in frame.iter_mut() {
+            *p += shift;
+        }
+    }
+    true
+}
+
+/// How far one ankle rises against the other before the body is placed on the other foot
+/// alone ([`on_its_feet`]), m: a heel well off the ground. A convention, not fitted.
+const HEEL_UP_M: f32 = 0.05;
 
 /// Each time's frame at `rate_hz`: the nearest, and at least one after the one before, so a
 /// skipped frame stays a gap in time.
