@@ -54,9 +54,14 @@ pub fn run(args: &Args) -> Result<String> {
             "teacher",
         ),
         None => (
-            coach
-                .retarget_analytic(&student)
-                .map_err(|(frame, e)| anyhow::anyhow!("coach frame {frame}: {e}"))?,
+            match (coach.pelvis_at_hips(), student.pelvis_at_hips()) {
+                // The student's format makes the pelvis as the hips' midpoint: the coach's
+                // is put there too (bone directions are copied).
+                (Some(false), Some(true)) => coach.with_pelvis_at_hips()?,
+                _ => coach.clone(),
+            }
+            .retarget_analytic(&student)
+            .map_err(|(frame, e)| anyhow::anyhow!("coach frame {frame}: {e}"))?,
             "analytic",
         ),
     };

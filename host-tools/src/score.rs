@@ -7,6 +7,7 @@ use crate::{html, input, session, teacher};
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_core::band::Band;
 use posecoach_core::events::EventError;
+use posecoach_core::joint::Joint;
 use posecoach_core::score::{self, Report, ScoreError};
 use posecoach_core::session::{JointTallies, Tendencies};
 use posecoach_io::Motion;
@@ -81,6 +82,50 @@ pub fn run(args: &Args) -> Result<String> {
         Some(path) => args.input.load(path)?,
         None => first.clone(),
     };
+    // Compared on what both swings have: a joint only one of them tracks is left out (the
+    // virtual coach would otherwise carry a head top or a club its file never had).
+    let (of_coach, of_student) = (coach.canonical_joints(), body.canonical_joints());
+    let names = |joints: Vec<&Joint>| {
+        let names: Vec<&str> = joints.iter().map(|j| j.name()).collect();
+        names.join(", ")
+    };
+    let left_out: Vec<String> = [
+        (
+            of_student
+                .iter()
+                .filter(|j| !of_coach.contains(j))
+                .collect(),
+            "coach",
+        ),
+        (
+            of_coach
+                .iter()
+                .filter(|j| !of_student.contains(j))
+                .collect(),
+            "student",
+        ),
+    ]
+    .into_iter()
+    .filter(|(joints, _): &(Vec<&Joint>, _)| !joints.is_empty())
+    .map(|(joints, whose)| format!("{} (the {whose}'s file does not track them)", names(joints)))
+    .collect();
+    let body = body
+        .only(|j| of_coach.contains(&j))
+        .context("the student's skeleton on the coach's joints")?;
+    // One pelvis for both: where one file makes it as the hips' midpoint and the other does
+    // not, every swing is compared with its pelvis there.
+    let at_hips = match (coach.pelvis_at_hips(), body.pelvis_at_hips()) {
+        (Some(c), Some(s)) => c != s,
+        _ => false,
+    };
+    let hips = |motion: &Motion| match at_hips {
+        true => motion.with_pelvis_at_hips(),
+        false => Ok(motion.clone()),
+    };
+    let body = hips(&body).context("the student's skeleton with its pelvis at its hips")?;
+    if !left_out.is_empty() {
+        eprintln!("note: not compared: {}", left_out.join("; "));
+    }
     // Each keeps its own golf contacts as the device's virtual coach does (planted feet, both
     // hands on one grip, the club at the ball), which rigid bones of other lengths would lose.
     let contacts = |mut on: Motion, of: &Motion, who: &str| -> Result<Motion> {
@@ -91,7 +136,8 @@ pub fn run(args: &Args) -> Result<String> {
         Ok(on)
     };
     let on_body = |motion: &Motion, who: &str| {
-        let on = motion
+        let on = hips(motion)
+            .with_context(|| format!("the {who}'s pelvis at its hips"))?
             .retarget_analytic(&body)
             .map_err(|(f, e)| anyhow!("{who} frame {f} onto the student's skeleton: {e}"))?;
         contacts(on, motion, who)
@@ -163,6 +209,7 @@ pub fn run(args: &Args) -> Result<String> {
                 let mut json = to_json(scored);
                 // What was scored, and the rate every frame number counts at.
                 json["files"] = files(path);
+                json["not_compared"] = json!(left_out);
                 json["rate_hz"] = json!(decimal(scored.student_hz, 3));
                 json
             }
@@ -197,6 +244,9 @@ pub fn run(args: &Args) -> Result<String> {
         notes.push(format!(
             "Coach retargeted onto the student by the {retargeter}"
         ));
+        if !left_out.is_empty() {
+            notes.push(format!("Not compared: {}", left_out.join("; ")));
+        }
         let pages: Vec<html::Swing> = swings
             .iter()
             .map(|(path, scored)| html::Swing {

@@ -17,6 +17,9 @@ use posecoach_core::skeleton::{Skeleton, SkeletonError};
 use posecoach_core::Vec3;
 use std::fmt;
 
+/// Two joints this close are one place (a pelvis made as the hips' midpoint), m.
+pub const SAME_PLACE_M: f32 = 0.01;
+
 /// A motion in metres, +Y up: `frames × joints` positions on `skeleton`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Motion {
@@ -60,6 +63,107 @@ impl Motion {
         } else {
             0.0
         }
+    }
+
+    /// How far the pelvis lies from the hips' midpoint, at most over the frames (`None` without
+    /// both hips): 0 where a format makes the pelvis as that midpoint (COCO, BlazePose, H36M),
+    /// some centimetres above it where markers on the waist place it (the golf captures).
+    fn pelvis_off_hips(&self) -> Option<f32> {
+        let (l, r) = self.hips()?;
+        (0..self.frames())
+            .map(|f| {
+                let p = self.frame(f);
+                (p[0] - (p[l] + p[r]) * 0.5).norm()
+            })
+            .reduce(f32::max)
+    }
+
+    fn hips(&self) -> Option<(usize, usize)> {
+        let s = &self.skeleton;
+        Some((s.find(&[Joint::LeftHip])?, s.find(&[Joint::RightHip])?))
+    }
+
+    /// Whether the pelvis lies at the hips' midpoint (within [`SAME_PLACE_M`]) in every frame,
+    /// as COCO, BlazePose and H36M make it; a golf capture's lies 8 cm above, where markers
+    /// on the waist place it. `None` without both hips.
+    pub fn pelvis_at_hips(&self) -> Option<bool> {
+        self.pelvis_off_hips().map(|d| d < SAME_PLACE_M)
+    }
+
+    /// This motion with its pelvis moved to its hips' midpoint in every frame and in the rest
+    /// pose (the root's children hung from there); unchanged without both hips.
+    ///
+    /// Two swings are compared on one pelvis: the retargeter copies bone directions, so a golf
+    /// capture's pelvis-to-hip bones, pointing 40° down, would tilt a phone student's level
+    /// ones and lower everything below them.
+    ///
+    /// # Errors
+    /// If the moved rest pose does not make a skeleton.
+    pub fn with_pelvis_at_hips(&self) -> Result<Motion, SkeletonError> {
+        let Some((l, r)) = self.hips() else {
+            return Ok(self.clone());
+        };
+        let s = &self.skeleton;
+        let n = s.len();
+        let mut rest = vec![Vec3::zeros(); n];
+        s.rest_positions(&mut rest);
+        rest[0] = (rest[l] + rest[r]) * 0.5;
+        let parents: Vec<Option<usize>> = (0..n).map(|k| s.parent(k)).collect();
+        let offsets: Vec<Vec3> = (0..n)
+            .map(|k| s.parent(k).map_or(rest[k], |p| rest[k] - rest[p]))
+            .collect();
+        let skeleton = Skeleton::new(s.format(), &parents, &offsets, s.joints())?;
+        let mut out = self.clone();
+        out.skeleton = skeleton;
+        for frame in out.positions.chunks_exact_mut(n) {
+            frame[0] = (frame[l] + frame[r]) * 0.5;
+        }
+        Ok(out)
+    }
+
+    /// The canonical joints the skeleton names.
+    pub fn canonical_joints(&self) -> Vec<Joint> {
+        self.skeleton.joints().iter().flatten().copied().collect()
+    }
+
+    /// This motion on the joints `keep` keeps (joints without a canonical name are kept), each
+    /// hung from its nearest kept ancestor with their rest chord as its offset: what it has in
+    /// common with a swing that tracks fewer joints.
+    ///
+    /// # Errors
+    /// If the joints kept do not make a skeleton (the pelvis or an end effector left out).
+    pub fn only(&self, keep: impl Fn(Joint) -> bool) -> Result<Motion, SkeletonError> {
+        let s = &self.skeleton;
+        let n = s.len();
+        let kept: Vec<usize> = (0..n).filter(|&k| s.joint(k).is_none_or(&keep)).collect();
+        let mut rest = vec![Vec3::zeros(); n];
+        s.rest_positions(&mut rest);
+        let place = |k: usize| kept.iter().position(|&j| j == k);
+        let mut parents = Vec::with_capacity(kept.len());
+        let mut offsets = Vec::with_capacity(kept.len());
+        for &k in &kept {
+            let mut up = s.parent(k);
+            while let Some(p) = up.filter(|&p| place(p).is_none()) {
+                up = s.parent(p);
+            }
+            parents.push(up.and_then(place));
+            offsets.push(up.map_or(rest[k], |p| rest[k] - rest[p]));
+        }
+        let joints: Vec<Option<Joint>> = kept.iter().map(|&k| s.joint(k)).collect();
+        let skeleton = Skeleton::new(s.format(), &parents, &offsets, &joints)?;
+        let frames = |f: usize| kept.iter().map(move |&k| f * n + k);
+        let all = 0..self.frames();
+        Ok(Motion {
+            skeleton,
+            names: kept.iter().map(|&k| self.names[k].clone()).collect(),
+            rate_hz: self.rate_hz,
+            positions: all
+                .clone()
+                .flat_map(frames)
+                .map(|i| self.positions[i])
+                .collect(),
+            missing: all.flat_map(frames).map(|i| self.missing[i]).collect(),
+        })
     }
 
     /// This motion retargeted with the analytic retargeter onto `student`'s skeleton, keeping
