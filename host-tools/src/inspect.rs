@@ -104,6 +104,9 @@ fn describe(path: &std::path::Path, motion: &Motion) -> Value {
         "joints": joints,
         "segments": segments,
         "missing": {"total": motion.missing.iter().filter(|&&m| m).count(), "per_joint": missing},
+        "swings": crate::swings::found(motion).iter().map(|&(start, duration)| {
+            json!({"start_s": decimal(start, 3), "duration_s": decimal(duration, 3)})
+        }).collect::<Vec<_>>(),
     })
 }
 
@@ -171,7 +174,7 @@ fn text(r: &Value) -> String {
         if reading["on_its_feet"] == true {
             _ = writeln!(
                 out,
-                "placed:   on its toes (the hips were held at one place in every frame)"
+                "placed:   on its planted feet (the hips were held at one place in every frame)"
             );
         }
         if let Some(n) = reading["skipped_frames"].as_u64().filter(|&n| n > 0) {
@@ -195,6 +198,18 @@ fn text(r: &Value) -> String {
             )
         }
         _ => _ = writeln!(out, "frames:   {frames} (a T-pose)"),
+    }
+    if let Some(swings) = r["swings"].as_array().filter(|s| !s.is_empty()) {
+        let at: Vec<String> = swings
+            .iter()
+            .map(|s| format!("{:.1} s", s["start_s"].as_f64().unwrap_or(0.0)))
+            .collect();
+        _ = writeln!(
+            out,
+            "swings:   {} found, at {}",
+            swings.len(),
+            at.join(", ")
+        );
     }
     _ = writeln!(
         out,

@@ -25,6 +25,7 @@ pub mod report;
 pub mod retarget;
 pub mod score;
 pub mod session;
+pub mod swings;
 pub mod synth;
 pub mod synth_imu;
 pub mod table;

@@ -2,10 +2,13 @@
 
 use crate::failure::NothingFound;
 use crate::report::{to_json, to_text, write_report, ReportFormat};
+use crate::swings::cut;
 use crate::table::decimal;
 use crate::{html, input, session, teacher};
 use anyhow::{anyhow, bail, Context, Result};
 use posecoach_core::band::Band;
+use posecoach_core::config::MAX_SWING_FRAMES;
+use posecoach_core::detector::DetectorConfig;
 use posecoach_core::events::EventError;
 use posecoach_core::joint::Joint;
 use posecoach_core::score::{self, Report, ScoreError};
@@ -72,7 +75,21 @@ pub fn run(args: &Args) -> Result<String> {
     if let Some(path) = &args.report {
         ReportFormat::of(path)?;
     }
-    let coach = args.input.load_coach(&args.coach)?;
+    // The longest swing the scorer takes, at the scoring rate.
+    let longest_s = MAX_SWING_FRAMES as f32 / args.score_rate;
+    let coach = {
+        let recording = args.input.load_coach(&args.coach)?;
+        let mut swings = cut(&recording, longest_s);
+        if swings.len() > 1 {
+            eprintln!(
+                "note: {}: {} swings; the first, at {:.1} s, is the coach's",
+                args.coach.display(),
+                swings.len(),
+                swings[0].start_s
+            );
+        }
+        swings.swap_remove(0).motion
+    };
     let first = args.input.load(&args.student[0])?;
     // The student's body: the T-pose if given, else the skeleton measured from the (first)
     // swing. Both swings are compared on it, as rigid bones: the coach's retargeted, the
@@ -157,16 +174,11 @@ pub fn run(args: &Args) -> Result<String> {
     };
     let mut joints = vec![JointTallies::EMPTY; body.skeleton.len()];
     let mut session = Tendencies::new(&mut joints);
-    let mut swings = Vec::new();
-    for (i, path) in args.student.iter().enumerate() {
-        let motion = match i {
-            0 => first.clone(),
-            _ => args.input.load(path)?,
-        };
-        let scored = on_body(&motion, "student")
+    let scored = |motion: &Motion, taken: &Taken, session: &mut Tendencies| {
+        on_body(motion, "student")
             .and_then(|student| Ok(student.resampled(args.score_rate)?))
             .and_then(|student| {
-                let report = score_swings(&student, &virtual_coach, band, &mut session)?;
+                let report = score_swings(&student, &virtual_coach, band, session)?;
                 Ok(html::Scored {
                     report,
                     skeleton: student.skeleton.clone(),
@@ -181,12 +193,35 @@ pub fn run(args: &Args) -> Result<String> {
                     student: true,
                     error: EventError::NoSwing,
                 }) => anyhow::Error::new(NothingFound {
-                    message: format!("{}: {e}", path.display()),
+                    message: format!("{taken}: {e}"),
                     output: String::new(),
                 }),
-                _ => e.context(path.display().to_string()),
-            });
-        swings.push((path, scored));
+                Some(ScoreError::TooLong { .. }) => e.context(format!(
+                    "{taken}: no swing was found to cut it at (a set-up, a swing and a finish \
+                     held {SETTLE} s): cut the file to one swing of at most {longest_s:.1} s, or \
+                     score at a lower --score-rate",
+                    SETTLE = DetectorConfig::full_swing(1.0).settle_s
+                )),
+                _ => e.context(taken.to_string()),
+            })
+    };
+    let mut swings = Vec::new();
+    for (i, path) in args.student.iter().enumerate() {
+        let recording = match i {
+            0 => first.clone(),
+            _ => args.input.load(path)?,
+        };
+        // Every swing of a recording (a file cut to one swing is kept whole).
+        let parts = cut(&recording, longest_s);
+        let several = parts.len() > 1;
+        for part in parts {
+            let taken = Taken {
+                path,
+                start_s: several.then_some(part.start_s),
+            };
+            let scored = scored(&part.motion, &taken, &mut session);
+            swings.push((taken, scored));
+        }
     }
     // One swing that cannot be scored is the command's error.
     if let [(_, Err(_))] = swings.as_slice() {
@@ -204,23 +239,26 @@ pub fn run(args: &Args) -> Result<String> {
     };
     let reports: Vec<Value> = swings
         .iter()
-        .map(|(path, scored)| match scored {
+        .map(|(taken, scored)| match scored {
             Ok(scored) => {
                 let mut json = to_json(scored);
                 // What was scored, and the rate every frame number counts at.
-                json["files"] = files(path);
+                json["files"] = files(taken.path);
                 json["not_compared"] = json!(left_out);
                 json["rate_hz"] = json!(decimal(scored.student_hz, 3));
                 json
             }
-            Err(e) => json!({"files": files(path), "error": format!("{e:#}")}),
+            Err(e) => json!({"files": files(taken.path), "error": format!("{e:#}")}),
         })
         .collect();
     let json = match reports.as_slice() {
         [one] => one.clone(),
         _ => json!({
-            "swings": swings.iter().zip(&reports).enumerate().map(|(i, ((path, _), report))| {
-                let mut entry = json!({"swing": i + 1, "file": path.display().to_string()});
+            "swings": swings.iter().zip(&reports).enumerate().map(|(i, ((taken, _), report))| {
+                let mut entry = json!({"swing": i + 1, "file": taken.path.display().to_string()});
+                if let Some(start) = taken.start_s {
+                    entry["start_s"] = json!(decimal(start, 3));
+                }
                 match report.get("error") {
                     Some(error) => entry["error"] = error.clone(),
                     None => entry["report"] = report.clone(),
@@ -249,8 +287,8 @@ pub fn run(args: &Args) -> Result<String> {
         }
         let pages: Vec<html::Swing> = swings
             .iter()
-            .map(|(path, scored)| html::Swing {
-                heading: format!("Swing of {}", path.display()),
+            .map(|(taken, scored)| html::Swing {
+                heading: format!("Swing of {taken}"),
                 outcome: match scored {
                     Ok(scored) => Ok(scored.clone()),
                     Err(e) => Err(format!("{e:#}")),
@@ -269,8 +307,8 @@ pub fn run(args: &Args) -> Result<String> {
         [(_, Ok(scored))] => to_text(scored),
         _ => {
             let mut text = String::new();
-            for (i, (path, scored)) in swings.iter().enumerate() {
-                let _ = write!(text, "swing {} ({}):", i + 1, path.display());
+            for (i, (taken, scored)) in swings.iter().enumerate() {
+                let _ = write!(text, "swing {} ({taken}):", i + 1);
                 match scored {
                     Ok(scored) => {
                         text.push('\n');
@@ -285,6 +323,22 @@ pub fn run(args: &Args) -> Result<String> {
             text
         }
     })
+}
+
+/// Which swing of which file: a file holding several names each by its start.
+struct Taken<'a> {
+    path: &'a Path,
+    start_s: Option<f32>,
+}
+
+impl std::fmt::Display for Taken<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.path.display())?;
+        match self.start_s {
+            Some(start) => write!(f, ", the swing at {start:.1} s"),
+            None => Ok(()),
+        }
+    }
 }
 
 /// Scores `student` against `coach`, both on the student's skeleton (the coach turned to face

@@ -552,6 +552,84 @@ fn every_bring_your_own_data_example_reads_as_its_tool_writes_it() {
     }
 }
 
+/// The real iron as a range recording: each swing from `swings` times over, its first frame
+/// held `before` s and its last `after` s, as a CSV in seconds.
+fn iron_recording(name: &str, swings: usize, before: f64, after: f64) -> PathBuf {
+    let text = std::fs::read_to_string(fixture("golf_iron_60hz.csv")).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let rows: Vec<&str> = lines.map(|l| l.split_once(',').unwrap().1).collect();
+    let hold = |s: f64| (s * 60.0).round() as usize;
+    let mut frames: Vec<&str> = Vec::new();
+    for _ in 0..swings {
+        frames.extend(std::iter::repeat_n(rows[0], hold(before)));
+        frames.extend(&rows);
+        frames.extend(std::iter::repeat_n(rows[rows.len() - 1], hold(after)));
+    }
+    let mut csv = format!("{header}\n");
+    for (i, row) in frames.iter().enumerate() {
+        csv.push_str(&format!("{},{row}\n", i as f64 / 60.0));
+    }
+    let path = std::env::temp_dir().join(format!("posecoach-{name}-{}.csv", std::process::id()));
+    std::fs::write(&path, csv).unwrap();
+    path
+}
+
+#[test]
+fn a_whole_recording_is_scored_swing_by_swing() {
+    let score = |student: &PathBuf| {
+        posecoach(&[
+            "score",
+            "--coach",
+            "iron",
+            "--student",
+            student.to_str().unwrap(),
+            "--json",
+        ])
+    };
+    // One swing with a second of set-up and a held finish: longer than the scorer takes
+    // whole, cut to its swing.
+    let one = iron_recording("one-swing", 1, 1.0, 1.5);
+    let (ok, out, err) = score(&one);
+    assert!(ok, "{err}");
+    let r: Value = serde_json::from_str(&out).unwrap();
+    assert!(r["score"].as_f64().unwrap() > 99.0, "{}", r["score"]);
+    // Three swings in one file: each scored, then the session they make.
+    let three = iron_recording("three-swings", 3, 1.0, 1.5);
+    let (ok, out, err) = score(&three);
+    assert!(ok, "{err}");
+    let r: Value = serde_json::from_str(&out).unwrap();
+    let swings = r["swings"].as_array().unwrap();
+    assert_eq!(swings.len(), 3, "{err}");
+    let starts: Vec<f64> = swings
+        .iter()
+        .map(|s| s["start_s"].as_f64().unwrap())
+        .collect();
+    let period = 1.0 + 1.5 + 109.0 / 60.0;
+    assert!((starts[2] - starts[1] - period).abs() < 0.05, "{starts:?}");
+    assert!(swings
+        .iter()
+        .all(|s| s["report"]["score"].as_f64().unwrap() > 99.0));
+    assert_eq!(r["session"]["swings"], 3);
+    // The text names each swing by its file and start.
+    let (ok, text, _) = posecoach(&[
+        "score",
+        "--coach",
+        "iron",
+        "--student",
+        three.to_str().unwrap(),
+    ]);
+    assert!(ok && text.contains(", the swing at "), "{text}");
+    // inspect lists them.
+    let (ok, out, err) = posecoach(&["inspect", three.to_str().unwrap(), "--json"]);
+    assert!(ok, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["swings"].as_array().unwrap().len(), 3, "{out}");
+    for file in [one, three] {
+        std::fs::remove_file(file).unwrap();
+    }
+}
+
 /// The real driver as MediaPipe's world landmarks hand it over: named BlazePose landmarks,
 /// metres, +Y down, centred on the hips, time in ms, no club; the ears at the head and the
 /// fingers 8 cm past the wrists (the capture has no such joints).
@@ -562,7 +640,10 @@ fn driver_as_mediapipe() -> PathBuf {
     let mut out = String::new();
     for row in lines {
         // An empty cell (a club marker lost) is not read below.
-        let cells: Vec<f64> = row.split(',').map(|c| c.parse().unwrap_or(f64::NAN)).collect();
+        let cells: Vec<f64> = row
+            .split(',')
+            .map(|c| c.parse().unwrap_or(f64::NAN))
+            .collect();
         let at = |joint: &str| -> [f64; 3] {
             let k = header
                 .iter()

@@ -51,7 +51,8 @@ impl fmt::Display for LimitError {
             LimitError::Duration(s) => {
                 write!(
                     f,
-                    "a duration of {s} s is over the limit of {MAX_DURATION_S} s"
+                    "a duration of {s} s is over the limit of {MAX_DURATION_S} s: cut the \
+                     recording into parts no longer"
                 )
             }
             LimitError::Samples { frames, joints } => write!(
@@ -110,7 +111,7 @@ mod tests {
         assert_eq!(e, LimitError::Duration(600.5));
         assert_eq!(
             e.to_string(),
-            "a duration of 600.5 s is over the limit of 600 s"
+            "a duration of 600.5 s is over the limit of 600 s: cut the recording into parts no longer"
         );
         let e = check_limits(300_000, 31, 2000.0).unwrap_err();
         assert_eq!(
