@@ -134,6 +134,21 @@ fn bad_messages_are_refused_and_change_nothing() {
         [Refusal::Implausible(Implausible::Bone { joint: 13, .. })]
     ));
     assert!((session.student().unwrap().height() - height).abs() < 1e-6);
+    // A T-pose sent y-down (a pose estimator's image axis), or lying along the ground.
+    let turned = |turn: fn([i16; 3]) -> [i16; 3]| {
+        let Message::StudentProfile { mut profile, .. } = profile(1.75) else {
+            unreachable!()
+        };
+        profile.joints_mm.iter_mut().for_each(|p| *p = turn(*p));
+        Message::StudentProfile { seq: 0, profile }
+    };
+    for body in [
+        turned(|[x, y, z]| [x, -y, -z]),
+        turned(|[x, y, z]| [x, z, -y]),
+    ] {
+        assert_eq!(outcomes(&mut session, &body), [Refusal::NotUpright]);
+    }
+    assert!((session.student().unwrap().height() - height).abs() < 1e-6);
     // Still working: a well-formed pose frame is taken.
     assert_eq!(outcomes(&mut session, &pose), []);
     let mut coco = pose.clone();

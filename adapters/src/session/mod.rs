@@ -56,6 +56,7 @@ use posecoach_core::detector::{DetectorConfig, SwingDetector, SwingWindow};
 use posecoach_core::events::{self, Event, EventError, Side, SwingEvents, STILL_S};
 use posecoach_core::format::Format;
 use posecoach_core::frames::{Frames, Mm};
+use posecoach_core::joint::Joint;
 use posecoach_core::math::norm;
 use posecoach_core::plausible;
 use posecoach_core::retarget::Fit;
@@ -809,6 +810,9 @@ fn body_of(profile: &StudentProfile) -> Result<Skeleton, Refusal> {
         .map_keypoints(&keypoints[..profile.joints_mm.len()], &mut joints)
         .map_err(|_| Refusal::ProfileFormat(format))?;
     let template = Skeleton::standard(format).map_err(Refusal::Profile)?;
+    if !upright(&template, &joints) {
+        return Err(Refusal::NotUpright);
+    }
     let lengths: [f32; MAX_JOINTS] = core::array::from_fn(|k| {
         (k < template.len())
             .then(|| template.parent(k))
@@ -820,6 +824,23 @@ fn body_of(profile: &StudentProfile) -> Result<Skeleton, Refusal> {
         .map_err(Refusal::Profile)?;
     plausible::body(&skeleton).map_err(Refusal::Implausible)?;
     Ok(skeleton)
+}
+
+/// Whether a standing body's `joints` (on `skeleton`'s joints) have the head above the feet
+/// along +Y: the feet-to-head vector within 60° of up. The skeleton's own rest pose is the
+/// format's, upright whatever the keypoints were, so the keypoints are read.
+fn upright(skeleton: &Skeleton, joints: &[Vec3]) -> bool {
+    let head = skeleton.find(&[Joint::Head, Joint::Neck, Joint::Thorax]);
+    let feet = [
+        skeleton.find(&[Joint::LeftAnkle, Joint::LeftToe]),
+        skeleton.find(&[Joint::RightAnkle, Joint::RightToe]),
+    ];
+    let (Some(head), [Some(l), Some(r)]) = (head, feet) else {
+        // A format without them is judged by the checks that follow.
+        return true;
+    };
+    let rise = joints[head] - (joints[l] + joints[r]) * 0.5;
+    rise.y >= 0.5 * norm(&rise)
 }
 
 /// Whether a session can run with `config`.

@@ -20,6 +20,9 @@ pub enum Refusal {
     Profile(SkeletonError),
     /// The profile's body is beyond human limits.
     Implausible(Implausible),
+    /// The profile's head is not above its feet along +Y: frames sent y-down (a pose
+    /// estimator's image axis, as MediaPipe's world landmarks are) or a body lying down.
+    NotUpright,
     /// The profile's format has no joint table, or its keypoint count is wrong.
     ProfileFormat(Format),
     /// No stored coach reference has this number.
@@ -65,6 +68,10 @@ impl core::fmt::Display for Refusal {
             }
             Refusal::Profile(e) => write!(f, "student profile: {e}"),
             Refusal::Implausible(e) => write!(f, "student profile: {e}"),
+            Refusal::NotUpright => f.write_str(
+                "student profile: the head is not above the feet along +Y (upside down, as a \
+                 y-down image axis sends it, or lying down): send +Y up",
+            ),
             Refusal::ProfileFormat(format) => write!(
                 f,
                 "student profile in format `{}` with no joint table or the wrong keypoint count",
