@@ -39,6 +39,19 @@ fn score_json(coach: &str, student: &str, extra: &[&str]) -> Value {
     serde_json::from_str(&out).unwrap()
 }
 
+/// `posecoach score` of `student` against the bundled iron, with `extra` flags.
+fn against_iron(student: &std::path::Path, extra: &[&str]) -> (bool, String, String) {
+    let mut args = vec![
+        "score",
+        "--coach",
+        "iron",
+        "--student",
+        student.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    posecoach(&args)
+}
+
 #[test]
 fn score_json_has_the_documented_shape() {
     let tpose = fixture("h36m17_tpose.csv");
@@ -577,16 +590,7 @@ fn iron_recording(name: &str, swings: usize, before: f64, after: f64) -> PathBuf
 
 #[test]
 fn a_whole_recording_is_scored_swing_by_swing() {
-    let score = |student: &PathBuf| {
-        posecoach(&[
-            "score",
-            "--coach",
-            "iron",
-            "--student",
-            student.to_str().unwrap(),
-            "--json",
-        ])
-    };
+    let score = |student: &PathBuf| against_iron(student, &["--json"]);
     // One swing with a second of set-up and a held finish: longer than the scorer takes
     // whole, cut to its swing.
     let one = iron_recording("one-swing", 1, 1.0, 1.5);
@@ -612,13 +616,7 @@ fn a_whole_recording_is_scored_swing_by_swing() {
         .all(|s| s["report"]["score"].as_f64().unwrap() > 99.0));
     assert_eq!(r["session"]["swings"], 3);
     // The text names each swing by its file and start.
-    let (ok, text, _) = posecoach(&[
-        "score",
-        "--coach",
-        "iron",
-        "--student",
-        three.to_str().unwrap(),
-    ]);
+    let (ok, text, _) = against_iron(&three, &[]);
     assert!(ok && text.contains(", the swing at "), "{text}");
     // inspect lists them.
     let (ok, out, err) = posecoach(&["inspect", three.to_str().unwrap(), "--json"]);
@@ -739,16 +737,7 @@ fn the_readmes_bring_your_own_data_scores_are_what_score_prints() {
         let file = file.trim_end_matches('`');
         let stated: f64 = cells[3].split([' ', ':']).next().unwrap().parse().unwrap();
         let path = fixture(&format!("byod/{file}"));
-        let (ok, out, err) = posecoach(&[
-            "score",
-            "--coach",
-            "iron",
-            "--student",
-            path.to_str().unwrap(),
-            "--rate",
-            "60",
-            "--json",
-        ]);
+        let (ok, out, err) = against_iron(&path, &["--rate", "60", "--json"]);
         assert!(ok, "{file}: {err}");
         let r: Value = serde_json::from_str(&out).unwrap();
         assert_eq!(
@@ -791,18 +780,7 @@ fn openpose_folder(name: &str, three_d: bool) -> PathBuf {
 
 #[test]
 fn an_openpose_folder_is_scored_as_its_frames_and_2d_is_refused() {
-    let score = |student: &PathBuf| {
-        posecoach(&[
-            "score",
-            "--coach",
-            "iron",
-            "--student",
-            student.to_str().unwrap(),
-            "--rate",
-            "60",
-            "--json",
-        ])
-    };
+    let score = |student: &PathBuf| against_iron(student, &["--rate", "60", "--json"]);
     let (ok, csv, err) = score(&fixture("byod/openpose_iron.csv"));
     assert!(ok, "{err}");
     let folder = openpose_folder("openpose3d", true);
