@@ -76,7 +76,8 @@ pub fn run(args: &Args) -> Result<String> {
         ReportFormat::of(path)?;
     }
     // The longest swing the scorer takes, at the scoring rate.
-    let longest_s = MAX_SWING_FRAMES as f32 / args.score_rate;
+    // (A motion lasting `d` s holds `d · rate + 1` frames.)
+    let longest_s = (MAX_SWING_FRAMES - 1) as f32 / args.score_rate;
     let coach = {
         let recording = args.input.load_coach(&args.coach)?;
         let mut swings = cut(&recording, longest_s);
@@ -131,8 +132,9 @@ pub fn run(args: &Args) -> Result<String> {
         .context("the student's skeleton on the coach's joints")?;
     // One pelvis for both: where one file makes it as the hips' midpoint and the other does
     // not, every swing is compared with its pelvis there.
+    // (The learned retargeter takes the coach as its training did: not with it.)
     let at_hips = match (coach.pelvis_at_hips(), body.pelvis_at_hips()) {
-        (Some(c), Some(s)) => c != s,
+        (Some(c), Some(s)) => c != s && args.weights.is_none(),
         _ => false,
     };
     let hips = |motion: &Motion| match at_hips {

@@ -2,7 +2,7 @@
 //! device's streaming detector cuts a pose stream, so that `score` and `inspect` see every
 //! swing of a range recording, not only files cut to one swing.
 
-use posecoach_core::detector::{DetectorConfig, SwingDetector};
+use posecoach_core::detector::{DetectorConfig, SwingDetector, SETTLE_WINDOW_S, SPEED_WINDOW_S};
 use posecoach_core::frames::Mm;
 use posecoach_io::Motion;
 
@@ -18,8 +18,9 @@ pub struct Swing {
 /// The swings of `motion`: the whole of it where it lasts at most `longest_s` and the detector
 /// closes at most one swing in it (a file cut to one swing, kept as it was cut); else each
 /// swing the detector closes, in order, with the set-up and settled finish the device keeps
-/// ([`DetectorConfig::full_swing`] at the recording's rate). Where it closes none the whole
-/// recording is its one swing (the scorer then says what it lacks).
+/// ([`DetectorConfig::full_swing`] at the recording's rate; a swing the recording stops in
+/// ends with it). Where it closes none the whole recording is its one swing (the scorer then
+/// says what it lacks).
 pub fn cut(motion: &Motion, longest_s: f32) -> Vec<Swing> {
     let whole = || {
         vec![Swing {
@@ -67,19 +68,24 @@ fn windows(motion: &Motion) -> Vec<(usize, usize)> {
     if frames < 2 || motion.rate_hz <= 0.0 {
         return Vec::new();
     }
-    // A ring as long as the recording (and the two seconds the detector needs at the least):
-    // no window is overwritten before it is cut.
-    let capacity = frames.max((2.0 * motion.rate_hz).ceil() as usize + 1);
-    let mut storage: Vec<Mm> = vec![[0; 3]; capacity * n];
     let config = DetectorConfig::full_swing(motion.rate_hz);
+    let settle = config.settle_s + SETTLE_WINDOW_S + SPEED_WINDOW_S;
+    let held = (settle * motion.rate_hz).ceil() as usize + 1;
+    // A ring as long as the recording and its held end (and the two seconds the detector
+    // needs at the least): a candidate is never cut short by the ring.
+    let capacity = (frames + held).max((2.0 * motion.rate_hz).ceil() as usize + 1);
+    let mut storage: Vec<Mm> = vec![[0; 3]; capacity * n];
     let Ok(mut detector) = SwingDetector::new(&motion.skeleton, config, &mut storage) else {
         return Vec::new();
     };
+    // The recording, then its last frame held for as long as the detector takes to see hands
+    // settle: a recording stopped right after its last swing still closes that swing (its
+    // window ends with the recording).
     let mut windows = Vec::new();
-    for f in 0..frames {
+    for f in (0..frames).chain(std::iter::repeat_n(frames - 1, held)) {
         match detector.push(motion.frame(f)) {
-            Ok(Some(w)) => windows.push((w.start as usize, w.len)),
-            Ok(None) => {}
+            Ok(Some(w)) if (w.start as usize) < frames => windows.push((w.start as usize, w.len)),
+            Ok(_) => {}
             Err(_) => return Vec::new(),
         }
     }
@@ -126,6 +132,15 @@ mod tests {
         assert!((gap - one.duration_s()).abs() < 0.05, "{gap}");
         // Each is the same stretch of the same swing.
         assert_eq!(swings[0].motion.positions, swings[1].motion.positions);
+    }
+
+    #[test]
+    fn a_recording_stopped_at_its_last_finish_keeps_that_swing() {
+        let one = held(&iron(), 1.0, 1.5);
+        let mut two = one.clone();
+        two.positions.extend(held(&iron(), 1.0, 0.0).positions);
+        two.missing.resize(two.positions.len(), false);
+        assert_eq!(cut(&two, 4.0).len(), 2);
     }
 
     #[test]

@@ -286,6 +286,8 @@ struct Reader {
     names: Option<Names>,
     /// Names already reported as not read.
     ignored: HashSet<String>,
+    /// The first frame with only 2D keypoints, if any.
+    two_d: Option<usize>,
 }
 
 impl Reader {
@@ -309,7 +311,8 @@ impl Reader {
             }
             self.out.times.push(t);
         }
-        match landmarks_of(frame, clock.as_deref()) {
+        let found = landmarks_of(frame, clock.as_deref());
+        match found {
             Found::Named(points) => {
                 let names = || points.keys().map(|k| k.to_string()).collect();
                 let row = self.start(at, points.len(), false, names)?;
@@ -319,21 +322,25 @@ impl Reader {
                 Ok(())
             }
             Found::List(list) => self.list(at, list),
-            // Nobody found: the frame's landmarks are missing, and frames before the first
-            // pose are not the recording's (their names are not known yet).
-            Found::Empty => match &self.names {
-                Some(names) => {
-                    let width = names.names.len();
-                    self.start(at, width, false, Vec::new).map(|_| ())
+            // Nobody found (or seen in 2D only): the frame's landmarks are missing, and frames
+            // before the first pose are not the recording's (their names are not known yet).
+            Found::Empty | Found::TwoD => {
+                if matches!(found, Found::TwoD) {
+                    self.two_d.get_or_insert(at);
                 }
-                None => {
-                    if self.out.clock.is_some() {
-                        self.out.times.pop();
+                match &self.names {
+                    Some(names) => {
+                        let width = names.names.len();
+                        self.start(at, width, false, Vec::new).map(|_| ())
                     }
-                    Ok(())
+                    None => {
+                        if self.out.clock.is_some() {
+                            self.out.times.pop();
+                        }
+                        Ok(())
+                    }
                 }
-            },
-            Found::TwoD => Err(err(at, JsonErrorKind::TwoD)),
+            }
             Found::None => Err(err(at, JsonErrorKind::NoLandmarks)),
         }
     }
@@ -482,7 +489,13 @@ fn samples(bytes: &[u8]) -> Result<Samples, JsonError> {
             }
         }
     }
-    let names = reader.names.ok_or(err(0, JsonErrorKind::NoPose))?;
+    // A file whose frames hold 2D keypoints only (a 3D run's frame seen in 2D alone is
+    // missing there).
+    let names = match (reader.names, reader.two_d) {
+        (Some(names), _) => names,
+        (None, Some(at)) => return Err(err(at, JsonErrorKind::TwoD)),
+        (None, None) => return Err(err(0, JsonErrorKind::NoPose)),
+    };
     reader.out.names = names.names;
     Ok(reader.out)
 }
@@ -708,6 +721,11 @@ mod tests {
         let (m, reading) = read_with(three_d.as_bytes(), &hints).unwrap();
         assert_eq!(reading.landmarks, Landmarks::OpenPose25);
         assert_eq!(m.frames(), 2);
+        // A 3D run with one frame seen in 2D only: missing there, not refused.
+        let some_2d = [frame(true), frame(false), frame(true)].join("\n");
+        let (m, _) = read_with(some_2d.as_bytes(), &hints).unwrap();
+        let n = m.skeleton.len();
+        assert!(m.missing[n..2 * n].iter().all(|&gone| gone) && !m.missing[0]);
         // Nobody in a frame: missing there.
         let empty = "{\"version\": 1.3, \"people\": []}";
         let (m, _) = read_with(

@@ -100,7 +100,9 @@ pub struct Reading {
     /// Columns or keys not read.
     pub ignored: Vec<String>,
     /// The hips were held at one place in every frame (MediaPipe's world landmarks are
-    /// centred on them), and the body was placed on its feet ([`on_its_feet`]).
+    /// centred on them), and the body was placed on its planted ankles: each frame moved so
+    /// that its planted ankle stays where it was at the first frame ([`HEEL_UP_M`] decides
+    /// which is planted), then stood on the floor.
     pub on_its_feet: bool,
 }
 
@@ -484,9 +486,10 @@ fn on_its_feet(joints: &[Joint], positions: &mut [Vec3]) -> bool {
     true
 }
 
-/// How far one ankle rises against the other before the body is placed on the other foot
-/// alone ([`on_its_feet`]), m: a heel well off the ground. A convention, not fitted.
-const HEEL_UP_M: f32 = 0.05;
+/// How far one ankle rises against the other before a body held at its hips is placed on
+/// the other foot alone (`Reading::on_its_feet`), m: a heel well off the ground. A convention,
+/// not fitted.
+pub const HEEL_UP_M: f32 = 0.05;
 
 /// Each time's frame at `rate_hz`: the nearest, and at least one after the one before, so a
 /// skipped frame stays a gap in time.

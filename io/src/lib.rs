@@ -230,7 +230,10 @@ pub fn folder(path: &Path, hints: &Hints) -> Result<(Motion, Reading), FileError
     let mut files = Vec::new();
     for entry in std::fs::read_dir(path).map_err(|e| fail(path, FileErrorKind::Io(e)))? {
         let file = entry.map_err(|e| fail(path, FileErrorKind::Io(e)))?.path();
-        if extension(&file) == "json" && !file.is_dir() {
+        let hidden = file
+            .file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with('.'));
+        if extension(&file) == "json" && !file.is_dir() && !hidden {
             files.push(file);
             if files.len() > limits::MAX_FOLDER_FILES {
                 return Err(fail(path, FileErrorKind::FolderTooLarge(files.len())));
@@ -243,7 +246,21 @@ pub fn folder(path: &Path, hints: &Hints) -> Result<(Motion, Reading), FileError
     files.sort_by(|a, b| natural(&a.to_string_lossy(), &b.to_string_lossy()));
     let mut bytes = Vec::new();
     for file in &files {
-        bytes.extend(std::fs::read(file).map_err(|e| fail(file, FileErrorKind::Io(e)))?);
+        let frame = std::fs::read(file).map_err(|e| fail(file, FileErrorKind::Io(e)))?;
+        if frame.iter().all(u8::is_ascii_whitespace) {
+            // An empty file (a run stopped while writing it): a frame with nobody in it.
+            bytes.extend(b"{\"people\": []}");
+        } else {
+            // Each file's syntax on its own, so that a broken one is named.
+            serde_json::from_slice::<&serde_json::value::RawValue>(&frame).map_err(|e| {
+                let kind = json::JsonErrorKind::Syntax(e.to_string());
+                fail(
+                    file,
+                    FileErrorKind::Json(json::JsonError { frame: 0, kind }),
+                )
+            })?;
+            bytes.extend(frame);
+        }
         bytes.push(b'\n');
     }
     json::read_with(&bytes, hints).map_err(|e| {
@@ -358,6 +375,18 @@ mod tests {
         .unwrap();
         let e = folder(&dir, &hints).unwrap_err();
         assert!(e.path.ends_with("swing_7_keypoints.json"), "{e}");
+        // A file cut short is named; an empty one is a frame with nobody in it; a hidden
+        // one (macOS's `._` files) is passed over.
+        let seventh = dir.join("swing_7_keypoints.json");
+        std::fs::write(&seventh, "{\"pelvis\": [0, 1").unwrap();
+        let e = folder(&dir, &hints).unwrap_err();
+        assert!(e.path.ends_with("swing_7_keypoints.json"), "{e}");
+        std::fs::write(&seventh, "").unwrap();
+        std::fs::write(dir.join("._swing_7_keypoints.json"), [0u8, 5]).unwrap();
+        let (m, _) = folder(&dir, &hints).unwrap();
+        let n = m.skeleton.len();
+        assert_eq!(m.frames(), 12);
+        assert!(m.missing[7 * n..8 * n].iter().all(|&gone| gone));
         std::fs::remove_dir_all(&dir).unwrap();
         let empty = std::env::temp_dir().join(format!("posecoach-io-empty-{}", std::process::id()));
         std::fs::create_dir_all(&empty).unwrap();

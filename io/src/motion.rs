@@ -70,7 +70,10 @@ impl Motion {
     /// some centimetres above it where markers on the waist place it (the golf captures).
     fn pelvis_off_hips(&self) -> Option<f32> {
         let (l, r) = self.hips()?;
+        let n = self.skeleton.len();
+        // Only frames that saw all three: a held sample of one is from another frame.
         (0..self.frames())
+            .filter(|f| [0, l, r].iter().all(|&k| !self.missing[f * n + k]))
             .map(|f| {
                 let p = self.frame(f);
                 (p[0] - (p[l] + p[r]) * 0.5).norm()
@@ -78,8 +81,10 @@ impl Motion {
             .reduce(f32::max)
     }
 
+    /// The hips' indices, where the root is the pelvis and both hips are joints.
     fn hips(&self) -> Option<(usize, usize)> {
         let s = &self.skeleton;
+        (s.joint(0) == Some(Joint::Pelvis)).then_some(())?;
         Some((s.find(&[Joint::LeftHip])?, s.find(&[Joint::RightHip])?))
     }
 
@@ -117,6 +122,9 @@ impl Motion {
         out.skeleton = skeleton;
         for frame in out.positions.chunks_exact_mut(n) {
             frame[0] = (frame[l] + frame[r]) * 0.5;
+        }
+        for gone in out.missing.chunks_exact_mut(n) {
+            gone[0] = gone[l] || gone[r];
         }
         Ok(out)
     }
