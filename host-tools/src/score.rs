@@ -103,29 +103,25 @@ pub fn run(args: &Args) -> Result<String> {
     // Compared on what both swings have: a joint only one of them tracks is left out (the
     // virtual coach would otherwise carry a head top or a club its file never had).
     let (of_coach, of_student) = (coach.canonical_joints(), body.canonical_joints());
-    let names = |joints: Vec<&Joint>| {
-        let names: Vec<&str> = joints.iter().map(|j| j.name()).collect();
-        names.join(", ")
+    let untracked = |have: &[Joint], lack: &[Joint], whose: &str| {
+        let names: Vec<&str> = have
+            .iter()
+            .filter(|j| !lack.contains(j))
+            .map(|j| j.name())
+            .collect();
+        (!names.is_empty()).then(|| {
+            format!(
+                "{} (the {whose}'s file does not track them)",
+                names.join(", ")
+            )
+        })
     };
     let left_out: Vec<String> = [
-        (
-            of_student
-                .iter()
-                .filter(|j| !of_coach.contains(j))
-                .collect(),
-            "coach",
-        ),
-        (
-            of_coach
-                .iter()
-                .filter(|j| !of_student.contains(j))
-                .collect(),
-            "student",
-        ),
+        untracked(&of_student, &of_coach, "coach"),
+        untracked(&of_coach, &of_student, "student"),
     ]
     .into_iter()
-    .filter(|(joints, _): &(Vec<&Joint>, _)| !joints.is_empty())
-    .map(|(joints, whose)| format!("{} (the {whose}'s file does not track them)", names(joints)))
+    .flatten()
     .collect();
     let body = body
         .only(|j| of_coach.contains(&j))

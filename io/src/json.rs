@@ -219,11 +219,13 @@ fn landmarks_of<'a>(frame: Object<'a>, clock: Option<&str>) -> Found<'a> {
     };
     if let Some(mut v) = LANDMARK_KEYS.iter().find_map(|k| frame.get(*k).copied()) {
         // A list of poses (its first item a list of points, each an array or an object): the
-        // first pose's.
-        while let Some(pose) = value::first(v).filter(|p| value::kind(p) == Kind::Array) {
-            match value::first(pose).map(value::kind) {
-                Some(Kind::Array | Kind::Object) => v = pose,
-                _ => break,
+        // first pose's. One level only, so a deeply nested frame costs one more pass at most.
+        if let Some(pose) = value::first(v).filter(|p| value::kind(p) == Kind::Array) {
+            if matches!(
+                value::first(pose).map(value::kind),
+                Some(Kind::Array | Kind::Object)
+            ) {
+                v = pose;
             }
         }
         if value::kind(v) == Kind::Array && value::first(v).is_none() {

@@ -114,10 +114,7 @@ impl Motion {
         s.rest_positions(&mut rest);
         rest[0] = (rest[l] + rest[r]) * 0.5;
         let parents: Vec<Option<usize>> = (0..n).map(|k| s.parent(k)).collect();
-        let offsets: Vec<Vec3> = (0..n)
-            .map(|k| s.parent(k).map_or(rest[k], |p| rest[k] - rest[p]))
-            .collect();
-        let skeleton = Skeleton::new(s.format(), &parents, &offsets, s.joints())?;
+        let skeleton = Skeleton::from_rest_positions(s.format(), &parents, &rest, s.joints())?;
         let mut out = self.clone();
         out.skeleton = skeleton;
         for frame in out.positions.chunks_exact_mut(n) {
@@ -147,18 +144,19 @@ impl Motion {
         let mut rest = vec![Vec3::zeros(); n];
         s.rest_positions(&mut rest);
         let place = |k: usize| kept.iter().position(|&j| j == k);
-        let mut parents = Vec::with_capacity(kept.len());
-        let mut offsets = Vec::with_capacity(kept.len());
-        for &k in &kept {
-            let mut up = s.parent(k);
-            while let Some(p) = up.filter(|&p| place(p).is_none()) {
-                up = s.parent(p);
-            }
-            parents.push(up.and_then(place));
-            offsets.push(up.map_or(rest[k], |p| rest[k] - rest[p]));
-        }
+        let parents: Vec<Option<usize>> = kept
+            .iter()
+            .map(|&k| {
+                let mut up = s.parent(k);
+                while let Some(p) = up.filter(|&p| place(p).is_none()) {
+                    up = s.parent(p);
+                }
+                up.and_then(place)
+            })
+            .collect();
+        let at: Vec<Vec3> = kept.iter().map(|&k| rest[k]).collect();
         let joints: Vec<Option<Joint>> = kept.iter().map(|&k| s.joint(k)).collect();
-        let skeleton = Skeleton::new(s.format(), &parents, &offsets, &joints)?;
+        let skeleton = Skeleton::from_rest_positions(s.format(), &parents, &at, &joints)?;
         let frames = |f: usize| kept.iter().map(move |&k| f * n + k);
         let all = 0..self.frames();
         Ok(Motion {
